@@ -1,0 +1,22 @@
+//! CPU scene data for pelage: meshes (procedural and OBJ), Cem Yuksel `.hair`
+//! files, camera, lights and the parameters of every stage.
+//!
+//! Everything here is plain CPU data with serde support; nothing here knows
+//! about the GPU. The stage crates turn these types into GPU buffers.
+
+pub mod camera;
+pub mod hair_file;
+pub mod light;
+pub mod mesh;
+pub mod obj;
+pub mod params;
+
+pub use camera::Camera;
+pub use hair_file::{HairFile, HairFileError};
+pub use light::DirectionalLight;
+pub use mesh::{Mesh, MeshError, MeshReport};
+pub use obj::{ObjError, load_obj, parse_obj};
+pub use params::{
+    GrowthParams, HairParams, HairType, MAX_FORCE, MAX_SEGMENTS, ParamError, RootParams, ShadeParams,
+    SurfaceInterpolation, WindParams,
+};

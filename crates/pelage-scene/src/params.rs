@@ -1,0 +1,462 @@
+//! Parameters of stage 1 (roots, growth, wind), as plain serde data.
+//!
+//! Every struct has a `validate` method that answers bad values (NaN, Inf,
+//! negative lengths, zero segments, ...) with a [`ParamError`] naming the
+//! parameter, and a `Default` that renders the built-in scene.
+
+use glam::Vec3;
+use serde::{Deserialize, Serialize};
+
+/// The most segments one strand may have (the `.hair` format's own limit is 65535;
+/// generated fur never needs more than a few dozen).
+pub const MAX_SEGMENTS: u32 = 256;
+
+/// A parameter that is out of its valid range.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("parameter `{name}` = {value}: {reason}")]
+pub struct ParamError {
+    /// Dotted path of the parameter, e.g. `growth.length`.
+    pub name: String,
+    /// The offending value, formatted.
+    pub value: String,
+    /// What the valid range is.
+    pub reason: String,
+}
+
+impl ParamError {
+    fn new(name: &str, value: impl std::fmt::Debug, reason: &str) -> Self {
+        Self {
+            name: name.to_string(),
+            value: format!("{value:?}"),
+            reason: reason.to_string(),
+        }
+    }
+}
+
+fn finite(name: &str, v: f32) -> Result<(), ParamError> {
+    if v.is_finite() {
+        Ok(())
+    } else {
+        Err(ParamError::new(name, v, "must be a finite number"))
+    }
+}
+
+fn non_negative(name: &str, v: f32) -> Result<(), ParamError> {
+    finite(name, v)?;
+    if v < 0.0 {
+        return Err(ParamError::new(name, v, "must be >= 0"));
+    }
+    Ok(())
+}
+
+fn positive(name: &str, v: f32) -> Result<(), ParamError> {
+    finite(name, v)?;
+    if v <= 0.0 {
+        return Err(ParamError::new(name, v, "must be > 0"));
+    }
+    Ok(())
+}
+
+fn finite_vec(name: &str, v: Vec3) -> Result<(), ParamError> {
+    if v.is_finite() {
+        Ok(())
+    } else {
+        Err(ParamError::new(name, v, "every component must be finite"))
+    }
+}
+
+/// How the surface under a root is interpolated from the triangle's corners.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SurfaceInterpolation {
+    /// Linear position, normalised linear normal (the mesh as drawn).
+    Flat,
+    /// PN triangles (Vlachos et al. 2001): cubic position, quadratic normal.
+    #[default]
+    PnTriangle,
+}
+
+/// Where strands grow: how many, and how they are spread over the mesh.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct RootParams {
+    /// Number of strands. Strand `i` keeps its root when this changes.
+    pub count: u32,
+    /// Seed of every random choice (roots, jitter, phases).
+    pub seed: u32,
+    /// Optional per-vertex density weight (>= 0), one per mesh vertex; a triangle's
+    /// share of the strands is its area times the mean weight of its corners.
+    pub density: Option<Vec<f32>>,
+    /// Optional per-vertex length scale (>= 0), interpolated at each root.
+    pub length_scale: Option<Vec<f32>>,
+}
+
+impl Default for RootParams {
+    fn default() -> Self {
+        Self {
+            count: 20_000,
+            seed: 1,
+            density: None,
+            length_scale: None,
+        }
+    }
+}
+
+impl RootParams {
+    /// Checks the parameters against a mesh with `vertex_count` vertices.
+    pub fn validate(&self, vertex_count: usize) -> Result<(), ParamError> {
+        if self.count == 0 {
+            return Err(ParamError::new("roots.count", self.count, "must be at least 1"));
+        }
+        for (name, map) in [
+            ("roots.density", &self.density),
+            ("roots.length_scale", &self.length_scale),
+        ] {
+            if let Some(map) = map {
+                if map.len() != vertex_count {
+                    return Err(ParamError::new(
+                        name,
+                        format!("{} values", map.len()),
+                        &format!("needs one value per mesh vertex ({vertex_count})"),
+                    ));
+                }
+                if let Some((i, v)) = map.iter().enumerate().find(|(_, v)| !v.is_finite() || **v < 0.0) {
+                    return Err(ParamError::new(&format!("{name}[{i}]"), v, "must be finite and >= 0"));
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The shape a strand is grown in, on top of gravity and wind.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case", tag = "kind")]
+pub enum HairType {
+    /// Straight strands that bend only under the forces.
+    Straight,
+    /// A planar wave: the tangent swings by `atan(2π·amplitude·frequency·cos(2π·frequency·s))`
+    /// around the growth direction, `s` being the arc length from the root.
+    Wavy {
+        /// Amplitude of the wave, in scene units.
+        amplitude: f32,
+        /// Waves per scene unit of strand length.
+        frequency: f32,
+    },
+    /// A helix around the growth direction.
+    Curly {
+        /// Helix radius, in scene units.
+        radius: f32,
+        /// Rise per turn along the growth direction, in scene units.
+        pitch: f32,
+    },
+}
+
+impl Default for HairType {
+    fn default() -> Self {
+        Self::Straight
+    }
+}
+
+/// How strands grow from their roots.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct GrowthParams {
+    /// Segments per strand (1..=`MAX_SEGMENTS`); a strand has `segments + 1` vertices.
+    pub segments: u32,
+    /// Strand length in scene units (before jitter and the length map).
+    pub length: f32,
+    /// Relative length jitter in [0, 1): each strand's length is scaled by `1 ± jitter`.
+    pub length_jitter: f32,
+    /// Largest tilt of a strand's root direction away from the surface normal, radians, in [0, π/2].
+    pub direction_jitter: f32,
+    /// Seed 001's force weight: each segment's direction becomes `normalize(d + force_weight·F)`,
+    /// so more segments (and a larger weight) bend more. 0 = rigid.
+    pub force_weight: f32,
+    /// Gravity, in the same units as the wind force.
+    pub gravity: Vec3,
+    /// Straight, wavy or curly.
+    pub hair_type: HairType,
+    /// Strand width at the root, in scene units.
+    pub width: f32,
+    /// Width at the tip as a fraction of the root width, in [0, 1].
+    pub tip_width: f32,
+    /// Base colour, linear RGB in [0, 1].
+    pub color: Vec3,
+    /// Per-strand brightness jitter in [0, 1).
+    pub color_jitter: f32,
+    /// How the root position and normal are interpolated.
+    pub surface: SurfaceInterpolation,
+}
+
+impl Default for GrowthParams {
+    fn default() -> Self {
+        Self {
+            segments: 8,
+            length: 0.14,
+            length_jitter: 0.25,
+            direction_jitter: 0.25,
+            force_weight: 0.08,
+            gravity: Vec3::new(0.0, -1.0, 0.0),
+            hair_type: HairType::Straight,
+            width: 0.004,
+            tip_width: 0.2,
+            color: Vec3::new(0.55, 0.33, 0.16),
+            color_jitter: 0.25,
+            surface: SurfaceInterpolation::PnTriangle,
+        }
+    }
+}
+
+impl GrowthParams {
+    /// Checks every field; the error names the first bad one.
+    pub fn validate(&self) -> Result<(), ParamError> {
+        if self.segments == 0 || self.segments > MAX_SEGMENTS {
+            return Err(ParamError::new(
+                "growth.segments",
+                self.segments,
+                &format!("must be in 1..={MAX_SEGMENTS}"),
+            ));
+        }
+        positive("growth.length", self.length)?;
+        non_negative("growth.length_jitter", self.length_jitter)?;
+        if self.length_jitter >= 1.0 {
+            return Err(ParamError::new("growth.length_jitter", self.length_jitter, "must be < 1"));
+        }
+        non_negative("growth.direction_jitter", self.direction_jitter)?;
+        if self.direction_jitter > std::f32::consts::FRAC_PI_2 {
+            return Err(ParamError::new(
+                "growth.direction_jitter",
+                self.direction_jitter,
+                "must be at most π/2 radians",
+            ));
+        }
+        non_negative("growth.force_weight", self.force_weight)?;
+        finite_vec("growth.gravity", self.gravity)?;
+        match self.hair_type {
+            HairType::Straight => {}
+            HairType::Wavy { amplitude, frequency } => {
+                non_negative("growth.hair_type.amplitude", amplitude)?;
+                non_negative("growth.hair_type.frequency", frequency)?;
+            }
+            HairType::Curly { radius, pitch } => {
+                non_negative("growth.hair_type.radius", radius)?;
+                positive("growth.hair_type.pitch", pitch)?;
+            }
+        }
+        positive("growth.width", self.width)?;
+        non_negative("growth.tip_width", self.tip_width)?;
+        if self.tip_width > 1.0 {
+            return Err(ParamError::new("growth.tip_width", self.tip_width, "must be in [0, 1]"));
+        }
+        finite_vec("growth.color", self.color)?;
+        if self.color.min_element() < 0.0 {
+            return Err(ParamError::new("growth.color", self.color, "components must be >= 0"));
+        }
+        non_negative("growth.color_jitter", self.color_jitter)?;
+        if self.color_jitter >= 1.0 {
+            return Err(ParamError::new("growth.color_jitter", self.color_jitter, "must be < 1"));
+        }
+        Ok(())
+    }
+}
+
+/// The wind: a force field evaluated for a time `t`, so any frame can be computed on its own.
+///
+/// `F(p, t) = direction·strength·gust(t + phase) + turbulence·noise(p·turbulence_scale − direction·t·turbulence_speed)`,
+/// where `gust` is smooth value noise in time around 1 (`1 ± gust_strength`), `phase` is a per-strand
+/// offset in `[0, phase_spread)` seconds and `noise` is a vector of coherent 3-D value noise in [-1, 1].
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct WindParams {
+    /// Wind direction (normalised on use; zero means no directional wind).
+    pub direction: Vec3,
+    /// Mean force of the wind.
+    pub strength: f32,
+    /// Relative gust amplitude in [0, 1].
+    pub gust_strength: f32,
+    /// Gusts per second.
+    pub gust_frequency: f32,
+    /// Force amplitude of the turbulence.
+    pub turbulence: f32,
+    /// Spatial frequency of the turbulence, cells per scene unit.
+    pub turbulence_scale: f32,
+    /// Speed at which the turbulence is carried along the wind, scene units per second.
+    pub turbulence_speed: f32,
+    /// Spread of per-strand gust phases, seconds.
+    pub phase_spread: f32,
+}
+
+/// The largest force magnitude accepted (anything larger bends every strand fully anyway).
+pub const MAX_FORCE: f32 = 1.0e6;
+
+impl Default for WindParams {
+    fn default() -> Self {
+        Self {
+            direction: Vec3::new(1.0, 0.0, 0.3),
+            strength: 0.6,
+            gust_strength: 0.8,
+            gust_frequency: 0.7,
+            turbulence: 0.5,
+            turbulence_scale: 3.0,
+            turbulence_speed: 1.5,
+            phase_spread: 0.6,
+        }
+    }
+}
+
+impl WindParams {
+    /// No wind at all.
+    pub fn calm() -> Self {
+        Self {
+            strength: 0.0,
+            turbulence: 0.0,
+            ..Self::default()
+        }
+    }
+
+    /// Checks every field; the error names the first bad one.
+    pub fn validate(&self) -> Result<(), ParamError> {
+        finite_vec("wind.direction", self.direction)?;
+        for (name, v) in [
+            ("wind.strength", self.strength),
+            ("wind.turbulence", self.turbulence),
+        ] {
+            non_negative(name, v)?;
+            if v > MAX_FORCE {
+                return Err(ParamError::new(name, v, &format!("must be at most {MAX_FORCE}")));
+            }
+        }
+        non_negative("wind.gust_strength", self.gust_strength)?;
+        if self.gust_strength > 1.0 {
+            return Err(ParamError::new("wind.gust_strength", self.gust_strength, "must be in [0, 1]"));
+        }
+        non_negative("wind.gust_frequency", self.gust_frequency)?;
+        non_negative("wind.turbulence_scale", self.turbulence_scale)?;
+        non_negative("wind.turbulence_speed", self.turbulence_speed)?;
+        non_negative("wind.phase_spread", self.phase_spread)?;
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_are_valid() {
+        GrowthParams::default().validate().unwrap();
+        WindParams::default().validate().unwrap();
+        RootParams::default().validate(3).unwrap();
+    }
+
+    #[test]
+    fn bad_values_name_the_parameter() {
+        let g = GrowthParams {
+            length: f32::NAN,
+            ..Default::default()
+        };
+        assert_eq!(g.validate().unwrap_err().name, "growth.length");
+        let g = GrowthParams {
+            segments: 0,
+            ..Default::default()
+        };
+        assert_eq!(g.validate().unwrap_err().name, "growth.segments");
+        let w = WindParams {
+            strength: -1.0,
+            ..Default::default()
+        };
+        assert_eq!(w.validate().unwrap_err().name, "wind.strength");
+        let r = RootParams {
+            density: Some(vec![1.0, -1.0, 1.0]),
+            ..Default::default()
+        };
+        assert_eq!(r.validate(3).unwrap_err().name, "roots.density[1]");
+    }
+}
+
+/// Everything stage 1 needs: where strands grow, how, and the wind.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct HairParams {
+    /// Root placement.
+    pub roots: RootParams,
+    /// Strand shape.
+    pub growth: GrowthParams,
+    /// Wind.
+    pub wind: WindParams,
+}
+
+impl HairParams {
+    /// Validates all three parts against a mesh with `vertex_count` vertices.
+    pub fn validate(&self, vertex_count: usize) -> Result<(), ParamError> {
+        self.roots.validate(vertex_count)?;
+        self.growth.validate()?;
+        self.wind.validate()
+    }
+}
+
+/// How stage 3 draws and shades (Kajiya-Kay, the opaque baseline).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct ShadeParams {
+    /// Clear colour, linear RGB.
+    pub background: Vec3,
+    /// Colour of the opaque mesh, linear RGB.
+    pub mesh_color: Vec3,
+    /// Ambient light, a fraction of the base colour.
+    pub ambient: f32,
+    /// Kajiya-Kay diffuse weight.
+    pub diffuse: f32,
+    /// Kajiya-Kay specular weight.
+    pub specular: f32,
+    /// Kajiya-Kay specular exponent (> 0).
+    pub shininess: f32,
+    /// Colour of the specular highlight, linear RGB.
+    pub specular_color: Vec3,
+    /// Darkening at the root in [0, 1], a stand-in for self-shadowing until a shadow method is on.
+    pub root_occlusion: f32,
+    /// Ribbons are at least this many pixels wide (>= 0).
+    pub min_pixels: f32,
+    /// Samples per pixel: 1 or 4.
+    pub sample_count: u32,
+}
+
+impl Default for ShadeParams {
+    fn default() -> Self {
+        Self {
+            background: Vec3::new(0.04, 0.045, 0.055),
+            mesh_color: Vec3::new(0.25, 0.16, 0.11),
+            ambient: 0.18,
+            diffuse: 0.75,
+            specular: 0.35,
+            shininess: 40.0,
+            specular_color: Vec3::new(1.0, 0.95, 0.85),
+            root_occlusion: 0.65,
+            min_pixels: 0.7,
+            sample_count: 4,
+        }
+    }
+}
+
+impl ShadeParams {
+    /// Checks every field; the error names the first bad one.
+    pub fn validate(&self) -> Result<(), ParamError> {
+        finite_vec("shade.background", self.background)?;
+        finite_vec("shade.mesh_color", self.mesh_color)?;
+        finite_vec("shade.specular_color", self.specular_color)?;
+        non_negative("shade.ambient", self.ambient)?;
+        non_negative("shade.diffuse", self.diffuse)?;
+        non_negative("shade.specular", self.specular)?;
+        positive("shade.shininess", self.shininess)?;
+        non_negative("shade.root_occlusion", self.root_occlusion)?;
+        if self.root_occlusion > 1.0 {
+            return Err(ParamError::new("shade.root_occlusion", self.root_occlusion, "must be in [0, 1]"));
+        }
+        non_negative("shade.min_pixels", self.min_pixels)?;
+        if self.sample_count != 1 && self.sample_count != 4 {
+            return Err(ParamError::new("shade.sample_count", self.sample_count, "must be 1 or 4"));
+        }
+        Ok(())
+    }
+}
