@@ -22,8 +22,8 @@ pub struct Camera {
 impl Default for Camera {
     fn default() -> Self {
         Self {
-            eye: Vec3::new(1.6, 0.7, 2.6),
-            target: Vec3::new(0.0, 0.05, 0.0),
+            eye: Vec3::new(2.2, 0.9, 2.9),
+            target: Vec3::new(0.0, 0.0, 0.0),
             fov_y: 40f32.to_radians(),
             near: 0.05,
             far: 20.0,
@@ -65,13 +65,25 @@ impl Camera {
             reason: reason.into(),
         };
         if !self.eye.is_finite() || !self.target.is_finite() {
-            return Err(bad("camera.eye", format!("{:?}", self.eye), "eye and target must be finite"));
+            return Err(bad(
+                "camera.eye",
+                format!("{:?}", self.eye),
+                "eye and target must be finite",
+            ));
         }
         if (self.eye - self.target).length_squared() < 1e-12 {
-            return Err(bad("camera.target", format!("{:?}", self.target), "must differ from the eye"));
+            return Err(bad(
+                "camera.target",
+                format!("{:?}", self.target),
+                "must differ from the eye",
+            ));
         }
         if !(self.fov_y > 0.0 && self.fov_y < std::f32::consts::PI) {
-            return Err(bad("camera.fov_y", format!("{}", self.fov_y), "must be in (0, π) radians"));
+            return Err(bad(
+                "camera.fov_y",
+                format!("{}", self.fov_y),
+                "must be in (0, π) radians",
+            ));
         }
         if !(self.near > 0.0 && self.far > self.near && self.far.is_finite()) {
             return Err(bad(

@@ -17,6 +17,6 @@ pub use light::DirectionalLight;
 pub use mesh::{Mesh, MeshError, MeshReport};
 pub use obj::{ObjError, load_obj, parse_obj};
 pub use params::{
-    GrowthParams, HairParams, HairType, MAX_FORCE, MAX_SEGMENTS, ParamError, RootParams, ShadeParams,
-    SurfaceInterpolation, WindParams,
+    GrowthParams, HairParams, HairType, MAX_FORCE, MAX_SEGMENTS, ParamError, RootParams,
+    ShadeParams, SurfaceInterpolation, WindParams,
 };

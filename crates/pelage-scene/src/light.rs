@@ -20,7 +20,7 @@ impl Default for DirectionalLight {
         Self {
             direction: Vec3::new(-0.5, -0.8, -0.35),
             color: Vec3::ONE,
-            intensity: 2.2,
+            intensity: 1.8,
         }
     }
 }

@@ -106,7 +106,11 @@ impl RootParams {
     /// Checks the parameters against a mesh with `vertex_count` vertices.
     pub fn validate(&self, vertex_count: usize) -> Result<(), ParamError> {
         if self.count == 0 {
-            return Err(ParamError::new("roots.count", self.count, "must be at least 1"));
+            return Err(ParamError::new(
+                "roots.count",
+                self.count,
+                "must be at least 1",
+            ));
         }
         for (name, map) in [
             ("roots.density", &self.density),
@@ -120,8 +124,16 @@ impl RootParams {
                         &format!("needs one value per mesh vertex ({vertex_count})"),
                     ));
                 }
-                if let Some((i, v)) = map.iter().enumerate().find(|(_, v)| !v.is_finite() || **v < 0.0) {
-                    return Err(ParamError::new(&format!("{name}[{i}]"), v, "must be finite and >= 0"));
+                if let Some((i, v)) = map
+                    .iter()
+                    .enumerate()
+                    .find(|(_, v)| !v.is_finite() || **v < 0.0)
+                {
+                    return Err(ParamError::new(
+                        &format!("{name}[{i}]"),
+                        v,
+                        "must be finite and >= 0",
+                    ));
                 }
             }
         }
@@ -130,10 +142,11 @@ impl RootParams {
 }
 
 /// The shape a strand is grown in, on top of gravity and wind.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case", tag = "kind")]
 pub enum HairType {
     /// Straight strands that bend only under the forces.
+    #[default]
     Straight,
     /// A planar wave: the tangent swings by `atan(2π·amplitude·frequency·cos(2π·frequency·s))`
     /// around the growth direction, `s` being the arc length from the root.
@@ -150,12 +163,6 @@ pub enum HairType {
         /// Rise per turn along the growth direction, in scene units.
         pitch: f32,
     },
-}
-
-impl Default for HairType {
-    fn default() -> Self {
-        Self::Straight
-    }
 }
 
 /// How strands grow from their roots.
@@ -193,15 +200,15 @@ impl Default for GrowthParams {
     fn default() -> Self {
         Self {
             segments: 8,
-            length: 0.14,
-            length_jitter: 0.25,
-            direction_jitter: 0.25,
-            force_weight: 0.08,
+            length: 0.13,
+            length_jitter: 0.3,
+            direction_jitter: 0.35,
+            force_weight: 0.16,
             gravity: Vec3::new(0.0, -1.0, 0.0),
             hair_type: HairType::Straight,
             width: 0.004,
             tip_width: 0.2,
-            color: Vec3::new(0.55, 0.33, 0.16),
+            color: Vec3::new(0.36, 0.2, 0.09),
             color_jitter: 0.25,
             surface: SurfaceInterpolation::PnTriangle,
         }
@@ -221,7 +228,11 @@ impl GrowthParams {
         positive("growth.length", self.length)?;
         non_negative("growth.length_jitter", self.length_jitter)?;
         if self.length_jitter >= 1.0 {
-            return Err(ParamError::new("growth.length_jitter", self.length_jitter, "must be < 1"));
+            return Err(ParamError::new(
+                "growth.length_jitter",
+                self.length_jitter,
+                "must be < 1",
+            ));
         }
         non_negative("growth.direction_jitter", self.direction_jitter)?;
         if self.direction_jitter > std::f32::consts::FRAC_PI_2 {
@@ -235,7 +246,10 @@ impl GrowthParams {
         finite_vec("growth.gravity", self.gravity)?;
         match self.hair_type {
             HairType::Straight => {}
-            HairType::Wavy { amplitude, frequency } => {
+            HairType::Wavy {
+                amplitude,
+                frequency,
+            } => {
                 non_negative("growth.hair_type.amplitude", amplitude)?;
                 non_negative("growth.hair_type.frequency", frequency)?;
             }
@@ -247,15 +261,27 @@ impl GrowthParams {
         positive("growth.width", self.width)?;
         non_negative("growth.tip_width", self.tip_width)?;
         if self.tip_width > 1.0 {
-            return Err(ParamError::new("growth.tip_width", self.tip_width, "must be in [0, 1]"));
+            return Err(ParamError::new(
+                "growth.tip_width",
+                self.tip_width,
+                "must be in [0, 1]",
+            ));
         }
         finite_vec("growth.color", self.color)?;
         if self.color.min_element() < 0.0 {
-            return Err(ParamError::new("growth.color", self.color, "components must be >= 0"));
+            return Err(ParamError::new(
+                "growth.color",
+                self.color,
+                "components must be >= 0",
+            ));
         }
         non_negative("growth.color_jitter", self.color_jitter)?;
         if self.color_jitter >= 1.0 {
-            return Err(ParamError::new("growth.color_jitter", self.color_jitter, "must be < 1"));
+            return Err(ParamError::new(
+                "growth.color_jitter",
+                self.color_jitter,
+                "must be < 1",
+            ));
         }
         Ok(())
     }
@@ -294,7 +320,7 @@ impl Default for WindParams {
     fn default() -> Self {
         Self {
             direction: Vec3::new(1.0, 0.0, 0.3),
-            strength: 0.6,
+            strength: 0.9,
             gust_strength: 0.8,
             gust_frequency: 0.7,
             turbulence: 0.5,
@@ -324,12 +350,20 @@ impl WindParams {
         ] {
             non_negative(name, v)?;
             if v > MAX_FORCE {
-                return Err(ParamError::new(name, v, &format!("must be at most {MAX_FORCE}")));
+                return Err(ParamError::new(
+                    name,
+                    v,
+                    &format!("must be at most {MAX_FORCE}"),
+                ));
             }
         }
         non_negative("wind.gust_strength", self.gust_strength)?;
         if self.gust_strength > 1.0 {
-            return Err(ParamError::new("wind.gust_strength", self.gust_strength, "must be in [0, 1]"));
+            return Err(ParamError::new(
+                "wind.gust_strength",
+                self.gust_strength,
+                "must be in [0, 1]",
+            ));
         }
         non_negative("wind.gust_frequency", self.gust_frequency)?;
         non_negative("wind.turbulence_scale", self.turbulence_scale)?;
@@ -429,7 +463,7 @@ impl Default for ShadeParams {
             mesh_color: Vec3::new(0.25, 0.16, 0.11),
             ambient: 0.18,
             diffuse: 0.75,
-            specular: 0.35,
+            specular: 0.3,
             shininess: 40.0,
             specular_color: Vec3::new(1.0, 0.95, 0.85),
             root_occlusion: 0.65,
@@ -451,11 +485,19 @@ impl ShadeParams {
         positive("shade.shininess", self.shininess)?;
         non_negative("shade.root_occlusion", self.root_occlusion)?;
         if self.root_occlusion > 1.0 {
-            return Err(ParamError::new("shade.root_occlusion", self.root_occlusion, "must be in [0, 1]"));
+            return Err(ParamError::new(
+                "shade.root_occlusion",
+                self.root_occlusion,
+                "must be in [0, 1]",
+            ));
         }
         non_negative("shade.min_pixels", self.min_pixels)?;
         if self.sample_count != 1 && self.sample_count != 4 {
-            return Err(ParamError::new("shade.sample_count", self.sample_count, "must be 1 or 4"));
+            return Err(ParamError::new(
+                "shade.sample_count",
+                self.sample_count,
+                "must be 1 or 4",
+            ));
         }
         Ok(())
     }

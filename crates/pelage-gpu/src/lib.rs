@@ -1,0 +1,28 @@
+//! pelage-gpu: the GPU plumbing every pelage stage shares.
+//!
+//! - [`Gpu`]: a device and queue, headless or brought by an engine, whose
+//!   errors come back as [`GpuError`] instead of panics;
+//! - [`ShaderLibrary`]: every file under `wgsl/`, embedded, `#import`-composed
+//!   and naga-validated;
+//! - typed buffers laid out by encase ([`storage_buffer`], [`UniformBuffer`]);
+//! - [`GpuTimer`]: per-pass GPU time from timestamp queries;
+//! - readback of buffers and textures for tests and tools.
+
+#![warn(missing_docs)]
+
+pub mod buffers;
+pub mod context;
+pub mod error;
+pub mod readback;
+pub mod shaders;
+pub mod timer;
+
+pub use buffers::{UniformBuffer, storage_buffer, zeroed_storage};
+pub use context::Gpu;
+pub use error::{GpuError, Result};
+pub use readback::{TextureData, read_buffer, read_buffer_range, read_texture};
+pub use shaders::{SOURCES, ShaderError, ShaderLibrary};
+pub use timer::{GpuTimer, TimerReport};
+
+pub use encase;
+pub use wgpu;

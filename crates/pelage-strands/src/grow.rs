@@ -1,0 +1,293 @@
+//! The growth pass: one compute invocation per strand (`wgsl/strands/grow.wgsl`).
+
+use encase::ShaderType;
+use glam::Vec3;
+use pelage_gpu::{
+    Gpu, GpuTimer, ShaderLibrary, UniformBuffer, storage_buffer, wgpu, zeroed_storage,
+};
+use pelage_scene::{HairParams, HairType, Mesh, SurfaceInterpolation, WindParams};
+
+use crate::{MeshBuffers, StrandRoot, StrandsError, sample_roots};
+
+/// Workgroup size of `grow.wgsl`.
+const WORKGROUP: u32 = 64;
+
+/// The uniforms of `grow.wgsl` (`GrowUniforms` there), rewritten every frame.
+#[derive(Clone, Copy, Debug, PartialEq, ShaderType)]
+pub struct GrowUniforms {
+    /// Number of strands.
+    pub strand_count: u32,
+    /// Segments per strand.
+    pub segments: u32,
+    /// 0 = flat, 1 = PN triangle.
+    pub surface: u32,
+    /// 0 = straight, 1 = wavy, 2 = curly.
+    pub hair_type: u32,
+    /// Wavy: amplitude. Curly: radius.
+    pub shape_a: f32,
+    /// Wavy: frequency. Curly: pitch.
+    pub shape_b: f32,
+    /// Seed 001's force weight.
+    pub force_weight: f32,
+    /// Time in seconds.
+    pub time: f32,
+    /// Gravity force.
+    pub gravity: Vec3,
+    /// Mean wind force.
+    pub wind_strength: f32,
+    /// Unit wind direction, zero for none.
+    pub wind_direction: Vec3,
+    /// Relative gust amplitude.
+    pub gust_strength: f32,
+    /// Gusts per second.
+    pub gust_frequency: f32,
+    /// Turbulence force amplitude.
+    pub turbulence: f32,
+    /// Turbulence cells per scene unit.
+    pub turbulence_scale: f32,
+    /// Turbulence advection speed.
+    pub turbulence_speed: f32,
+    /// Invocations per row of the dispatch grid.
+    pub row_stride: u32,
+    /// Seed of the wind noise.
+    pub seed: u32,
+    /// Spread of per-strand gust phases, seconds.
+    pub phase_spread: f32,
+}
+
+impl GrowUniforms {
+    /// The uniforms for `params` at time `t`, for a dispatch grid rows of `row_stride` invocations.
+    pub fn new(params: &HairParams, time: f32, row_stride: u32) -> Self {
+        let g = &params.growth;
+        let w = &params.wind;
+        let (hair_type, shape_a, shape_b) = match g.hair_type {
+            HairType::Straight => (0, 0.0, 0.0),
+            HairType::Wavy {
+                amplitude,
+                frequency,
+            } => (1, amplitude, frequency),
+            HairType::Curly { radius, pitch } => (2, radius, pitch),
+        };
+        Self {
+            strand_count: params.roots.count,
+            segments: g.segments,
+            surface: match g.surface {
+                SurfaceInterpolation::Flat => 0,
+                SurfaceInterpolation::PnTriangle => 1,
+            },
+            hair_type,
+            shape_a,
+            shape_b,
+            force_weight: g.force_weight,
+            time,
+            gravity: g.gravity,
+            wind_strength: w.strength,
+            wind_direction: w.direction.normalize_or_zero(),
+            gust_strength: w.gust_strength,
+            gust_frequency: w.gust_frequency,
+            turbulence: w.turbulence,
+            turbulence_scale: w.turbulence_scale,
+            turbulence_speed: w.turbulence_speed,
+            row_stride,
+            seed: params.roots.seed,
+            phase_spread: w.phase_spread,
+        }
+    }
+}
+
+/// What stage 1 produces, for later stages to bind without any readback.
+#[derive(Debug)]
+pub struct StrandBuffers {
+    /// `strand_count * (segments + 1)` `vec4<f32>`: xyz = position, w = strand parameter in [0, 1].
+    /// Strand `i`'s vertices start at `i * (segments + 1)`; tangents come from neighbours.
+    pub vertices: wgpu::Buffer,
+    /// One `StrandRoot` per strand: width, colour, seed and the root itself.
+    pub roots: wgpu::Buffer,
+    /// Number of strands.
+    pub strand_count: u32,
+    /// Segments per strand (every strand has the same count).
+    pub segments: u32,
+}
+
+impl StrandBuffers {
+    /// Vertices per strand.
+    pub fn vertices_per_strand(&self) -> u32 {
+        self.segments + 1
+    }
+
+    /// Bytes of the vertex buffer.
+    pub fn vertex_bytes(&self) -> u64 {
+        self.vertices.size()
+    }
+}
+
+/// Stage 1: grows strands over a mesh for any time `t`.
+///
+/// ```no_run
+/// # fn demo(gpu: &pelage_gpu::Gpu) -> Result<(), pelage_strands::StrandsError> {
+/// use pelage_scene::{HairParams, Mesh};
+/// use pelage_strands::{GrowStrands, MeshBuffers};
+/// let mesh = Mesh::creature();
+/// let mesh_buffers = MeshBuffers::upload(gpu, &mesh)?;
+/// let strands = GrowStrands::new(gpu, &mesh, &mesh_buffers, &HairParams::default())?;
+/// strands.set_time(&gpu.queue, 0.5)?;
+/// let mut encoder = gpu.device.create_command_encoder(&Default::default());
+/// strands.encode(&mut encoder, None);
+/// gpu.queue.submit([encoder.finish()]);
+/// # Ok(()) }
+/// ```
+#[derive(Debug)]
+pub struct GrowStrands {
+    params: HairParams,
+    roots: Vec<StrandRoot>,
+    pipeline: wgpu::ComputePipeline,
+    bind_group: wgpu::BindGroup,
+    uniforms: UniformBuffer<GrowUniforms>,
+    buffers: StrandBuffers,
+    groups: (u32, u32),
+}
+
+impl GrowStrands {
+    /// Samples roots on `mesh` (the rest pose; `mesh_buffers` may be rewritten later),
+    /// allocates the strand buffers and builds the pipeline.
+    pub fn new(
+        gpu: &Gpu,
+        mesh: &Mesh,
+        mesh_buffers: &MeshBuffers,
+        params: &HairParams,
+    ) -> crate::Result<Self> {
+        params.validate(mesh.positions.len())?;
+        if mesh_buffers.vertex_count as usize != mesh.positions.len()
+            || mesh_buffers.triangle_count as usize != mesh.indices.len() / 3
+        {
+            return Err(StrandsError::MeshMismatch {
+                buffers: format!(
+                    "{} vertices, {} triangles",
+                    mesh_buffers.vertex_count, mesh_buffers.triangle_count
+                ),
+                mesh: format!(
+                    "{} vertices, {} triangles",
+                    mesh.positions.len(),
+                    mesh.indices.len() / 3
+                ),
+            });
+        }
+        let roots = sample_roots(mesh, &params.roots, &params.growth)?;
+        let count = params.roots.count;
+        let vertex_bytes = u64::from(count) * u64::from(params.growth.segments + 1) * 16;
+        gpu.check_storage_size("strand vertices", vertex_bytes)?;
+
+        let groups_needed = count.div_ceil(WORKGROUP);
+        let max_x = gpu.limits().max_compute_workgroups_per_dimension.max(1);
+        let groups = (groups_needed.min(max_x), groups_needed.div_ceil(max_x));
+        let uniforms = UniformBuffer::new(
+            gpu,
+            "pelage grow uniforms",
+            &GrowUniforms::new(params, 0.0, groups.0 * WORKGROUP),
+        )?;
+        let storage = wgpu::BufferUsages::STORAGE;
+        let roots_buffer = storage_buffer(gpu, "pelage strand roots", &roots, storage)?;
+        let vertices = zeroed_storage(gpu, "pelage strand vertices", vertex_bytes, storage)?;
+
+        let module = ShaderLibrary::module(gpu, "strands/grow.wgsl")?;
+        let (pipeline, bind_group) = gpu.scoped(|device| {
+            let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some("pelage grow"),
+                layout: None,
+                module: &module,
+                entry_point: Some("main"),
+                compilation_options: Default::default(),
+                cache: None,
+            });
+            let entries = [
+                &uniforms.buffer,
+                &mesh_buffers.positions,
+                &mesh_buffers.normals,
+                &mesh_buffers.indices,
+                &roots_buffer,
+                &vertices,
+            ];
+            let entries: Vec<_> = entries
+                .iter()
+                .enumerate()
+                .map(|(i, b)| wgpu::BindGroupEntry {
+                    binding: i as u32,
+                    resource: b.as_entire_binding(),
+                })
+                .collect();
+            let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("pelage grow"),
+                layout: &pipeline.get_bind_group_layout(0),
+                entries: &entries,
+            });
+            (pipeline, bind_group)
+        })?;
+
+        Ok(Self {
+            params: params.clone(),
+            roots,
+            pipeline,
+            bind_group,
+            uniforms,
+            buffers: StrandBuffers {
+                vertices,
+                roots: roots_buffer,
+                strand_count: count,
+                segments: params.growth.segments,
+            },
+            groups,
+        })
+    }
+
+    /// Sets the time the next `encode` grows the strands for.
+    pub fn set_time(&self, queue: &wgpu::Queue, time: f32) -> crate::Result<()> {
+        if !time.is_finite() {
+            return Err(pelage_scene::ParamError {
+                name: "time".into(),
+                value: format!("{time}"),
+                reason: "must be finite".into(),
+            }
+            .into());
+        }
+        Ok(self.uniforms.write(queue, &self.uniforms_at(time))?)
+    }
+
+    /// Replaces the wind (validated); takes effect at the next `set_time`.
+    pub fn set_wind(&mut self, wind: WindParams) -> crate::Result<()> {
+        wind.validate()?;
+        self.params.wind = wind;
+        Ok(())
+    }
+
+    /// The uniforms the pass uses at `time` (what the CPU mirror needs to reproduce a frame).
+    pub fn uniforms_at(&self, time: f32) -> GrowUniforms {
+        GrowUniforms::new(&self.params, time, self.groups.0 * WORKGROUP)
+    }
+
+    /// Records the growth pass.
+    pub fn encode(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&mut GpuTimer>) {
+        let timestamp_writes = timer.and_then(|t| t.compute_pass("strands: grow"));
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("pelage grow"),
+            timestamp_writes,
+        });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &self.bind_group, &[]);
+        pass.dispatch_workgroups(self.groups.0, self.groups.1, 1);
+    }
+
+    /// The buffers this stage writes.
+    pub fn buffers(&self) -> &StrandBuffers {
+        &self.buffers
+    }
+
+    /// The roots sampled on the CPU (input of the CPU mirror).
+    pub fn roots(&self) -> &[StrandRoot] {
+        &self.roots
+    }
+
+    /// The parameters in use.
+    pub fn params(&self) -> &HairParams {
+        &self.params
+    }
+}

@@ -1,0 +1,51 @@
+//! Stage 1 of pelage: strands grown from a triangle mesh on the GPU.
+//!
+//! [`GrowStrands`] samples roots over the mesh once (on the CPU, deterministic
+//! from a seed), then every frame a compute pass evaluates the surface under
+//! each root (PN triangles or flat), grows the strand under gravity and wind for
+//! a time `t`, and writes [`StrandBuffers`], which later stages bind directly.
+//!
+//! The mesh lives in [`MeshBuffers`]: tightly packed `f32 x3` positions and
+//! normals and a `u32` triangle list in storage buffers, which an engine may own
+//! and rewrite every frame (a skinned mesh, say).
+
+mod grow;
+mod mesh_buffers;
+mod roots;
+
+pub use grow::{GrowStrands, GrowUniforms, StrandBuffers};
+pub use mesh_buffers::MeshBuffers;
+pub use roots::{StrandRoot, hash_to_unit, pcg_hash, sample_roots};
+
+use pelage_gpu::GpuError;
+use pelage_scene::{MeshError, ParamError};
+
+/// What can go wrong in stage 1.
+#[derive(Debug, thiserror::Error)]
+pub enum StrandsError {
+    /// A parameter is out of range.
+    #[error(transparent)]
+    Param(#[from] ParamError),
+    /// The mesh is unusable (no triangles, NaN positions, ...).
+    #[error("mesh: {0}")]
+    Mesh(#[from] MeshError),
+    /// The GPU refused something (a buffer too large, a validation error, ...).
+    #[error(transparent)]
+    Gpu(#[from] GpuError),
+    /// Roots cannot be placed: every triangle has zero area or zero density.
+    #[error("no triangle can carry strands: {0}")]
+    NoSurface(String),
+    /// The caller's mesh buffers do not match the CPU mesh the roots were sampled on.
+    #[error(
+        "mesh buffers hold {buffers} but the mesh has {mesh}; pass buffers made from the same mesh"
+    )]
+    MeshMismatch {
+        /// What the buffers hold.
+        buffers: String,
+        /// What the mesh has.
+        mesh: String,
+    },
+}
+
+/// Result of stage 1.
+pub type Result<T, E = StrandsError> = std::result::Result<T, E>;

@@ -1,0 +1,241 @@
+//! Root placement: N strands spread over the mesh by area, deterministic from a seed.
+//!
+//! Strand `i` draws its random numbers from `pcg_hash(i ^ pcg_hash(seed))` alone,
+//! so it keeps its root, length and jitter when the strand count changes.
+
+use encase::ShaderType;
+use glam::{Vec2, Vec3};
+use pelage_scene::{GrowthParams, Mesh, RootParams};
+
+/// PCG hash (Jarzynski and Olano 2020), the same as `pcg_hash` in `wgsl/shared/noise.wgsl`.
+pub fn pcg_hash(v: u32) -> u32 {
+    let state = v.wrapping_mul(747_796_405).wrapping_add(2_891_336_453);
+    let word = ((state >> ((state >> 28) + 4)) ^ state).wrapping_mul(277_803_737);
+    (word >> 22) ^ word
+}
+
+/// A float in [0, 1) from the top 24 bits of a hash, the same as `hash_to_unit` in WGSL.
+pub fn hash_to_unit(h: u32) -> f32 {
+    (h >> 8) as f32 * (1.0 / 16_777_216.0)
+}
+
+/// One strand's root and per-strand attributes, as the GPU reads them (`StrandRoot` in WGSL).
+#[derive(Clone, Copy, Debug, PartialEq, ShaderType)]
+pub struct StrandRoot {
+    /// Triangle the root sits on.
+    pub triangle: u32,
+    /// The strand's own hash seed.
+    pub seed: u32,
+    /// Barycentrics (u, v) of the root for the triangle's first and second corner; w = 1 - u - v.
+    pub bary: Vec2,
+    /// Strand length, scene units, jitter and length map applied.
+    pub length: f32,
+    /// Width at the root, scene units.
+    pub width: f32,
+    /// Gust phase as a fraction of `WindParams::phase_spread`, in [0, 1).
+    pub phase: f32,
+    /// Tilt of the root direction away from the normal, radians.
+    pub tilt: f32,
+    /// Azimuth of that tilt around the normal, radians.
+    pub azimuth: f32,
+    /// Linear RGB colour.
+    pub color: Vec3,
+}
+
+/// Places `roots.count` strands over `mesh`, each triangle getting a share proportional
+/// to its area (times its corners' mean density, if a density map is given).
+/// Zero-area triangles get no strands.
+pub fn sample_roots(
+    mesh: &Mesh,
+    roots: &RootParams,
+    growth: &GrowthParams,
+) -> crate::Result<Vec<StrandRoot>> {
+    let report = mesh.validate()?;
+    roots.validate(mesh.positions.len())?;
+    growth.validate()?;
+
+    let areas = mesh.triangle_areas();
+    let mut degenerate = vec![false; areas.len()];
+    for &t in &report.degenerate_triangles {
+        if let Some(d) = degenerate.get_mut(t as usize) {
+            *d = true;
+        }
+    }
+    let corner_mean = |map: &Option<Vec<f32>>, tri: usize, bary: [f32; 3]| -> f32 {
+        let Some(map) = map else { return 1.0 };
+        (0..3)
+            .map(|k| {
+                let idx = mesh.indices.get(tri * 3 + k).copied().unwrap_or(0) as usize;
+                map.get(idx).copied().unwrap_or(0.0) * bary[k]
+            })
+            .sum()
+    };
+
+    // Cumulative weights in f64 so a million small triangles still sum exactly enough.
+    let mut cdf = Vec::with_capacity(areas.len());
+    let mut total = 0.0f64;
+    for (t, &area) in areas.iter().enumerate() {
+        let w = if degenerate[t] {
+            0.0
+        } else {
+            f64::from(area) * f64::from(corner_mean(&roots.density, t, [1.0 / 3.0; 3]))
+        };
+        total += w.max(0.0);
+        cdf.push(total);
+    }
+    if total <= 0.0 || !total.is_finite() {
+        return Err(crate::StrandsError::NoSurface(format!(
+            "total weighted area is {total} over {} triangles ({} degenerate)",
+            areas.len(),
+            report.degenerate_triangles.len()
+        )));
+    }
+
+    let seed_hash = pcg_hash(roots.seed);
+    let out = (0..roots.count)
+        .map(|i| {
+            let h0 = pcg_hash(i ^ seed_hash);
+            let mut h = h0;
+            let mut next = || {
+                h = pcg_hash(h);
+                hash_to_unit(h)
+            };
+            let target = f64::from(next()) * total;
+            // First triangle whose cumulative weight exceeds the target (never a zero-weight one).
+            let tri = cdf.partition_point(|&c| c <= target).min(cdf.len() - 1);
+            let su = next().sqrt();
+            let bu = 1.0 - su;
+            let bv = next() * su;
+            let bw = (1.0 - bu - bv).max(0.0);
+            let length_scale = corner_mean(&roots.length_scale, tri, [bu, bv, bw]);
+            let length =
+                growth.length * (1.0 + growth.length_jitter * (2.0 * next() - 1.0)) * length_scale;
+            let phase = next();
+            let tilt = growth.direction_jitter * next();
+            let azimuth = std::f32::consts::TAU * next();
+            let brightness = 1.0 + growth.color_jitter * (2.0 * next() - 1.0);
+            StrandRoot {
+                triangle: tri as u32,
+                seed: h0,
+                bary: Vec2::new(bu, bv),
+                // A zero length-map value makes a zero-length strand, which is legal and invisible.
+                length: length.max(0.0),
+                width: growth.width,
+                phase,
+                tilt,
+                azimuth,
+                color: growth.color * brightness,
+            }
+        })
+        .collect();
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn strand_keeps_its_root_when_count_changes() {
+        let mesh = Mesh::icosphere(1.0, 2).unwrap();
+        let growth = GrowthParams::default();
+        let few = sample_roots(
+            &mesh,
+            &RootParams {
+                count: 100,
+                ..Default::default()
+            },
+            &growth,
+        )
+        .unwrap();
+        let many = sample_roots(
+            &mesh,
+            &RootParams {
+                count: 1000,
+                ..Default::default()
+            },
+            &growth,
+        )
+        .unwrap();
+        assert_eq!(few[..], many[..100]);
+    }
+
+    #[test]
+    fn roots_follow_area() {
+        // Two triangles, the second four times the area of the first.
+        let mesh = Mesh {
+            positions: vec![
+                Vec3::ZERO,
+                Vec3::X,
+                Vec3::Z,
+                Vec3::new(2.0, 0.0, 0.0),
+                Vec3::new(4.0, 0.0, 0.0),
+                Vec3::new(2.0, 0.0, 2.0),
+            ],
+            normals: vec![Vec3::Y; 6],
+            indices: vec![0, 2, 1, 3, 5, 4],
+        };
+        let roots = sample_roots(
+            &mesh,
+            &RootParams {
+                count: 20_000,
+                ..Default::default()
+            },
+            &GrowthParams::default(),
+        )
+        .unwrap();
+        let on_second = roots.iter().filter(|r| r.triangle == 1).count() as f32 / 20_000.0;
+        assert!((on_second - 0.8).abs() < 0.02, "{on_second}");
+        assert!(
+            roots
+                .iter()
+                .all(|r| r.bary.x >= 0.0 && r.bary.y >= 0.0 && r.bary.x + r.bary.y <= 1.0 + 1e-6)
+        );
+    }
+
+    #[test]
+    fn density_and_length_maps_steer_roots() {
+        let mesh = Mesh {
+            positions: vec![
+                Vec3::ZERO,
+                Vec3::X,
+                Vec3::Z,
+                Vec3::new(2.0, 0.0, 0.0),
+                Vec3::new(3.0, 0.0, 0.0),
+                Vec3::new(2.0, 0.0, 1.0),
+            ],
+            normals: vec![Vec3::Y; 6],
+            indices: vec![0, 2, 1, 3, 5, 4],
+        };
+        let params = RootParams {
+            count: 1000,
+            density: Some(vec![0.0, 0.0, 0.0, 1.0, 1.0, 1.0]),
+            length_scale: Some(vec![1.0, 1.0, 1.0, 2.0, 2.0, 2.0]),
+            ..Default::default()
+        };
+        let growth = GrowthParams {
+            length_jitter: 0.0,
+            ..Default::default()
+        };
+        let roots = sample_roots(&mesh, &params, &growth).unwrap();
+        assert!(roots.iter().all(|r| r.triangle == 1));
+        assert!(
+            roots
+                .iter()
+                .all(|r| (r.length - 2.0 * growth.length).abs() < 1e-5)
+        );
+    }
+
+    #[test]
+    fn zero_density_everywhere_is_an_error() {
+        let mesh = Mesh::icosphere(1.0, 0).unwrap();
+        let roots = RootParams {
+            density: Some(vec![0.0; mesh.positions.len()]),
+            ..Default::default()
+        };
+        assert!(matches!(
+            sample_roots(&mesh, &roots, &GrowthParams::default()),
+            Err(crate::StrandsError::NoSurface(_))
+        ));
+    }
+}

@@ -1,0 +1,58 @@
+//! pelage: compute-first GPU hair and fur rendering on wgpu.
+//!
+//! Three stages chained through GPU storage buffers, never through the CPU:
+//!
+//! 1. [`strands`]: a compute pass grows strands from a mesh (PN triangles, hair
+//!    types, gravity and wind for a time `t`);
+//! 2. shadows (to come);
+//! 3. [`shade`]: strands drawn as camera-facing ribbons pulled from the strand
+//!    buffer, Kajiya-Kay shaded, over the opaque mesh.
+//!
+//! [`Renderer`] chains the stages for the common case: one mesh, one groom, one
+//! light, an offscreen image. Engines that bring their own device, buffers and
+//! render targets call the stage types directly ([`strands::GrowStrands`],
+//! [`shade::RibbonPass`]) on their own encoder.
+//!
+//! ```no_run
+//! let gpu = pelage::gpu::Gpu::headless()?;
+//! let scene = pelage::Scene::default();
+//! let mut renderer = pelage::Renderer::new(&gpu, &scene, 320, 240)?;
+//! let stats = renderer.render(&gpu, 0.0, &scene.camera)?;
+//! renderer.image(&gpu)?.save("frame.png")?;
+//! println!("{:.2} ms on the GPU", stats.gpu_ms());
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+pub use pelage_gpu as gpu;
+pub use pelage_scene as scene;
+pub use pelage_shade as shade;
+pub use pelage_strands as strands;
+
+mod output;
+mod renderer;
+
+pub use output::{OutputError, save_png, write_atomically};
+pub use renderer::{FrameStats, Renderer, Scene};
+
+/// Any error of the frame pipeline.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// Stage 1 failed.
+    #[error("strands: {0}")]
+    Strands(#[from] strands::StrandsError),
+    /// Stage 3 failed.
+    #[error("shade: {0}")]
+    Shade(#[from] shade::ShadeError),
+    /// The GPU failed.
+    #[error(transparent)]
+    Gpu(#[from] gpu::GpuError),
+    /// The scene is not usable.
+    #[error("scene: {0}")]
+    Param(#[from] scene::ParamError),
+    /// Writing an output failed.
+    #[error(transparent)]
+    Output(#[from] OutputError),
+}
+
+/// Result of the frame pipeline.
+pub type Result<T, E = Error> = std::result::Result<T, E>;

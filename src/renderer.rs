@@ -1,0 +1,136 @@
+//! The frame pipeline: stage 1 then stage 3 into an offscreen image.
+
+use pelage_gpu::{Gpu, GpuTimer};
+use pelage_scene::{Camera, DirectionalLight, HairParams, Mesh, ShadeParams};
+use pelage_shade::{RibbonPass, Targets};
+use pelage_strands::{GrowStrands, MeshBuffers};
+
+/// Everything a frame is made of.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    /// The surface the hair grows from.
+    pub mesh: Mesh,
+    /// Roots, growth and wind.
+    pub hair: HairParams,
+    /// Raster and shading.
+    pub shade: ShadeParams,
+    /// The camera.
+    pub camera: Camera,
+    /// The light.
+    pub light: DirectionalLight,
+}
+
+impl Default for Scene {
+    /// The built-in scene: the procedural creature, furred, in gusting wind.
+    fn default() -> Self {
+        Self {
+            mesh: Mesh::creature(),
+            hair: HairParams::default(),
+            shade: ShadeParams::default(),
+            camera: Camera::default(),
+            light: DirectionalLight::default(),
+        }
+    }
+}
+
+/// GPU time of one frame, per pass.
+#[derive(Clone, Debug, Default)]
+pub struct FrameStats {
+    /// Milliseconds per pass label; empty when the adapter has no timestamp queries.
+    pub passes: Vec<(String, f64)>,
+}
+
+impl FrameStats {
+    /// Sum of all passes, milliseconds.
+    pub fn gpu_ms(&self) -> f64 {
+        self.passes.iter().map(|(_, ms)| ms).sum()
+    }
+}
+
+/// Stage 1 and stage 3 chained, rendering into its own offscreen targets.
+#[derive(Debug)]
+pub struct Renderer {
+    mesh_buffers: MeshBuffers,
+    strands: GrowStrands,
+    ribbons: RibbonPass,
+    targets: Targets,
+    timer: Option<GpuTimer>,
+    light: DirectionalLight,
+}
+
+impl Renderer {
+    /// Uploads the mesh, samples the roots, builds every pipeline and a `width` x `height` target.
+    pub fn new(gpu: &Gpu, scene: &Scene, width: u32, height: u32) -> crate::Result<Self> {
+        let mesh_buffers = MeshBuffers::upload(gpu, &scene.mesh)?;
+        let strands = GrowStrands::new(gpu, &scene.mesh, &mesh_buffers, &scene.hair)?;
+        let ribbons = RibbonPass::new(
+            gpu,
+            &scene.shade,
+            &scene.hair,
+            &mesh_buffers,
+            strands.buffers(),
+        )?;
+        let targets = Targets::new(gpu, width, height, scene.shade.sample_count)?;
+        let timer = GpuTimer::new(gpu, 8)?;
+        Ok(Self {
+            mesh_buffers,
+            strands,
+            ribbons,
+            targets,
+            timer,
+            light: scene.light.clone(),
+        })
+    }
+
+    /// Grows the strands for time `t` and draws them from `camera`; waits for the GPU.
+    pub fn render(&mut self, gpu: &Gpu, t: f32, camera: &Camera) -> crate::Result<FrameStats> {
+        self.strands.set_time(&gpu.queue, t)?;
+        self.ribbons.set_frame(
+            &gpu.queue,
+            camera,
+            &self.light,
+            self.targets.width,
+            self.targets.height,
+        )?;
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        self.strands.encode(&mut encoder, self.timer.as_mut());
+        let (color, resolve) = self.targets.color_views();
+        let depth = self.targets.depth_view();
+        self.ribbons.encode(
+            &mut encoder,
+            &color,
+            resolve.as_ref(),
+            &depth,
+            self.timer.as_mut(),
+        );
+        if let Some(timer) = &self.timer {
+            timer.resolve(&mut encoder);
+        }
+        gpu.submit_and_wait(encoder.finish())?;
+        let passes = match &mut self.timer {
+            Some(timer) => timer.read(gpu)?.by_label(),
+            None => Vec::new(),
+        };
+        Ok(FrameStats { passes })
+    }
+
+    /// The last rendered image (sRGB RGBA8).
+    pub fn image(&self, gpu: &Gpu) -> crate::Result<image::RgbaImage> {
+        let data = self.targets.read_color(gpu)?;
+        image::RgbaImage::from_raw(data.width, data.height, data.data).ok_or_else(|| {
+            crate::Error::Gpu(pelage_gpu::GpuError::Map(
+                "colour readback has the wrong size for its image".into(),
+            ))
+        })
+    }
+
+    /// Stage 1, for binding its buffers or reading its roots.
+    pub fn strands(&self) -> &GrowStrands {
+        &self.strands
+    }
+
+    /// The mesh buffers every stage reads.
+    pub fn mesh_buffers(&self) -> &MeshBuffers {
+        &self.mesh_buffers
+    }
+}

@@ -1,0 +1,222 @@
+// Stage 1: grow strands from a triangle mesh.
+//
+// Reads:  the mesh (positions and normals as tightly packed f32 x3, a u32 triangle
+//         list) and one StrandRoot per strand (triangle, barycentrics, seed, length,
+//         jitter), plus the frame's GrowUniforms (growth shape, gravity, wind, time).
+// Writes: `vertices`, (segments + 1) vec4 per strand: xyz = position, w = strand
+//         parameter in [0, 1] (0 at the root, 1 at the tip).
+// Dispatch: one invocation per strand, workgroup_size(64), x = ceil(strand_count / 64)
+//         (y > 1 when that exceeds the dispatch limit; see `strand_index`).
+//
+// Every segment has the exact length `length / segments`: the tangent of each segment
+// is a unit vector, so no force, wind or time can stretch a strand or make it NaN.
+// The CPU mirror of this file is pelage-reference/src/strands.rs: change both together.
+
+#import shared/math.wgsl
+#import shared/noise.wgsl
+
+struct GrowUniforms {
+    strand_count: u32,
+    segments: u32,
+    // 0 = flat, 1 = PN triangle.
+    surface: u32,
+    // 0 = straight, 1 = wavy, 2 = curly.
+    hair_type: u32,
+    // wavy: amplitude, frequency; curly: radius, pitch.
+    shape_a: f32,
+    shape_b: f32,
+    force_weight: f32,
+    time: f32,
+    gravity: vec3<f32>,
+    wind_strength: f32,
+    // Unit wind direction (zero for none).
+    wind_direction: vec3<f32>,
+    gust_strength: f32,
+    gust_frequency: f32,
+    turbulence: f32,
+    turbulence_scale: f32,
+    turbulence_speed: f32,
+    // Invocations per row of the dispatch grid (x groups * 64).
+    row_stride: u32,
+    seed: u32,
+    // Spread of per-strand gust phases, seconds.
+    phase_spread: f32,
+}
+
+struct StrandRoot {
+    triangle: u32,
+    seed: u32,
+    bary: vec2<f32>,
+    length: f32,
+    width: f32,
+    // Gust phase as a fraction of phase_spread, in [0, 1).
+    phase: f32,
+    // Root direction jitter: tilt angle (radians) and azimuth (radians).
+    tilt: f32,
+    azimuth: f32,
+    color: vec3<f32>,
+}
+
+@group(0) @binding(0) var<uniform> u: GrowUniforms;
+@group(0) @binding(1) var<storage, read> positions: array<f32>;
+@group(0) @binding(2) var<storage, read> normals: array<f32>;
+@group(0) @binding(3) var<storage, read> indices: array<u32>;
+@group(0) @binding(4) var<storage, read> roots: array<StrandRoot>;
+@group(0) @binding(5) var<storage, read_write> vertices: array<vec4<f32>>;
+
+fn load_position(i: u32) -> vec3<f32> {
+    return vec3<f32>(positions[3u * i], positions[3u * i + 1u], positions[3u * i + 2u]);
+}
+
+fn load_normal(i: u32) -> vec3<f32> {
+    return vec3<f32>(normals[3u * i], normals[3u * i + 1u], normals[3u * i + 2u]);
+}
+
+struct Surface {
+    position: vec3<f32>,
+    normal: vec3<f32>,
+    // A unit vector in the tangent plane that turns with the triangle.
+    tangent: vec3<f32>,
+}
+
+// PN triangle edge control point (Vlachos et al. 2001): 1/3 of the way from pi to pj,
+// projected onto the tangent plane at pi.
+fn pn_edge(pi: vec3<f32>, pj: vec3<f32>, ni: vec3<f32>) -> vec3<f32> {
+    let w = dot(pj - pi, ni);
+    return (2.0 * pi + pj - w * ni) / 3.0;
+}
+
+// PN triangle mid-edge normal coefficient.
+fn pn_edge_normal(pi: vec3<f32>, pj: vec3<f32>, ni: vec3<f32>, nj: vec3<f32>) -> vec3<f32> {
+    let d = pj - pi;
+    let dd = dot(d, d);
+    var v = 0.0;
+    if dd > 0.0 {
+        v = 2.0 * dot(d, ni + nj) / dd;
+    }
+    return safe_normalize(ni + nj - v * d, ni);
+}
+
+// Position, normal and tangent at barycentrics (u, v, w = 1 - u - v) of a triangle
+// whose corners p1, p2, p3 belong to u, v, w.
+fn eval_surface(tri: u32, bary: vec2<f32>) -> Surface {
+    let i1 = indices[3u * tri];
+    let i2 = indices[3u * tri + 1u];
+    let i3 = indices[3u * tri + 2u];
+    let p1 = load_position(i1);
+    let p2 = load_position(i2);
+    let p3 = load_position(i3);
+    let n1 = safe_normalize(load_normal(i1), vec3<f32>(0.0, 1.0, 0.0));
+    let n2 = safe_normalize(load_normal(i2), n1);
+    let n3 = safe_normalize(load_normal(i3), n1);
+    let bu = bary.x;
+    let bv = bary.y;
+    let bw = 1.0 - bu - bv;
+
+    var s: Surface;
+    if u.surface == 1u {
+        let p210 = pn_edge(p1, p2, n1);
+        let p120 = pn_edge(p2, p1, n2);
+        let p021 = pn_edge(p2, p3, n2);
+        let p012 = pn_edge(p3, p2, n3);
+        let p102 = pn_edge(p3, p1, n3);
+        let p201 = pn_edge(p1, p3, n1);
+        let e = (p210 + p120 + p021 + p012 + p102 + p201) / 6.0;
+        let c = (p1 + p2 + p3) / 3.0;
+        let p111 = e + (e - c) * 0.5;
+        s.position = p1 * (bu * bu * bu) + p2 * (bv * bv * bv) + p3 * (bw * bw * bw)
+            + p210 * (3.0 * bu * bu * bv) + p120 * (3.0 * bu * bv * bv)
+            + p201 * (3.0 * bu * bu * bw) + p021 * (3.0 * bv * bv * bw)
+            + p012 * (3.0 * bv * bw * bw) + p102 * (3.0 * bu * bw * bw)
+            + p111 * (6.0 * bu * bv * bw);
+        let n110 = pn_edge_normal(p1, p2, n1, n2);
+        let n011 = pn_edge_normal(p2, p3, n2, n3);
+        let n101 = pn_edge_normal(p3, p1, n3, n1);
+        let n = n1 * (bu * bu) + n2 * (bv * bv) + n3 * (bw * bw)
+            + n110 * (bu * bv) + n011 * (bv * bw) + n101 * (bu * bw);
+        s.normal = safe_normalize(n, n1);
+    } else {
+        s.position = p1 * bu + p2 * bv + p3 * bw;
+        s.normal = safe_normalize(n1 * bu + n2 * bv + n3 * bw, n1);
+    }
+    s.tangent = perpendicular(s.normal, p2 - p1);
+    return s;
+}
+
+// A unit vector perpendicular to unit `n`, as close to `hint` as possible.
+fn perpendicular(n: vec3<f32>, hint: vec3<f32>) -> vec3<f32> {
+    var fallback = vec3<f32>(1.0, 0.0, 0.0);
+    if abs(n.x) > 0.9 {
+        fallback = vec3<f32>(0.0, 1.0, 0.0);
+    }
+    let f = safe_normalize(fallback - dot(fallback, n) * n, vec3<f32>(0.0, 0.0, 1.0));
+    return safe_normalize(hint - dot(hint, n) * n, f);
+}
+
+// The force field at point p for time t (already offset by the strand's phase).
+fn force(p: vec3<f32>, t: f32) -> vec3<f32> {
+    let gust = 1.0 + u.gust_strength * value_noise_1d(t * u.gust_frequency, u.seed ^ 0x9e3779b9u);
+    var f = u.gravity + u.wind_direction * (u.wind_strength * gust);
+    if u.turbulence > 0.0 {
+        let q = p * u.turbulence_scale - u.wind_direction * (t * u.turbulence_speed);
+        let turb = vec3<f32>(
+            value_noise_3d(q, u.seed ^ 0x68e31da4u),
+            value_noise_3d(q, u.seed ^ 0xb5297a4du),
+            value_noise_3d(q, u.seed ^ 0x1b56c4e9u),
+        );
+        f = f + turb * u.turbulence;
+    }
+    return f;
+}
+
+// The unit tangent of the segment whose midpoint lies at arc length s, for a strand
+// whose growth direction is d with transported frame (e1, e2).
+fn shaped_tangent(d: vec3<f32>, e1: vec3<f32>, e2: vec3<f32>, s: f32) -> vec3<f32> {
+    if u.hair_type == 1u {
+        let k = 2.0 * PI * u.shape_b;
+        let theta = atan(k * u.shape_a * cos(k * s));
+        return d * cos(theta) + e1 * sin(theta);
+    }
+    if u.hair_type == 2u {
+        let circumference = 2.0 * PI * u.shape_a;
+        let turn_length = sqrt(circumference * circumference + u.shape_b * u.shape_b);
+        let theta = atan2(circumference, u.shape_b);
+        let phi = 2.0 * PI * s / turn_length;
+        return d * cos(theta) + (e1 * cos(phi) + e2 * sin(phi)) * sin(theta);
+    }
+    return d;
+}
+
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let strand = gid.y * u.row_stride + gid.x;
+    if strand >= u.strand_count {
+        return;
+    }
+    let root = roots[strand];
+    let surf = eval_surface(root.triangle, root.bary);
+
+    // Root direction: the normal tilted by the strand's jitter.
+    let side = surf.tangent * cos(root.azimuth) + cross(surf.normal, surf.tangent) * sin(root.azimuth);
+    var d = safe_normalize(surf.normal * cos(root.tilt) + side * sin(root.tilt), surf.normal);
+    var e1 = perpendicular(d, surf.tangent);
+    var e2 = cross(d, e1);
+
+    let segments = u.segments;
+    let seg_len = root.length / f32(segments);
+    let t = u.time + root.phase * u.phase_spread;
+    let base = strand * (segments + 1u);
+    var p = surf.position;
+    vertices[base] = vec4<f32>(p, 0.0);
+    for (var i = 0u; i < segments; i++) {
+        let s = (f32(i) + 0.5) * seg_len;
+        let tangent = shaped_tangent(d, e1, e2, s);
+        p = p + tangent * seg_len;
+        vertices[base + i + 1u] = vec4<f32>(p, f32(i + 1u) / f32(segments));
+        // Bend the growth direction for the next segment, then carry the frame along.
+        let d_next = safe_normalize(d + force(p, t) * u.force_weight, d);
+        e1 = perpendicular(d_next, e1);
+        e2 = cross(d_next, e1);
+        d = d_next;
+    }
+}
