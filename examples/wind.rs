@@ -152,6 +152,12 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         }
         println!("  {:<16} {total:8.3} ms", "frame");
     }
+    // Cross-check that does not rely on the driver's timestamps: each stage alone, wall clock.
+    let last = args.frames.saturating_sub(1) as f32 / args.fps as f32;
+    println!("wall clock per stage, submitted alone (median of 5):");
+    for (stage, ms) in renderer.stage_wall_times(&gpu, last, &scene.camera, 5)? {
+        println!("  {stage:<16} {ms:8.3} ms");
+    }
     println!("wall time: {:.1} s", started.elapsed().as_secs_f64());
     Ok(())
 }

@@ -210,12 +210,15 @@ impl Gpu {
         Ok(value)
     }
 
-    /// Submit `cmd` and wait until the queue has finished it.
+    /// Submit `commands` (in order) and wait until the queue has finished it.
     ///
     /// Errors raised by the submission, errors recorded since the last check,
     /// and a lost device are returned; a failed wait is [`GpuError::Poll`].
-    pub fn submit_and_wait(&self, cmd: wgpu::CommandBuffer) -> Result<()> {
-        let index = self.scoped(|_| self.queue.submit([cmd]))?;
+    pub fn submit_and_wait(
+        &self,
+        commands: impl IntoIterator<Item = wgpu::CommandBuffer>,
+    ) -> Result<()> {
+        let index = self.scoped(|_| self.queue.submit(commands))?;
         self.device
             .poll(wgpu::PollType::Wait {
                 submission_index: Some(index),

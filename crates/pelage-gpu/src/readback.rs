@@ -55,7 +55,7 @@ pub fn read_buffer_range(
             label: Some("pelage read_buffer"),
         });
     encoder.copy_buffer_to_buffer(buffer, start, &staging, 0, stop - start);
-    gpu.submit_and_wait(encoder.finish())?;
+    gpu.submit_and_wait([encoder.finish()])?;
     let bytes = map_read(gpu, &staging, 0..stop - start)?;
     let skip = (offset - start) as usize;
     Ok(bytes
@@ -149,7 +149,7 @@ pub fn read_texture(gpu: &Gpu, texture: &wgpu::Texture) -> Result<TextureData> {
             depth_or_array_layers: 1,
         },
     );
-    gpu.submit_and_wait(encoder.finish())?;
+    gpu.submit_and_wait([encoder.finish()])?;
     let padded = map_read(gpu, &staging, 0..total)?;
 
     // Drop the padding at the end of each row.

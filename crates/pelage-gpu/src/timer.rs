@@ -15,7 +15,7 @@
 //! if let Some(t) = &timer {
 //!     t.resolve(&mut encoder);
 //! }
-//! gpu.submit_and_wait(encoder.finish())?;
+//! gpu.submit_and_wait([encoder.finish()])?;
 //! if let Some(t) = &mut timer {
 //!     for (label, ms) in t.read(gpu)?.scopes {
 //!         println!("{label}: {ms:.3} ms");

@@ -147,7 +147,7 @@ fn timed_compute_doubles_values() {
         pass.dispatch_workgroups(n / 64, 1, 1);
     }
     timer.resolve(&mut encoder);
-    gpu.submit_and_wait(encoder.finish()).unwrap();
+    gpu.submit_and_wait([encoder.finish()]).unwrap();
 
     let report = timer.read(&gpu).unwrap();
     println!("{report:?}");

@@ -77,7 +77,7 @@ fn render(gpu: &Gpu, mesh: &Mesh, hair: &HairParams, camera: &Camera) -> Vec<u8>
         &targets.depth_view(),
         None,
     );
-    gpu.submit_and_wait(encoder.finish()).unwrap();
+    gpu.submit_and_wait([encoder.finish()]).unwrap();
     let data = targets.read_color(gpu).unwrap();
     data.data.chunks(4).map(|p| p[0]).collect()
 }

@@ -25,7 +25,7 @@ fn grow_on_gpu(gpu: &Gpu, strands: &GrowStrands, t: f32) -> Vec<Vec4> {
     strands.set_time(&gpu.queue, t).unwrap();
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
     strands.encode(&mut encoder, None);
-    gpu.submit_and_wait(encoder.finish()).unwrap();
+    gpu.submit_and_wait([encoder.finish()]).unwrap();
     read_vertices(gpu, &strands.buffers().vertices)
 }
 
