@@ -96,8 +96,13 @@ impl Renderer {
         self.strands.encode(&mut encoder, self.timer.as_mut());
         let (color, resolve) = self.targets.color_views();
         let depth = self.targets.depth_view();
-        self.ribbons
-            .encode(&mut encoder, &color, resolve.as_ref(), &depth, self.timer.as_mut());
+        self.ribbons.encode(
+            &mut encoder,
+            &color,
+            resolve.as_ref(),
+            &depth,
+            self.timer.as_mut(),
+        );
         if let Some(timer) = &self.timer {
             timer.resolve(&mut encoder);
         }
@@ -122,13 +127,19 @@ impl Renderer {
         repeats: usize,
     ) -> crate::Result<Vec<(String, f64)>> {
         self.strands.set_time(&gpu.queue, t)?;
-        self.ribbons
-            .set_frame(&gpu.queue, camera, &self.light, self.targets.width, self.targets.height)?;
+        self.ribbons.set_frame(
+            &gpu.queue,
+            camera,
+            &self.light,
+            self.targets.width,
+            self.targets.height,
+        )?;
         let (color, resolve) = self.targets.color_views();
         let depth = self.targets.depth_view();
         let strands = |e: &mut wgpu::CommandEncoder| self.strands.encode(e, None);
         let shade = |e: &mut wgpu::CommandEncoder| {
-            self.ribbons.encode(e, &color, resolve.as_ref(), &depth, None)
+            self.ribbons
+                .encode(e, &color, resolve.as_ref(), &depth, None)
         };
         let encoders: [(&str, &dyn Fn(&mut wgpu::CommandEncoder)); 2] =
             [("strands", &strands), ("shade", &shade)];
