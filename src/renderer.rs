@@ -136,28 +136,15 @@ impl Renderer {
         )?;
         let (color, resolve) = self.targets.color_views();
         let depth = self.targets.depth_view();
-        let strands = |e: &mut wgpu::CommandEncoder| self.strands.encode(e, None);
-        let shade = |e: &mut wgpu::CommandEncoder| {
+        let strands = time_alone(gpu, repeats, |e| self.strands.encode(e, None))?;
+        let shade = time_alone(gpu, repeats, |e| {
             self.ribbons
                 .encode(e, &color, resolve.as_ref(), &depth, None)
-        };
-        let encoders: [(&str, &dyn Fn(&mut wgpu::CommandEncoder)); 2] =
-            [("strands", &strands), ("shade", &shade)];
-        let mut stages = Vec::new();
-        for (stage, encode) in encoders {
-            let mut times = Vec::with_capacity(repeats.max(1));
-            for _ in 0..repeats.max(1) {
-                let mut encoder = gpu.device.create_command_encoder(&Default::default());
-                encode(&mut encoder);
-                let command = encoder.finish();
-                let started = std::time::Instant::now();
-                gpu.submit_and_wait([command])?;
-                times.push(started.elapsed().as_secs_f64() * 1e3);
-            }
-            times.sort_by(f64::total_cmp);
-            stages.push((stage.to_string(), times[times.len() / 2]));
-        }
-        Ok(stages)
+        })?;
+        Ok(vec![
+            ("strands".to_string(), strands),
+            ("shade".to_string(), shade),
+        ])
     }
 
     /// The last rendered image (sRGB RGBA8).
@@ -179,4 +166,23 @@ impl Renderer {
     pub fn mesh_buffers(&self) -> &MeshBuffers {
         &self.mesh_buffers
     }
+}
+
+/// Median wall-clock milliseconds of `repeats` submissions of what `encode` records, each waited for.
+fn time_alone(
+    gpu: &Gpu,
+    repeats: usize,
+    encode: impl Fn(&mut wgpu::CommandEncoder),
+) -> crate::Result<f64> {
+    let mut times = Vec::with_capacity(repeats.max(1));
+    for _ in 0..repeats.max(1) {
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        encode(&mut encoder);
+        let command = encoder.finish();
+        let started = std::time::Instant::now();
+        gpu.submit_and_wait([command])?;
+        times.push(started.elapsed().as_secs_f64() * 1e3);
+    }
+    times.sort_by(f64::total_cmp);
+    Ok(times[times.len() / 2])
 }
