@@ -4,12 +4,14 @@
 //! progress bar, and ends with a summary of what it wrote and the GPU time per stage.
 //!
 //! ```text
-//! cargo run --release --example wind -- [--frames N] [--size WxH] [--strands N] [--fps N] [--out DIR]
+//! cargo run --release --example wind -- [--frames N] [--size WxH] [--strands N] [--fps N]
+//!     [--out DIR] [--shadow none|voxel] [--voxels N]
 //! ```
 
 use std::path::PathBuf;
 use std::time::Instant;
 
+use pelage::scene::{ShadowParams, VoxelParams};
 use pelage::{Renderer, Scene, gpu::Gpu, save_png, write_atomically};
 
 struct Args {
@@ -19,6 +21,7 @@ struct Args {
     strands: Option<u32>,
     fps: u32,
     out: PathBuf,
+    shadow: ShadowParams,
 }
 
 fn parse_args() -> Result<Args, String> {
@@ -29,6 +32,7 @@ fn parse_args() -> Result<Args, String> {
         strands: None,
         fps: 24,
         out: PathBuf::from("out/wind"),
+        shadow: ShadowParams::default(),
     };
     let mut it = std::env::args().skip(1);
     while let Some(flag) = it.next() {
@@ -39,6 +43,22 @@ fn parse_args() -> Result<Args, String> {
             "--strands" => args.strands = Some(number(value()?)?),
             "--fps" => args.fps = number(value()?)?.max(1),
             "--out" => args.out = PathBuf::from(value()?),
+            "--shadow" => {
+                args.shadow = match value()?.as_str() {
+                    "none" => ShadowParams::None,
+                    "voxel" => ShadowParams::Voxel(VoxelParams::default()),
+                    other => return Err(format!("--shadow {other}: expected none or voxel")),
+                }
+            }
+            "--voxels" => {
+                let n = number(value()?)?;
+                match &mut args.shadow {
+                    ShadowParams::Voxel(v) => v.resolution = [n; 3],
+                    ShadowParams::None => {
+                        return Err("--voxels needs --shadow voxel before it".into());
+                    }
+                }
+            }
             "--size" => {
                 let v = value()?;
                 let (w, h) = v
@@ -54,7 +74,9 @@ fn parse_args() -> Result<Args, String> {
                      --size WxH     image size (480x360)\n\
                      --strands N    strand count (the scene's default, 20000)\n\
                      --fps N        frames per second of the animation (24)\n\
-                     --out DIR      output folder (out/wind)"
+                     --out DIR      output folder (out/wind)\n\
+                     --shadow M     shadow method: none or voxel (voxel)\n\
+                     --voxels N     voxel grid resolution per axis (128)"
                 );
                 std::process::exit(0);
             }
@@ -80,7 +102,10 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let gpu = Gpu::headless()?;
     println!("adapter: {}", gpu.describe());
 
-    let mut scene = Scene::default();
+    let mut scene = Scene {
+        shadow: args.shadow.clone(),
+        ..Scene::default()
+    };
     if let Some(n) = args.strands {
         scene.hair.roots.count = n;
     }

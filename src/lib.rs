@@ -4,14 +4,15 @@
 //!
 //! 1. [`strands`]: a compute pass grows strands from a mesh (PN triangles, hair
 //!    types, gravity and wind for a time `t`);
-//! 2. shadows (to come);
+//! 2. [`shadow`]: voxel shadows (density splatted into a light-space grid fitted
+//!    to the hair, summed along the light) and a shadow map for the mesh;
 //! 3. [`shade`]: strands drawn as camera-facing ribbons pulled from the strand
 //!    buffer, Kajiya-Kay shaded, over the opaque mesh.
 //!
 //! [`Renderer`] chains the stages for the common case: one mesh, one groom, one
 //! light, an offscreen image. Engines that bring their own device, buffers and
 //! render targets call the stage types directly ([`strands::GrowStrands`],
-//! [`shade::RibbonPass`]) on their own encoder.
+//! [`shadow::VoxelShadow`], [`shade::RibbonPass`]) on their own encoder.
 //!
 //! ```no_run
 //! let gpu = pelage::gpu::Gpu::headless()?;
@@ -26,6 +27,7 @@
 pub use pelage_gpu as gpu;
 pub use pelage_scene as scene;
 pub use pelage_shade as shade;
+pub use pelage_shadow as shadow;
 pub use pelage_strands as strands;
 
 mod output;
@@ -40,6 +42,9 @@ pub enum Error {
     /// Stage 1 failed.
     #[error("strands: {0}")]
     Strands(#[from] strands::StrandsError),
+    /// Stage 2 failed.
+    #[error("shadow: {0}")]
+    Shadow(#[from] shadow::ShadowError),
     /// Stage 3 failed.
     #[error("shade: {0}")]
     Shade(#[from] shade::ShadeError),

@@ -1,8 +1,9 @@
-//! The frame pipeline: stage 1 then stage 3 into an offscreen image.
+//! The frame pipeline: strands, shadows, then shading into an offscreen image.
 
 use pelage_gpu::{Gpu, GpuTimer, wgpu};
-use pelage_scene::{Camera, DirectionalLight, HairParams, Mesh, ShadeParams};
+use pelage_scene::{Camera, DirectionalLight, HairParams, Mesh, ShadeParams, ShadowParams};
 use pelage_shade::{RibbonPass, Targets};
+use pelage_shadow::VoxelShadow;
 use pelage_strands::{GrowStrands, MeshBuffers};
 
 /// Everything a frame is made of.
@@ -12,6 +13,8 @@ pub struct Scene {
     pub mesh: Mesh,
     /// Roots, growth and wind.
     pub hair: HairParams,
+    /// Shadow method.
+    pub shadow: ShadowParams,
     /// Raster and shading.
     pub shade: ShadeParams,
     /// The camera.
@@ -26,10 +29,28 @@ impl Default for Scene {
         Self {
             mesh: Mesh::creature(),
             hair: HairParams::default(),
+            shadow: ShadowParams::default(),
             shade: ShadeParams::default(),
             camera: Camera::default(),
             light: DirectionalLight::default(),
         }
+    }
+}
+
+impl Scene {
+    /// A world box holding the mesh and everything that can grow on it: the mesh's
+    /// bounds grown by the longest strand (length, jitter and length map) and its width.
+    pub fn reach(&self) -> (glam::Vec3, glam::Vec3) {
+        let (lo, hi) = self.mesh.bounds();
+        let g = &self.hair.growth;
+        let map_max = self
+            .hair
+            .roots
+            .length_scale
+            .as_ref()
+            .map_or(1.0, |m| m.iter().copied().fold(0.0f32, f32::max));
+        let reach = g.length * (1.0 + g.length_jitter) * map_max + g.width;
+        (lo - glam::Vec3::splat(reach), hi + glam::Vec3::splat(reach))
     }
 }
 
@@ -47,11 +68,12 @@ impl FrameStats {
     }
 }
 
-/// Stage 1 and stage 3 chained, rendering into its own offscreen targets.
+/// Stages 1, 2 and 3 chained, rendering into its own offscreen targets.
 #[derive(Debug)]
 pub struct Renderer {
     mesh_buffers: MeshBuffers,
     strands: GrowStrands,
+    shadow: Option<VoxelShadow>,
     ribbons: RibbonPass,
     targets: Targets,
     timer: Option<GpuTimer>,
@@ -63,18 +85,32 @@ impl Renderer {
     pub fn new(gpu: &Gpu, scene: &Scene, width: u32, height: u32) -> crate::Result<Self> {
         let mesh_buffers = MeshBuffers::upload(gpu, &scene.mesh)?;
         let strands = GrowStrands::new(gpu, &scene.mesh, &mesh_buffers, &scene.hair)?;
+        let shadow = match &scene.shadow {
+            ShadowParams::None => None,
+            ShadowParams::Voxel(params) => Some(VoxelShadow::new(
+                gpu,
+                params,
+                &scene.hair.growth,
+                strands.buffers(),
+                &mesh_buffers,
+                scene.reach(),
+            )?),
+        };
+        let binding = shadow.as_ref().map(VoxelShadow::binding);
         let ribbons = RibbonPass::new(
             gpu,
             &scene.shade,
             &scene.hair,
             &mesh_buffers,
             strands.buffers(),
+            binding.as_ref(),
         )?;
         let targets = Targets::new(gpu, width, height, scene.shade.sample_count)?;
-        let timer = GpuTimer::new(gpu, 8)?;
+        let timer = GpuTimer::new(gpu, 16)?;
         Ok(Self {
             mesh_buffers,
             strands,
+            shadow,
             ribbons,
             targets,
             timer,
@@ -82,27 +118,31 @@ impl Renderer {
         })
     }
 
-    /// Grows the strands for time `t` and draws them from `camera`; waits for the GPU.
-    pub fn render(&mut self, gpu: &Gpu, t: f32, camera: &Camera) -> crate::Result<FrameStats> {
+    /// Writes the per-frame uniforms of every stage for time `t` and `camera`.
+    fn prepare(&self, gpu: &Gpu, t: f32, camera: &Camera) -> crate::Result<()> {
         self.strands.set_time(&gpu.queue, t)?;
-        self.ribbons.set_frame(
-            &gpu.queue,
-            camera,
-            &self.light,
-            self.targets.width,
-            self.targets.height,
-        )?;
+        if let Some(shadow) = &self.shadow {
+            shadow.set_light(&gpu.queue, &self.light)?;
+        }
+        let (width, height) = (self.targets.width, self.targets.height);
+        self.ribbons
+            .set_frame(&gpu.queue, camera, &self.light, width, height)?;
+        Ok(())
+    }
+
+    /// Grows the strands for time `t`, shadows them and draws them from `camera`; waits for the GPU.
+    pub fn render(&mut self, gpu: &Gpu, t: f32, camera: &Camera) -> crate::Result<FrameStats> {
+        self.prepare(gpu, t, camera)?;
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         self.strands.encode(&mut encoder, self.timer.as_mut());
+        if let Some(shadow) = &self.shadow {
+            shadow.encode(&mut encoder, self.timer.as_mut());
+        }
         let (color, resolve) = self.targets.color_views();
         let depth = self.targets.depth_view();
-        self.ribbons.encode(
-            &mut encoder,
-            &color,
-            resolve.as_ref(),
-            &depth,
-            self.timer.as_mut(),
-        );
+        let timer = self.timer.as_mut();
+        self.ribbons
+            .encode(&mut encoder, &color, resolve.as_ref(), &depth, timer);
         if let Some(timer) = &self.timer {
             timer.resolve(&mut encoder);
         }
@@ -126,25 +166,23 @@ impl Renderer {
         camera: &Camera,
         repeats: usize,
     ) -> crate::Result<Vec<(String, f64)>> {
-        self.strands.set_time(&gpu.queue, t)?;
-        self.ribbons.set_frame(
-            &gpu.queue,
-            camera,
-            &self.light,
-            self.targets.width,
-            self.targets.height,
-        )?;
+        self.prepare(gpu, t, camera)?;
         let (color, resolve) = self.targets.color_views();
         let depth = self.targets.depth_view();
-        let strands = time_alone(gpu, repeats, |e| self.strands.encode(e, None))?;
+        let mut stages = vec![(
+            "strands".to_string(),
+            time_alone(gpu, repeats, |e| self.strands.encode(e, None))?,
+        )];
+        if let Some(shadow) = &self.shadow {
+            let ms = time_alone(gpu, repeats, |e| shadow.encode(e, None))?;
+            stages.push(("shadow".to_string(), ms));
+        }
         let shade = time_alone(gpu, repeats, |e| {
             self.ribbons
                 .encode(e, &color, resolve.as_ref(), &depth, None)
         })?;
-        Ok(vec![
-            ("strands".to_string(), strands),
-            ("shade".to_string(), shade),
-        ])
+        stages.push(("shade".to_string(), shade));
+        Ok(stages)
     }
 
     /// The last rendered image (sRGB RGBA8).

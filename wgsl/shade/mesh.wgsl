@@ -1,4 +1,5 @@
-// Stage 3, opaque mesh: the surface the hair grows from, Lambert shaded.
+// Stage 3, opaque mesh: the surface the hair grows from, Lambert shaded, shadowed
+// through the shadow contract (light_visibility, shadow/none.wgsl or its redirect).
 //
 // Reads:  Frame (uniform), mesh positions and normals (f32 x3 storage), the u32
 //         triangle list (storage), MeshStyle (uniform).
@@ -6,6 +7,7 @@
 // Draw:   non-indexed, 3 * triangle_count vertices; vertex_index pulls the index list.
 
 #import shade/frame.wgsl
+#import shadow/none.wgsl
 
 struct MeshStyle {
     color: vec3<f32>,
@@ -21,6 +23,7 @@ struct MeshStyle {
 struct VertexOut {
     @builtin(position) clip: vec4<f32>,
     @location(0) normal: vec3<f32>,
+    @location(1) world: vec3<f32>,
 }
 
 @vertex
@@ -31,13 +34,14 @@ fn vs_main(@builtin(vertex_index) vi: u32) -> VertexOut {
     var out: VertexOut;
     out.clip = frame.view_proj * vec4<f32>(p, 1.0);
     out.normal = n;
+    out.world = p;
     return out;
 }
 
 @fragment
 fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
     let n = normalize(in.normal);
-    let lambert = max(dot(n, frame.to_light), 0.0);
+    let lambert = max(dot(n, frame.to_light), 0.0) * light_visibility(in.world);
     let c = style.color * (frame.ambient + lambert * frame.light_color);
     return vec4<f32>(c, 1.0);
 }

@@ -1,5 +1,6 @@
 // Stage 3, hair: strands expanded into camera-facing ribbons in the vertex shader,
-// Kajiya-Kay shaded, depth tested.
+// Kajiya-Kay shaded, shadowed through the shadow contract (light_visibility,
+// shadow/none.wgsl or its redirect), depth tested.
 //
 // Reads:  Frame (uniform), the strand vertices (vec4: xyz position, w strand
 //         parameter) and StrandRoot attributes written by stage 1, RibbonStyle (uniform).
@@ -8,19 +9,9 @@
 //         (two triangles per segment; no vertex buffers, everything is pulled).
 
 #import shared/math.wgsl
+#import shared/strand.wgsl
 #import shade/frame.wgsl
-
-struct StrandRoot {
-    triangle: u32,
-    seed: u32,
-    bary: vec2<f32>,
-    length: f32,
-    width: f32,
-    phase: f32,
-    tilt: f32,
-    azimuth: f32,
-    color: vec3<f32>,
-}
+#import shadow/none.wgsl
 
 struct RibbonStyle {
     segments: u32,
@@ -114,7 +105,8 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
     let v = safe_normalize(frame.eye - in.world, vec3<f32>(0.0, 0.0, 1.0));
     let kk = kajiya_kay(t, frame.to_light, v);
     let occlusion = mix(1.0 - style.root_occlusion, 1.0, in.v);
-    let lit = in.color * (frame.ambient + style.diffuse * kk.x * frame.light_color)
-        + style.specular_color * (style.specular * kk.y) * frame.light_color;
+    let light = frame.light_color * light_visibility(in.world);
+    let lit = in.color * (frame.ambient + style.diffuse * kk.x * light)
+        + style.specular_color * (style.specular * kk.y) * light;
     return vec4<f32>(lit * occlusion, 1.0);
 }

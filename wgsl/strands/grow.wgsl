@@ -5,14 +5,15 @@
 //         jitter), plus the frame's GrowUniforms (growth shape, gravity, wind, time).
 // Writes: `vertices`, (segments + 1) vec4 per strand: xyz = position, w = strand
 //         parameter in [0, 1] (0 at the root, 1 at the tip).
-// Dispatch: one invocation per strand, workgroup_size(64), x = ceil(strand_count / 64)
-//         (y > 1 when that exceeds the dispatch limit; see `strand_index`).
+// Dispatch: one invocation per strand, workgroup_size(64); x = min(groups, limit),
+//         y = ceil(groups / x).
 //
 // Every segment has the exact length `length / segments`: the tangent of each segment
 // is a unit vector, so no force, wind or time can stretch a strand or make it NaN.
 // The CPU mirror of this file is pelage-reference/src/strands.rs: change both together.
 
 #import shared/math.wgsl
+#import shared/strand.wgsl
 #import shared/noise.wgsl
 
 struct GrowUniforms {
@@ -36,25 +37,9 @@ struct GrowUniforms {
     turbulence: f32,
     turbulence_scale: f32,
     turbulence_speed: f32,
-    // Invocations per row of the dispatch grid (x groups * 64).
-    row_stride: u32,
     seed: u32,
     // Spread of per-strand gust phases, seconds.
     phase_spread: f32,
-}
-
-struct StrandRoot {
-    triangle: u32,
-    seed: u32,
-    bary: vec2<f32>,
-    length: f32,
-    width: f32,
-    // Gust phase as a fraction of phase_spread, in [0, 1).
-    phase: f32,
-    // Root direction jitter: tilt angle (radians) and azimuth (radians).
-    tilt: f32,
-    azimuth: f32,
-    color: vec3<f32>,
 }
 
 @group(0) @binding(0) var<uniform> u: GrowUniforms;
@@ -188,8 +173,8 @@ fn shaped_tangent(d: vec3<f32>, e1: vec3<f32>, e2: vec3<f32>, s: f32) -> vec3<f3
 }
 
 @compute @workgroup_size(64)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let strand = gid.y * u.row_stride + gid.x;
+fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let strand = gid.y * groups.x * 64u + gid.x;
     if strand >= u.strand_count {
         return;
     }

@@ -6,20 +6,26 @@
 //!   and naga-validated;
 //! - typed buffers laid out by encase ([`storage_buffer`], [`UniformBuffer`]);
 //! - [`GpuTimer`]: per-pass GPU time from timestamp queries;
+//! - [`ShaderBinding`]: a WGSL contract implementation plus its resources, handed
+//!   from one stage to another;
 //! - readback of buffers and textures for tests and tools.
 
 #![warn(missing_docs)]
 
+pub mod binding;
 pub mod buffers;
 pub mod context;
 pub mod error;
+pub mod pipelines;
 pub mod readback;
 pub mod shaders;
 pub mod timer;
 
+pub use binding::{BoundResource, ShaderBinding};
 pub use buffers::{UniformBuffer, storage_buffer, zeroed_storage};
 pub use context::Gpu;
 pub use error::{GpuError, Result};
+pub use pipelines::{bind_buffers, bind_numbered, compute_pipeline, dispatch_size};
 pub use readback::{TextureData, read_buffer, read_buffer_range, read_texture};
 pub use shaders::{SOURCES, ShaderError, ShaderLibrary};
 pub use timer::{GpuTimer, TimerReport};

@@ -95,7 +95,35 @@ impl ShaderLibrary {
     /// Compose, validate with naga, and create a [`wgpu::ShaderModule`] inside
     /// an error scope (so the device's own checks are caught too).
     pub fn module(gpu: &Gpu, name: &str) -> Result<wgpu::ShaderModule> {
-        let composed = compose_with(name, &lookup)?;
+        Self::module_redirected(gpu, name, &[])
+    }
+
+    /// [`ShaderLibrary::compose`] with some imports redirected: for each
+    /// `(from, to)`, `#import from` includes the file `to` instead. This is how a
+    /// pass picks an implementation of a contract (say, which shadow method
+    /// `shadow/none.wgsl` stands for) without knowing the method.
+    pub fn compose_redirected(
+        name: &str,
+        redirects: &[(&str, &str)],
+    ) -> Result<String, ShaderError> {
+        Ok(compose_with(name, &redirected(redirects))?.text)
+    }
+
+    /// [`ShaderLibrary::validate`] with redirected imports.
+    pub fn validate_redirected(
+        name: &str,
+        redirects: &[(&str, &str)],
+    ) -> Result<naga::Module, ShaderError> {
+        validate_composed(name, &compose_with(name, &redirected(redirects))?)
+    }
+
+    /// [`ShaderLibrary::module`] with redirected imports.
+    pub fn module_redirected(
+        gpu: &Gpu,
+        name: &str,
+        redirects: &[(&str, &str)],
+    ) -> Result<wgpu::ShaderModule> {
+        let composed = compose_with(name, &redirected(redirects))?;
         validate_composed(name, &composed)?;
         gpu.scoped(|device| {
             device.create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -103,6 +131,19 @@ impl ShaderLibrary {
                 source: wgpu::ShaderSource::Wgsl(composed.text.into()),
             })
         })
+    }
+}
+
+/// A lookup that reads `to` wherever `from` is asked for.
+fn redirected<'r>(
+    redirects: &'r [(&'r str, &'r str)],
+) -> impl Fn(&str) -> Option<&'static str> + 'r {
+    move |name| {
+        let target = redirects
+            .iter()
+            .find(|(from, _)| *from == name)
+            .map_or(name, |(_, to)| *to);
+        lookup(target)
     }
 }
 

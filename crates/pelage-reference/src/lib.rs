@@ -7,3 +7,5 @@
 
 pub mod noise;
 pub mod strands;
+pub mod transmittance;
+pub mod voxel;

@@ -18,5 +18,5 @@ pub use mesh::{Mesh, MeshError, MeshReport};
 pub use obj::{ObjError, load_obj, parse_obj};
 pub use params::{
     GrowthParams, HairParams, HairType, MAX_FORCE, MAX_SEGMENTS, ParamError, RootParams,
-    ShadeParams, SurfaceInterpolation, WindParams,
+    ShadeParams, ShadowParams, Splat, SurfaceInterpolation, VoxelParams, WindParams,
 };

@@ -18,7 +18,7 @@ pub struct DirectionalLight {
 impl Default for DirectionalLight {
     fn default() -> Self {
         Self {
-            direction: Vec3::new(-0.5, -0.8, -0.35),
+            direction: Vec3::new(-0.85, -0.6, 0.1),
             color: Vec3::ONE,
             intensity: 1.8,
         }

@@ -2,7 +2,7 @@
 
 use encase::ShaderType;
 use glam::{Mat4, Vec3};
-use pelage_gpu::{Gpu, GpuTimer, ShaderLibrary, UniformBuffer, wgpu};
+use pelage_gpu::{Gpu, GpuTimer, ShaderBinding, ShaderLibrary, UniformBuffer, bind_buffers, wgpu};
 use pelage_scene::{Camera, DirectionalLight, HairParams, ShadeParams};
 use pelage_strands::{MeshBuffers, StrandBuffers};
 
@@ -64,23 +64,31 @@ pub struct MeshStyle {
 pub struct RibbonPass {
     params: ShadeParams,
     frame: UniformBuffer<FrameUniforms>,
-    mesh_pipeline: wgpu::RenderPipeline,
-    mesh_bind_group: wgpu::BindGroup,
-    hair_pipeline: wgpu::RenderPipeline,
-    hair_bind_group: wgpu::BindGroup,
-    mesh_vertices: u32,
-    hair_vertices: u32,
+    /// The mesh, then the hair.
+    draws: [Draw; 2],
+}
+
+/// One render pass: a pipeline, its bind groups (index = group; `None` = unused), a vertex count.
+#[derive(Debug)]
+struct Draw {
+    label: &'static str,
+    pipeline: wgpu::RenderPipeline,
+    groups: Vec<Option<wgpu::BindGroup>>,
+    vertices: u32,
 }
 
 impl RibbonPass {
     /// Builds the pipelines for targets of `ShadeParams::sample_count` samples in
     /// [`COLOR_FORMAT`] and [`DEPTH_FORMAT`], bound to the given mesh and strand buffers.
+    /// `shadow` is stage 2's implementation of the shadow contract (`shadow/none.wgsl`);
+    /// `None` draws without shadows.
     pub fn new(
         gpu: &Gpu,
         params: &ShadeParams,
         hair: &HairParams,
         mesh: &MeshBuffers,
         strands: &StrandBuffers,
+        shadow: Option<&ShaderBinding>,
     ) -> crate::Result<Self> {
         params.validate()?;
         hair.growth.validate()?;
@@ -121,62 +129,82 @@ impl RibbonPass {
                 _pad: 0.0,
             },
         )?;
-        let mesh_module = ShaderLibrary::module(gpu, "shade/mesh.wgsl")?;
-        let hair_module = ShaderLibrary::module(gpu, "shade/ribbons.wgsl")?;
+        // The shadow contract: both passes import shadow/none.wgsl; a shadow method
+        // redirects it to its own lookup and hands over the resources for group 1.
+        let redirects: Vec<(&str, &str)> = shadow.iter().map(|b| b.redirect()).collect();
+        let mesh_module = ShaderLibrary::module_redirected(gpu, "shade/mesh.wgsl", &redirects)?;
+        let hair_module = ShaderLibrary::module_redirected(gpu, "shade/ribbons.wgsl", &redirects)?;
         let samples = params.sample_count;
 
-        let (mesh_pipeline, mesh_bind_group, hair_pipeline, hair_bind_group) =
-            gpu.scoped(|device| {
-                let mesh_pipeline = raster_pipeline(
-                    device,
-                    "pelage mesh",
-                    &mesh_module,
-                    samples,
-                    Some(wgpu::Face::Back),
-                );
-                // Ribbons face the camera by construction; either winding may reach the rasterizer.
-                let hair_pipeline =
-                    raster_pipeline(device, "pelage ribbons", &hair_module, samples, None);
-                let mesh_bind_group = bind_group(
-                    device,
-                    "pelage mesh",
-                    &mesh_pipeline,
-                    &[
-                        &frame.buffer,
-                        &mesh.positions,
-                        &mesh.normals,
-                        &mesh.indices,
-                        &mesh_style.buffer,
-                    ],
-                );
-                let hair_bind_group = bind_group(
-                    device,
-                    "pelage ribbons",
-                    &hair_pipeline,
-                    &[
-                        &frame.buffer,
-                        &strands.vertices,
-                        &strands.roots,
-                        &ribbon_style.buffer,
-                    ],
-                );
-                (
-                    mesh_pipeline,
-                    mesh_bind_group,
-                    hair_pipeline,
-                    hair_bind_group,
-                )
-            })?;
+        let (mesh, hair) = gpu.scoped(|device| {
+            let mesh_pipeline = raster_pipeline(
+                device,
+                "pelage mesh",
+                &mesh_module,
+                samples,
+                Some(wgpu::Face::Back),
+            );
+            // Ribbons face the camera by construction; either winding may reach the rasterizer.
+            let hair_pipeline =
+                raster_pipeline(device, "pelage ribbons", &hair_module, samples, None);
+            let mesh_groups = [bind_buffers(
+                device,
+                "pelage mesh",
+                &mesh_pipeline.get_bind_group_layout(0),
+                &[
+                    &frame.buffer,
+                    &mesh.positions,
+                    &mesh.normals,
+                    &mesh.indices,
+                    &mesh_style.buffer,
+                ],
+            )];
+            let hair_groups = [bind_buffers(
+                device,
+                "pelage ribbons",
+                &hair_pipeline.get_bind_group_layout(0),
+                &[
+                    &frame.buffer,
+                    &strands.vertices,
+                    &strands.roots,
+                    &ribbon_style.buffer,
+                ],
+            )];
+            let shadow_group = |pipeline: &wgpu::RenderPipeline, label: &str| {
+                shadow.and_then(|b| {
+                    b.bind_group(device, label, &pipeline.get_bind_group_layout(b.group))
+                })
+            };
+            let mesh_shadow = shadow_group(&mesh_pipeline, "pelage mesh shadow");
+            let hair_shadow = shadow_group(&hair_pipeline, "pelage ribbons shadow");
+            (
+                Draw {
+                    label: "shade: mesh",
+                    pipeline: mesh_pipeline,
+                    groups: mesh_groups
+                        .into_iter()
+                        .map(Some)
+                        .chain([mesh_shadow])
+                        .collect(),
+                    vertices: mesh.triangle_count.saturating_mul(3),
+                },
+                Draw {
+                    label: "shade: hair",
+                    pipeline: hair_pipeline,
+                    groups: hair_groups
+                        .into_iter()
+                        .map(Some)
+                        .chain([hair_shadow])
+                        .collect(),
+                    vertices: hair_vertices,
+                },
+            )
+        })?;
 
         Ok(Self {
             params: params.clone(),
             frame,
-            mesh_pipeline,
-            mesh_bind_group,
-            hair_pipeline,
-            hair_bind_group,
-            mesh_vertices: mesh.triangle_count.saturating_mul(3),
-            hair_vertices,
+            draws: [mesh, hair],
         })
     }
 
@@ -211,23 +239,9 @@ impl RibbonPass {
         mut timer: Option<&mut GpuTimer>,
     ) {
         let bg = self.params.background;
-        let passes: [(&str, &wgpu::RenderPipeline, &wgpu::BindGroup, u32, bool); 2] = [
-            (
-                "shade: mesh",
-                &self.mesh_pipeline,
-                &self.mesh_bind_group,
-                self.mesh_vertices,
-                true,
-            ),
-            (
-                "shade: hair",
-                &self.hair_pipeline,
-                &self.hair_bind_group,
-                self.hair_vertices,
-                false,
-            ),
-        ];
-        for (label, pipeline, bind_group, vertices, first) in passes {
+        for (i, draw) in self.draws.iter().enumerate() {
+            let first = i == 0;
+            let label = draw.label;
             let timestamp_writes = timer.as_deref_mut().and_then(|t| t.render_pass(label));
             let load_color = if first {
                 wgpu::LoadOp::Clear(wgpu::Color {
@@ -266,9 +280,13 @@ impl RibbonPass {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            pass.set_pipeline(pipeline);
-            pass.set_bind_group(0, bind_group, &[]);
-            pass.draw(0..vertices, 0..1);
+            pass.set_pipeline(&draw.pipeline);
+            for (group, bind_group) in draw.groups.iter().enumerate() {
+                if let Some(bind_group) = bind_group {
+                    pass.set_bind_group(group as u32, bind_group, &[]);
+                }
+            }
+            pass.draw(0..draw.vertices, 0..1);
         }
     }
 }
@@ -334,26 +352,5 @@ fn raster_pipeline(
         }),
         multiview_mask: None,
         cache: None,
-    })
-}
-
-fn bind_group(
-    device: &wgpu::Device,
-    label: &str,
-    pipeline: &wgpu::RenderPipeline,
-    buffers: &[&wgpu::Buffer],
-) -> wgpu::BindGroup {
-    let entries: Vec<_> = buffers
-        .iter()
-        .enumerate()
-        .map(|(i, b)| wgpu::BindGroupEntry {
-            binding: i as u32,
-            resource: b.as_entire_binding(),
-        })
-        .collect();
-    device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some(label),
-        layout: &pipeline.get_bind_group_layout(0),
-        entries: &entries,
     })
 }

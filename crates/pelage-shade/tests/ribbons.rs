@@ -62,7 +62,7 @@ fn render(gpu: &Gpu, mesh: &Mesh, hair: &HairParams, camera: &Camera) -> Vec<u8>
     let mesh_buffers = MeshBuffers::upload(gpu, mesh).unwrap();
     let strands = GrowStrands::new(gpu, mesh, &mesh_buffers, hair).unwrap();
     let params = shade_params();
-    let pass = RibbonPass::new(gpu, &params, hair, &mesh_buffers, strands.buffers()).unwrap();
+    let pass = RibbonPass::new(gpu, &params, hair, &mesh_buffers, strands.buffers(), None).unwrap();
     let targets = Targets::new(gpu, SIZE, SIZE, params.sample_count).unwrap();
     strands.set_time(&gpu.queue, 0.0).unwrap();
     pass.set_frame(&gpu.queue, camera, &DirectionalLight::default(), SIZE, SIZE)
@@ -134,4 +134,25 @@ fn mesh_in_front_hides_the_hair() {
         hidden.iter().all(|&r| r == 0),
         "hair shows through the mesh"
     );
+}
+
+#[test]
+fn shading_passes_compose_with_every_shadow_implementation() {
+    // Every file that implements the shadow contract (`light_visibility`), by naming convention.
+    let implementations: Vec<&str> = pelage_gpu::ShaderLibrary::names()
+        .filter(|n| *n == "shadow/none.wgsl" || n.ends_with("_lookup.wgsl"))
+        .collect();
+    assert!(
+        implementations.contains(&"shadow/voxel_lookup.wgsl"),
+        "{implementations:?}"
+    );
+    for pass in ["shade/mesh.wgsl", "shade/ribbons.wgsl"] {
+        for implementation in &implementations {
+            pelage_gpu::ShaderLibrary::validate_redirected(
+                pass,
+                &[("shadow/none.wgsl", implementation)],
+            )
+            .unwrap_or_else(|e| panic!("{pass} with {implementation}: {e}"));
+        }
+    }
 }

@@ -3,7 +3,8 @@
 use encase::ShaderType;
 use glam::Vec3;
 use pelage_gpu::{
-    Gpu, GpuTimer, ShaderLibrary, UniformBuffer, storage_buffer, wgpu, zeroed_storage,
+    Gpu, GpuTimer, ShaderLibrary, UniformBuffer, bind_buffers, compute_pipeline, dispatch_size,
+    storage_buffer, wgpu, zeroed_storage,
 };
 use pelage_scene::{HairParams, HairType, Mesh, SurfaceInterpolation, WindParams};
 
@@ -47,8 +48,6 @@ pub struct GrowUniforms {
     pub turbulence_scale: f32,
     /// Turbulence advection speed.
     pub turbulence_speed: f32,
-    /// Invocations per row of the dispatch grid.
-    pub row_stride: u32,
     /// Seed of the wind noise.
     pub seed: u32,
     /// Spread of per-strand gust phases, seconds.
@@ -56,8 +55,8 @@ pub struct GrowUniforms {
 }
 
 impl GrowUniforms {
-    /// The uniforms for `params` at time `t`, for a dispatch grid rows of `row_stride` invocations.
-    pub fn new(params: &HairParams, time: f32, row_stride: u32) -> Self {
+    /// The uniforms for `params` at time `t`.
+    pub fn new(params: &HairParams, time: f32) -> Self {
         let g = &params.growth;
         let w = &params.wind;
         let (hair_type, shape_a, shape_b) = match g.hair_type {
@@ -88,7 +87,6 @@ impl GrowUniforms {
             turbulence: w.turbulence,
             turbulence_scale: w.turbulence_scale,
             turbulence_speed: w.turbulence_speed,
-            row_stride,
             seed: params.roots.seed,
             phase_spread: w.phase_spread,
         }
@@ -177,49 +175,29 @@ impl GrowStrands {
         let vertex_bytes = u64::from(count) * u64::from(params.growth.segments + 1) * 16;
         gpu.check_storage_size("strand vertices", vertex_bytes)?;
 
-        let groups_needed = count.div_ceil(WORKGROUP);
-        let max_x = gpu.limits().max_compute_workgroups_per_dimension.max(1);
-        let groups = (groups_needed.min(max_x), groups_needed.div_ceil(max_x));
-        let uniforms = UniformBuffer::new(
-            gpu,
-            "pelage grow uniforms",
-            &GrowUniforms::new(params, 0.0, groups.0 * WORKGROUP),
-        )?;
+        let groups = dispatch_size(gpu.limits(), u64::from(count), WORKGROUP);
+        let uniforms =
+            UniformBuffer::new(gpu, "pelage grow uniforms", &GrowUniforms::new(params, 0.0))?;
         let storage = wgpu::BufferUsages::STORAGE;
         let roots_buffer = storage_buffer(gpu, "pelage strand roots", &roots, storage)?;
         let vertices = zeroed_storage(gpu, "pelage strand vertices", vertex_bytes, storage)?;
 
         let module = ShaderLibrary::module(gpu, "strands/grow.wgsl")?;
         let (pipeline, bind_group) = gpu.scoped(|device| {
-            let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some("pelage grow"),
-                layout: None,
-                module: &module,
-                entry_point: Some("main"),
-                compilation_options: Default::default(),
-                cache: None,
-            });
-            let entries = [
-                &uniforms.buffer,
-                &mesh_buffers.positions,
-                &mesh_buffers.normals,
-                &mesh_buffers.indices,
-                &roots_buffer,
-                &vertices,
-            ];
-            let entries: Vec<_> = entries
-                .iter()
-                .enumerate()
-                .map(|(i, b)| wgpu::BindGroupEntry {
-                    binding: i as u32,
-                    resource: b.as_entire_binding(),
-                })
-                .collect();
-            let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("pelage grow"),
-                layout: &pipeline.get_bind_group_layout(0),
-                entries: &entries,
-            });
+            let pipeline = compute_pipeline(device, "pelage grow", &module, "main");
+            let bind_group = bind_buffers(
+                device,
+                "pelage grow",
+                &pipeline.get_bind_group_layout(0),
+                &[
+                    &uniforms.buffer,
+                    &mesh_buffers.positions,
+                    &mesh_buffers.normals,
+                    &mesh_buffers.indices,
+                    &roots_buffer,
+                    &vertices,
+                ],
+            );
             (pipeline, bind_group)
         })?;
 
@@ -261,7 +239,7 @@ impl GrowStrands {
 
     /// The uniforms the pass uses at `time` (what the CPU mirror needs to reproduce a frame).
     pub fn uniforms_at(&self, time: f32) -> GrowUniforms {
-        GrowUniforms::new(&self.params, time, self.groups.0 * WORKGROUP)
+        GrowUniforms::new(&self.params, time)
     }
 
     /// Records the growth pass.
