@@ -1,6 +1,6 @@
 // Stage 3, hair: strands expanded into camera-facing ribbons in the vertex shader,
 // Kajiya-Kay shaded, shadowed through the shadow contract (light_visibility,
-// shadow/none.wgsl or its redirect), depth tested.
+// shadow/none.wgsl or its redirect, evaluated per strand vertex), depth tested.
 //
 // Reads:  Frame (uniform), the strand vertices (vec4: xyz position, w strand
 //         parameter) and StrandRoot attributes written by stage 1, RibbonStyle (uniform).
@@ -40,6 +40,8 @@ struct VertexOut {
     @location(1) tangent: vec3<f32>,
     @location(2) color: vec3<f32>,
     @location(3) v: f32,
+    // Light reaching the strand's centre line here, from the shadow contract.
+    @location(4) visibility: f32,
 }
 
 // Which end of the segment (0 start, 1 end) and which side (-1, +1) each of the six corners takes.
@@ -75,6 +77,10 @@ fn vs_main(@builtin(vertex_index) vi: u32) -> VertexOut {
     out.tangent = tangent;
     out.color = root.color;
     out.v = here.w;
+    // Shadows are looked up per strand vertex, not per fragment: transmittance varies
+    // slowly along a strand, and this runs 6 times per segment instead of once per
+    // covered sample.
+    out.visibility = light_visibility(here.xyz);
     return out;
 }
 
@@ -105,7 +111,7 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
     let v = safe_normalize(frame.eye - in.world, vec3<f32>(0.0, 0.0, 1.0));
     let kk = kajiya_kay(t, frame.to_light, v);
     let occlusion = mix(1.0 - style.root_occlusion, 1.0, in.v);
-    let light = frame.light_color * light_visibility(in.world);
+    let light = frame.light_color * in.visibility;
     let lit = in.color * (frame.ambient + style.diffuse * kk.x * light)
         + style.specular_color * (style.specular * kk.y) * light;
     return vec4<f32>(lit * occlusion, 1.0);
