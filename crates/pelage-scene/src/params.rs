@@ -287,6 +287,14 @@ impl GrowthParams {
                 "must be < 1",
             ));
         }
+        non_negative("growth.opacity", self.opacity)?;
+        if self.opacity > 1.0 {
+            return Err(ParamError::new(
+                "growth.opacity",
+                self.opacity,
+                "must be in [0, 1]",
+            ));
+        }
         Ok(())
     }
 }
@@ -405,6 +413,16 @@ mod tests {
             ..Default::default()
         };
         assert_eq!(w.validate().unwrap_err().name, "wind.strength");
+        let g = GrowthParams {
+            opacity: 1.5,
+            ..Default::default()
+        };
+        assert_eq!(g.validate().unwrap_err().name, "growth.opacity");
+        let v = VoxelParams {
+            fixed_point_bits: 30,
+            ..Default::default()
+        };
+        assert_eq!(v.validate().unwrap_err().name, "shadow.fixed_point_bits");
         let r = RootParams {
             density: Some(vec![1.0, -1.0, 1.0]),
             ..Default::default()
@@ -525,7 +543,12 @@ pub enum Splat {
 #[serde(default, deny_unknown_fields)]
 pub struct VoxelParams {
     /// Voxels per axis (x and y across the light, z along it), each in 2..=512.
+    /// Ignored when `voxel_size` is set.
     pub resolution: [u32; 3],
+    /// Target voxel edge in scene units (> 0); when set, the resolution is derived from
+    /// it and the box the hair can reach (the same on every axis, since the light may
+    /// turn), clamped to 2..=512.
+    pub voxel_size: Option<f32>,
     /// Nearest or trilinear splatting.
     pub splat: Splat,
     /// The lookup reads this many voxels toward the light (>= 0) so a strand does not
@@ -548,6 +571,7 @@ impl Default for VoxelParams {
     fn default() -> Self {
         Self {
             resolution: [128, 128, 128],
+            voxel_size: None,
             splat: Splat::Trilinear,
             bias_voxels: 1.5,
             fixed_point_bits: 16,
@@ -558,6 +582,24 @@ impl Default for VoxelParams {
 }
 
 impl VoxelParams {
+    /// The grid resolution for hair that stays inside the world box `reach`: `resolution`,
+    /// or the one `voxel_size` gives over the box's diagonal.
+    pub fn resolution_for(&self, reach: (Vec3, Vec3)) -> [u32; 3] {
+        match self.voxel_size {
+            Some(size) if size > 0.0 => {
+                let diagonal = (reach.1 - reach.0).length();
+                let n = (diagonal / size).ceil();
+                let n = if n.is_finite() {
+                    n.clamp(2.0, 512.0) as u32
+                } else {
+                    512
+                };
+                [n; 3]
+            }
+            _ => self.resolution,
+        }
+    }
+
     /// Checks every field; the error names the first bad one.
     pub fn validate(&self) -> Result<(), ParamError> {
         if let Some(r) = self.resolution.iter().find(|r| !(2..=512).contains(*r)) {
@@ -566,6 +608,9 @@ impl VoxelParams {
                 r,
                 "each axis must be in 2..=512",
             ));
+        }
+        if let Some(size) = self.voxel_size {
+            positive("shadow.voxel_size", size)?;
         }
         non_negative("shadow.bias_voxels", self.bias_voxels)?;
         if !(8..=28).contains(&self.fixed_point_bits) {

@@ -99,7 +99,8 @@ pub struct VoxelShadow {
 
 impl VoxelShadow {
     /// Allocates the grid and builds the passes for `strands` (grown with `growth`) on `mesh`.
-    /// `mesh_bounds` is the world box the mesh map covers: the mesh and its hair.
+    /// `mesh_bounds` is the world box the hair and mesh stay in: the mesh map covers it,
+    /// and `VoxelParams::voxel_size` derives the resolution from it.
     pub fn new(
         gpu: &Gpu,
         params: &VoxelParams,
@@ -110,7 +111,7 @@ impl VoxelShadow {
     ) -> crate::Result<Self> {
         params.validate()?;
         growth.validate()?;
-        let [rx, ry, rz] = params.resolution;
+        let [rx, ry, rz] = params.resolution_for(mesh_bounds);
         let voxels = u64::from(rx) * u64::from(ry) * u64::from(rz + 1);
         gpu.check_storage_size("voxel shadow grid", voxels * 4)?;
         let vertex_count = strands.strand_count.saturating_mul(strands.segments + 1);

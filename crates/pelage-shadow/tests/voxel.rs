@@ -484,3 +484,40 @@ fn shadows_only_darken_and_the_far_side_is_darker() {
     );
     assert!(mean(&near) > mean(&far) + 0.3);
 }
+
+#[test]
+fn resolution_follows_a_target_voxel_size() {
+    let gpu = gpu();
+    let strands = strand_buffers(&gpu, &[vec![Vec3::ZERO, Vec3::X]], 0.01);
+    let params = VoxelParams {
+        voxel_size: Some(0.05),
+        ..voxel_params(8)
+    };
+    let reach = (Vec3::splat(-1.0), Vec3::splat(1.0));
+    let shadow = VoxelShadow::new(
+        &gpu,
+        &params,
+        &growth(0.01, 0.5),
+        &strands,
+        &dummy_mesh(&gpu),
+        reach,
+    )
+    .unwrap();
+    // The box's diagonal is 2 sqrt(3) = 3.46 units: 70 voxels of 0.05.
+    let u = shadow.base_uniforms();
+    assert_eq!([u.resolution_x, u.resolution_y, u.resolution_z], [70; 3]);
+    let bad = VoxelParams {
+        voxel_size: Some(-1.0),
+        ..params
+    };
+    let err = VoxelShadow::new(
+        &gpu,
+        &bad,
+        &growth(0.01, 0.5),
+        &strands,
+        &dummy_mesh(&gpu),
+        reach,
+    )
+    .unwrap_err();
+    assert!(err.to_string().contains("shadow.voxel_size"), "{err}");
+}
