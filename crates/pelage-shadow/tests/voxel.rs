@@ -404,20 +404,26 @@ fn a_thousand_strands_through_one_voxel_saturate_and_never_wrap() {
     }
 }
 
-#[test]
-fn the_grid_is_fitted_to_the_hair_on_the_gpu() {
-    let gpu = gpu();
+/// The long-hair groom grown at t = 0 and a voxel method of `resolution`^3 on it.
+fn long_hair_shadow(gpu: &Gpu, resolution: u32) -> (GrowStrands, VoxelShadow) {
     let (mesh, hair) = long_hair();
-    let (strands, mesh_buffers) = grow(&gpu, &mesh, &hair);
+    let (strands, mesh_buffers) = grow(gpu, &mesh, &hair);
     let shadow = VoxelShadow::new(
-        &gpu,
-        &voxel_params(64),
+        gpu,
+        &voxel_params(resolution),
         &hair.growth,
         strands.buffers(),
         &mesh_buffers,
         (Vec3::ZERO, Vec3::ONE),
     )
     .unwrap();
+    (strands, shadow)
+}
+
+#[test]
+fn the_grid_is_fitted_to_the_hair_on_the_gpu() {
+    let gpu = gpu();
+    let (strands, shadow) = long_hair_shadow(&gpu, 64);
     shadow.set_light(&gpu.queue, &light()).unwrap();
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
     shadow.encode(&mut encoder, None);
@@ -452,17 +458,7 @@ fn the_grid_is_fitted_to_the_hair_on_the_gpu() {
 #[test]
 fn shadows_only_darken_and_the_far_side_is_darker() {
     let gpu = gpu();
-    let (mesh, hair) = long_hair();
-    let (strands, mesh_buffers) = grow(&gpu, &mesh, &hair);
-    let shadow = VoxelShadow::new(
-        &gpu,
-        &voxel_params(64),
-        &hair.growth,
-        strands.buffers(),
-        &mesh_buffers,
-        (Vec3::ZERO, Vec3::ONE),
-    )
-    .unwrap();
+    let (strands, shadow) = long_hair_shadow(&gpu, 64);
     let t = voxel_transmittance(&gpu, &shadow, strands.buffers());
     assert!(t.iter().all(|v| (0.0..=1.0).contains(v)));
     let vertices = read_vec4(&gpu, &strands.buffers().vertices);
