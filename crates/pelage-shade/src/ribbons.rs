@@ -104,7 +104,13 @@ impl RibbonPass {
         let frame = UniformBuffer::new(
             gpu,
             "pelage frame",
-            &FrameUniforms::new(&Camera::default(), &DirectionalLight::default(), params, 1)?,
+            &FrameUniforms::new(
+                &Camera::default(),
+                &DirectionalLight::default(),
+                params,
+                1,
+                1,
+            )?,
         )?;
         let ribbon_style = UniformBuffer::new(
             gpu,
@@ -208,8 +214,7 @@ impl RibbonPass {
         })
     }
 
-    /// Sets camera and light for the next `encode`, for a target `height` pixels high
-    /// of aspect `aspect` (width / height).
+    /// Sets camera and light for the next `encode`, for a `width` x `height` target.
     pub fn set_frame(
         &self,
         queue: &wgpu::Queue,
@@ -218,13 +223,7 @@ impl RibbonPass {
         width: u32,
         height: u32,
     ) -> crate::Result<()> {
-        let u = FrameUniforms::new(camera, light, &self.params, 1)?;
-        let aspect = width.max(1) as f32 / height.max(1) as f32;
-        let u = FrameUniforms {
-            view_proj: camera.view_projection(aspect),
-            pixel_scale: 2.0 * (camera.fov_y * 0.5).tan() / height.max(1) as f32,
-            ..u
-        };
+        let u = FrameUniforms::new(camera, light, &self.params, width, height)?;
         Ok(self.frame.write(queue, &u)?)
     }
 
@@ -292,19 +291,21 @@ impl RibbonPass {
 }
 
 impl FrameUniforms {
-    /// Frame uniforms for `camera` and `light` on a target `height` pixels high, square aspect.
+    /// Frame uniforms for `camera` and `light` on a `width` x `height` target.
     pub fn new(
         camera: &Camera,
         light: &DirectionalLight,
         params: &ShadeParams,
+        width: u32,
         height: u32,
     ) -> crate::Result<Self> {
         camera.validate()?;
         let to_light = light.to_light()?;
+        let height = height.max(1) as f32;
         Ok(Self {
-            view_proj: camera.view_projection(1.0),
+            view_proj: camera.view_projection(width.max(1) as f32 / height),
             eye: camera.eye,
-            pixel_scale: 2.0 * (camera.fov_y * 0.5).tan() / height.max(1) as f32,
+            pixel_scale: 2.0 * (camera.fov_y * 0.5).tan() / height,
             to_light,
             ambient: params.ambient,
             light_color: light.color * light.intensity,
