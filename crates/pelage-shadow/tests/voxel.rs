@@ -69,6 +69,17 @@ fn dummy_mesh(gpu: &Gpu) -> MeshBuffers {
     MeshBuffers::upload(gpu, &mesh).unwrap()
 }
 
+/// The voxel method on `strands` alone (a dummy mesh, no mesh map needed), reach box `reach`.
+fn isolated(
+    gpu: &Gpu,
+    params: &VoxelParams,
+    growth: &GrowthParams,
+    strands: &StrandBuffers,
+    reach: (Vec3, Vec3),
+) -> Result<VoxelShadow, pelage_shadow::ShadowError> {
+    VoxelShadow::new(gpu, params, growth, strands, &dummy_mesh(gpu), reach)
+}
+
 fn voxel_params(resolution: u32) -> VoxelParams {
     VoxelParams {
         resolution: [resolution; 3],
@@ -122,12 +133,11 @@ fn scan_equals_cpu_scan_on_columns_of_every_length() {
         mesh_map_size: 0,
         ..VoxelParams::default()
     };
-    let shadow = VoxelShadow::new(
+    let shadow = isolated(
         &gpu,
         &params,
         &growth(0.01, 0.5),
         &strands,
-        &dummy_mesh(&gpu),
         (Vec3::ZERO, Vec3::ONE),
     )
     .unwrap();
@@ -313,12 +323,11 @@ fn an_isolated_strand_does_not_shadow_itself() {
         let buffers = strand_buffers(&gpu, &[strand], 0.005);
         for resolution in [64, 128] {
             let params = voxel_params(resolution);
-            let shadow = VoxelShadow::new(
+            let shadow = isolated(
                 &gpu,
                 &params,
                 &growth(0.005, 0.8),
                 &buffers,
-                &dummy_mesh(&gpu),
                 (Vec3::ZERO, Vec3::ONE),
             )
             .unwrap();
@@ -358,12 +367,11 @@ fn a_thousand_strands_through_one_voxel_saturate_and_never_wrap() {
             fixed_point_bits: 26,
             ..voxel_params(15)
         };
-        let shadow = VoxelShadow::new(
+        let shadow = isolated(
             &gpu,
             &params,
             &growth(0.05, 1.0),
             &buffers,
-            &dummy_mesh(&gpu),
             (Vec3::ZERO, Vec3::ONE),
         )
         .unwrap();
@@ -490,15 +498,7 @@ fn resolution_follows_a_target_voxel_size() {
         ..voxel_params(8)
     };
     let reach = (Vec3::splat(-1.0), Vec3::splat(1.0));
-    let shadow = VoxelShadow::new(
-        &gpu,
-        &params,
-        &growth(0.01, 0.5),
-        &strands,
-        &dummy_mesh(&gpu),
-        reach,
-    )
-    .unwrap();
+    let shadow = isolated(&gpu, &params, &growth(0.01, 0.5), &strands, reach).unwrap();
     // The box's diagonal is 2 sqrt(3) = 3.46 units: 70 voxels of 0.05.
     let u = shadow.base_uniforms();
     assert_eq!([u.resolution_x, u.resolution_y, u.resolution_z], [70; 3]);
@@ -506,14 +506,6 @@ fn resolution_follows_a_target_voxel_size() {
         voxel_size: Some(-1.0),
         ..params
     };
-    let err = VoxelShadow::new(
-        &gpu,
-        &bad,
-        &growth(0.01, 0.5),
-        &strands,
-        &dummy_mesh(&gpu),
-        reach,
-    )
-    .unwrap_err();
+    let err = isolated(&gpu, &bad, &growth(0.01, 0.5), &strands, reach).unwrap_err();
     assert!(err.to_string().contains("shadow.voxel_size"), "{err}");
 }
