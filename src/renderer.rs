@@ -3,7 +3,7 @@
 use pelage_gpu::{Gpu, GpuTimer, wgpu};
 use pelage_scene::{Camera, DirectionalLight, HairParams, Mesh, ShadeParams, ShadowParams};
 use pelage_shade::{RibbonPass, Targets};
-use pelage_shadow::VoxelShadow;
+use pelage_shadow::ShadowMethod;
 use pelage_strands::{GrowStrands, MeshBuffers};
 
 /// Everything a frame is made of.
@@ -73,7 +73,7 @@ impl FrameStats {
 pub struct Renderer {
     mesh_buffers: MeshBuffers,
     strands: GrowStrands,
-    shadow: Option<VoxelShadow>,
+    shadow: Option<Box<dyn ShadowMethod>>,
     ribbons: RibbonPass,
     targets: Targets,
     timer: Option<GpuTimer>,
@@ -85,18 +85,15 @@ impl Renderer {
     pub fn new(gpu: &Gpu, scene: &Scene, width: u32, height: u32) -> crate::Result<Self> {
         let mesh_buffers = MeshBuffers::upload(gpu, &scene.mesh)?;
         let strands = GrowStrands::new(gpu, &scene.mesh, &mesh_buffers, &scene.hair)?;
-        let shadow = match &scene.shadow {
-            ShadowParams::None => None,
-            ShadowParams::Voxel(params) => Some(VoxelShadow::new(
-                gpu,
-                params,
-                &scene.hair.growth,
-                strands.buffers(),
-                &mesh_buffers,
-                scene.reach(),
-            )?),
-        };
-        let binding = shadow.as_ref().map(VoxelShadow::binding);
+        let shadow = pelage_shadow::build(
+            gpu,
+            &scene.shadow,
+            &scene.hair.growth,
+            strands.buffers(),
+            &mesh_buffers,
+            scene.reach(),
+        )?;
+        let binding = shadow.as_ref().map(|s| s.binding());
         let ribbons = RibbonPass::new(
             gpu,
             &scene.shade,

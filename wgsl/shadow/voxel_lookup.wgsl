@@ -1,7 +1,7 @@
 // Voxel shadows, lookup: implements the shadow contract (shadow/none.wgsl) for the
 // shading passes, which redirect their import of shadow/none.wgsl here.
 //
-// Reads:  @group(1): VoxelUniforms (0), VoxelGrid (1), the scanned optical depth
+// Reads:  @group(1): LightGridUniforms (0), LightGrid (1), the scanned optical depth
 //         volume as f32 (2), and the mesh shadow map (3 to 5, shadow/mesh_shadow.wgsl).
 // Writes: nothing.
 //
@@ -11,11 +11,11 @@
 // the light so a strand does not shadow itself. Outside the grid's columns it is 0;
 // behind the hair it is the column's total.
 
-#import shadow/voxel_common.wgsl
+#import shadow/light_common.wgsl
 #import shadow/mesh_shadow.wgsl
 
-@group(1) @binding(0) var<uniform> voxel: VoxelUniforms;
-@group(1) @binding(1) var<storage, read> voxel_grid: VoxelGrid;
+@group(1) @binding(0) var<uniform> voxel: LightGridUniforms;
+@group(1) @binding(1) var<storage, read> voxel_grid: LightGrid;
 @group(1) @binding(2) var<storage, read> voxel_depth: array<f32>;
 
 // Optical depth stored at column (x, y), face z; 0 outside the columns, faces clamped.

@@ -1,6 +1,6 @@
 // Voxel shadows, pass 3: exclusive prefix sum of density along the light, in place.
 //
-// Reads:  VoxelUniforms; `volume` as u32 fixed-point density per voxel.
+// Reads:  LightGridUniforms; `volume` as u32 fixed-point density per voxel.
 // Writes: `volume` as f32 bits: layer z holds the optical depth in front of voxel z
 //         (the sum over layers < z, so no voxel shadows itself); layer resolution_z
 //         holds the column's total, for points behind the hair. Sums saturate.
@@ -8,9 +8,9 @@
 //         ceil(resolution_x / 8) x ceil(resolution_y / 8). Cost depends on the grid only.
 // The CPU mirror is pelage-reference/src/voxel.rs (`exclusive_scan_column`).
 
-#import shadow/voxel_common.wgsl
+#import shadow/light_common.wgsl
 
-@group(0) @binding(0) var<uniform> u: VoxelUniforms;
+@group(0) @binding(0) var<uniform> u: LightGridUniforms;
 @group(0) @binding(1) var<storage, read_write> volume: array<u32>;
 
 @compute @workgroup_size(8, 8)

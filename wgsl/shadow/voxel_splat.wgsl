@@ -1,6 +1,6 @@
 // Voxel shadows, pass 2: splat every strand segment into the light-space density grid.
 //
-// Reads:  VoxelUniforms, VoxelGrid (fitted this frame), the strand vertices and
+// Reads:  LightGridUniforms, LightGrid (fitted this frame), the strand vertices and
 //         StrandRoot attributes (width).
 // Writes: `volume`, (resolution_z + 1) layers of atomic<u32> fixed-point optical
 //         depth, cleared to 0 before the pass; additions saturate at 0xffffffff.
@@ -15,10 +15,10 @@
 // length at most half a voxel apart so long segments leave no gaps.
 
 #import shared/strand.wgsl
-#import shadow/voxel_common.wgsl
+#import shadow/light_common.wgsl
 
-@group(0) @binding(0) var<uniform> u: VoxelUniforms;
-@group(0) @binding(1) var<storage, read> grid: VoxelGrid;
+@group(0) @binding(0) var<uniform> u: LightGridUniforms;
+@group(0) @binding(1) var<storage, read> grid: LightGrid;
 @group(0) @binding(2) var<storage, read> vertices: array<vec4<f32>>;
 @group(0) @binding(3) var<storage, read> roots: array<StrandRoot>;
 @group(0) @binding(4) var<storage, read_write> volume: array<atomic<u32>>;

@@ -1,22 +1,68 @@
 //! Stage 2 of pelage: how much light reaches each point of the hair.
 //!
-//! [`VoxelShadow`] (seed 001, corrected): every frame a compute reduction fits a
-//! light-space grid to the hair, every segment splats its optical depth into
-//! `atomic<u32>` fixed-point cells, and an exclusive prefix sum along the light
-//! turns density into the optical depth in front of each voxel. The mesh casts
-//! its own shadow through a [`MeshShadowMap`] with PCF.
+//! Every method implements [`ShadowMethod`]: it is aimed with `set_light`, records
+//! its passes into the caller's encoder with `encode` (no readback), and hands the
+//! shading stage a [`ShaderBinding`] implementing the shadow contract
+//! (`wgsl/shadow/none.wgsl`: `light_visibility(p)`), so the shading pass never
+//! knows which method it got. The mesh casts its own shadow through a
+//! [`MeshShadowMap`] with PCF in every method.
 //!
-//! Every method hands the shading stage a [`ShaderBinding`](pelage_gpu::ShaderBinding)
-//! implementing the shadow contract (`wgsl/shadow/none.wgsl`: `light_visibility(p)`),
-//! so the shading pass never knows which method it got.
+//! - [`VoxelShadow`] (seed 001, corrected): a light-space grid fitted to the hair
+//!   on the GPU ([`LightFit`]), segments splatted as `atomic<u32>` fixed-point
+//!   optical depth, an exclusive prefix sum along the light.
 
+mod fit;
 mod light_space;
 mod mesh_shadow;
+mod probe;
 mod voxel;
 
+pub use fit::{LightFit, LightGrid, LightGridUniforms};
 pub use light_space::LightSpace;
 pub use mesh_shadow::{MeshShadowMap, MeshShadowUniforms};
-pub use voxel::{VoxelGrid, VoxelShadow, VoxelUniforms};
+pub use probe::TransmittanceProbe;
+pub use voxel::VoxelShadow;
+
+use glam::Vec3;
+use pelage_gpu::{Gpu, GpuTimer, ShaderBinding, wgpu};
+use pelage_scene::{DirectionalLight, GrowthParams, ShadowParams};
+use pelage_strands::{MeshBuffers, StrandBuffers};
+
+/// The WGSL file every shading pass imports for `light_visibility(p)`; a method's
+/// [`ShaderBinding`] redirects it to the method's lookup.
+pub const CONTRACT: &str = "shadow/none.wgsl";
+
+/// One shadow method, as the frame pipeline drives it.
+pub trait ShadowMethod: std::fmt::Debug {
+    /// A short description with its parameters, e.g. `voxel 128x128x128 trilinear`.
+    fn name(&self) -> String;
+    /// Aims the method along `light`; takes effect at the next `encode`.
+    fn set_light(&self, queue: &wgpu::Queue, light: &DirectionalLight) -> Result<()>;
+    /// Records the method's passes for this frame.
+    fn encode(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&mut GpuTimer>);
+    /// The shadow contract's implementation, for the shading passes.
+    fn binding(&self) -> ShaderBinding;
+    /// Bytes of GPU memory the method holds.
+    fn memory_bytes(&self) -> u64;
+}
+
+/// Builds the method `params` chooses (`None` for no shadows) for `strands`, grown with
+/// `growth`, on `mesh`; `reach` is the world box hair and mesh stay in.
+pub fn build(
+    gpu: &Gpu,
+    params: &ShadowParams,
+    growth: &GrowthParams,
+    strands: &StrandBuffers,
+    mesh: &MeshBuffers,
+    reach: (Vec3, Vec3),
+) -> Result<Option<Box<dyn ShadowMethod>>> {
+    Ok(match params {
+        ShadowParams::None => None,
+        ShadowParams::Voxel(p) => Some(Box::new(VoxelShadow::new(
+            gpu, p, growth, strands, mesh, reach,
+        )?)),
+    })
+}
 
 /// What can go wrong in stage 2.
 #[derive(Debug, thiserror::Error)]

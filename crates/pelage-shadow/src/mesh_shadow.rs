@@ -4,6 +4,7 @@
 use encase::ShaderType;
 use glam::{Mat4, Vec3};
 use pelage_gpu::{BoundResource, Gpu, GpuTimer, ShaderLibrary, UniformBuffer, bind_buffers, wgpu};
+use pelage_scene::DirectionalLight;
 use pelage_strands::MeshBuffers;
 
 use crate::LightSpace;
@@ -141,7 +142,8 @@ impl MeshShadowMap {
     }
 
     /// Aims the map along `light` (fitted to the bounds given at creation).
-    pub fn set_light(&self, queue: &wgpu::Queue, light: &LightSpace) -> crate::Result<()> {
+    pub fn set_light(&self, queue: &wgpu::Queue, light: &DirectionalLight) -> crate::Result<()> {
+        let light = LightSpace::new(light.to_light()?);
         let u = if self.draw.is_some() {
             let (lo, hi) = light.bounds_of(self.bounds.0, self.bounds.1);
             MeshShadowUniforms {

@@ -1,18 +1,19 @@
-// Voxel shadows, pass 1: fit the grid to the hair's light-space bounds, on the GPU.
+// Every light-space shadow method, pass 1: fit the grid (or map) to the hair's
+// light-space bounds, on the GPU.
 //
-// Reads:  VoxelUniforms, the strand vertices (vec4, xyz = position).
+// Reads:  LightGridUniforms, the strand vertices (vec4, xyz = position).
 // Writes: `bounds` (6 x atomic<u32>, cleared to 0 before the pass): max of the
 //         order-preserving key of x, y, z, then max of the inverted key (= min) of x, y, z;
-//         `grid` (VoxelGrid) from the `finalize` entry point.
+//         `grid` (LightGrid) from the `finalize` entry point.
 // Dispatch: `fit` with fit_invocations / 256 workgroups of 256 (a grid-stride loop
 //         covers every vertex), then `finalize` with one workgroup of 1.
 
-#import shadow/voxel_common.wgsl
+#import shadow/light_common.wgsl
 
-@group(0) @binding(0) var<uniform> u: VoxelUniforms;
+@group(0) @binding(0) var<uniform> u: LightGridUniforms;
 @group(0) @binding(1) var<storage, read> vertices: array<vec4<f32>>;
 @group(0) @binding(2) var<storage, read_write> bounds: array<atomic<u32>, 6>;
-@group(0) @binding(3) var<storage, read_write> grid: VoxelGrid;
+@group(0) @binding(3) var<storage, read_write> grid: LightGrid;
 
 // Maps f32 to u32 so that unsigned order equals float order (NaN aside).
 fn order_key(f: f32) -> u32 {

@@ -1,15 +1,17 @@
-// Types shared by the voxel shadow passes (fit, splat, scan, lookup, sample).
-// Declares structs and helpers only. The Rust twins are VoxelUniforms and
-// VoxelGrid in pelage-shadow/src/voxel.rs.
+// Types shared by every shadow method that sees the hair from the light (the fit,
+// the voxel passes, the shadow-map passes and their lookups). Declares structs and
+// helpers only. The Rust twins are LightGridUniforms and LightGrid in
+// pelage-shadow/src/fit.rs.
 
-struct VoxelUniforms {
+struct LightGridUniforms {
     // Light space: x and y across the light, z along it, away from the light.
     axis_x: vec3<f32>,
     resolution_x: u32,
     axis_y: vec3<f32>,
     resolution_y: u32,
     axis_z: vec3<f32>,
-    // Layers along the light; the volume holds resolution_z + 1 (the last is the column total).
+    // Cells along the light (voxel layers; 1 for shadow maps). The voxel volume holds
+    // resolution_z + 1 layers (the last is the column total).
     resolution_z: u32,
     vertex_count: u32,
     segments: u32,
@@ -34,7 +36,7 @@ struct VoxelUniforms {
 }
 
 // The grid fitted to the hair this frame (written by the fit pass).
-struct VoxelGrid {
+struct LightGrid {
     origin: vec3<f32>,
     _pad0: f32,
     cell: vec3<f32>,
@@ -43,11 +45,11 @@ struct VoxelGrid {
     _pad2: f32,
 }
 
-fn to_light_space(u: VoxelUniforms, p: vec3<f32>) -> vec3<f32> {
+fn to_light_space(u: LightGridUniforms, p: vec3<f32>) -> vec3<f32> {
     return vec3<f32>(dot(p, u.axis_x), dot(p, u.axis_y), dot(p, u.axis_z));
 }
 
 // Index of voxel (x, y, z); z-major layers so neighbouring columns are neighbours in memory.
-fn voxel_index(u: VoxelUniforms, x: u32, y: u32, z: u32) -> u32 {
+fn voxel_index(u: LightGridUniforms, x: u32, y: u32, z: u32) -> u32 {
     return (z * u.resolution_y + y) * u.resolution_x + x;
 }
