@@ -5,13 +5,13 @@
 //!
 //! ```text
 //! cargo run --release --example wind -- [--frames N] [--size WxH] [--strands N] [--fps N]
-//!     [--out DIR] [--shadow none|voxel] [--voxels N]
+//!     [--out DIR] [--shadow none|voxel|dom|map|adsm] [--shadow-res N]
 //! ```
 
 use std::path::PathBuf;
 use std::time::Instant;
 
-use pelage::scene::{ShadowParams, VoxelParams};
+use pelage::scene::ShadowParams;
 use pelage::{Renderer, Scene, gpu::Gpu, save_png, write_atomically};
 
 struct Args {
@@ -46,16 +46,26 @@ fn parse_args() -> Result<Args, String> {
             "--shadow" => {
                 args.shadow = match value()?.as_str() {
                     "none" => ShadowParams::None,
-                    "voxel" => ShadowParams::Voxel(VoxelParams::default()),
-                    other => return Err(format!("--shadow {other}: expected none or voxel")),
+                    "voxel" => ShadowParams::Voxel(Default::default()),
+                    "dom" => ShadowParams::DeepOpacity(Default::default()),
+                    "map" => ShadowParams::ShadowMap(Default::default()),
+                    "adsm" => ShadowParams::Adsm(Default::default()),
+                    other => {
+                        return Err(format!(
+                            "--shadow {other}: expected none, voxel, dom, map or adsm"
+                        ));
+                    }
                 }
             }
-            "--voxels" => {
+            "--shadow-res" => {
                 let n = number(value()?)?;
                 match &mut args.shadow {
                     ShadowParams::Voxel(v) => v.resolution = [n; 3],
+                    ShadowParams::DeepOpacity(d) => d.map.size = n,
+                    ShadowParams::ShadowMap(m) => m.map.size = n,
+                    ShadowParams::Adsm(a) => a.map.size = n,
                     ShadowParams::None => {
-                        return Err("--voxels needs --shadow voxel before it".into());
+                        return Err("--shadow-res needs a --shadow method before it".into());
                     }
                 }
             }
@@ -75,8 +85,9 @@ fn parse_args() -> Result<Args, String> {
                      --strands N    strand count (the scene's default, 20000)\n\
                      --fps N        frames per second of the animation (24)\n\
                      --out DIR      output folder (out/wind)\n\
-                     --shadow M     shadow method: none or voxel (voxel)\n\
-                     --voxels N     voxel grid resolution per axis (128)"
+                     --shadow M     shadow method: none, voxel, dom (deep opacity maps),\n\
+                     \x20              map (shadow map with PCF) or adsm; default voxel\n\
+                     --shadow-res N voxels per axis, or map side in texels (128 / 1024)"
                 );
                 std::process::exit(0);
             }

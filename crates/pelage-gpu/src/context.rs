@@ -5,10 +5,12 @@ use std::sync::{Arc, Mutex, MutexGuard};
 
 use crate::error::{GpuError, Result};
 
-/// Optional features pelage uses when the adapter has them (timing only).
+/// Optional features pelage uses when the adapter has them: timing, and blending
+/// into 32-bit float targets (deep opacity maps in float32).
 const WANTED_FEATURES: wgpu::Features = wgpu::Features::TIMESTAMP_QUERY
     .union(wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS)
-    .union(wgpu::Features::TIMESTAMP_QUERY_INSIDE_PASSES);
+    .union(wgpu::Features::TIMESTAMP_QUERY_INSIDE_PASSES)
+    .union(wgpu::Features::FLOAT32_BLENDABLE);
 
 /// Errors that wgpu reported outside any error scope, recorded by the
 /// handlers [`Gpu::headless`] installs.
@@ -42,7 +44,7 @@ impl Gpu {
     ///
     /// Respects `WGPU_BACKEND` (e.g. `vulkan` or `gl`), prefers a high
     /// performance adapter and falls back to a software one (lavapipe or
-    /// llvmpipe). Requests only the timestamp-query features the adapter has,
+    /// llvmpipe). Requests only the optional features (timestamps, float32 blending) the adapter has,
     /// and the adapter's own limits (so 128 MiB storage bindings are usable).
     ///
     /// wgpu's default handler panics on errors raised outside an error scope;

@@ -17,6 +17,7 @@ pub use light::DirectionalLight;
 pub use mesh::{Mesh, MeshError, MeshReport};
 pub use obj::{ObjError, load_obj, parse_obj};
 pub use params::{
-    GrowthParams, HairParams, HairType, MAX_FORCE, MAX_SEGMENTS, ParamError, RootParams,
-    ShadeParams, ShadowParams, Splat, SurfaceInterpolation, VoxelParams, WindParams,
+    AdsmParams, DeepOpacityParams, GrowthParams, HairParams, HairType, LayerSpacing, MAX_FORCE,
+    MAX_SEGMENTS, MapParams, OpacityFormat, ParamError, RootParams, ShadeParams, ShadowMapParams,
+    ShadowParams, Splat, SurfaceInterpolation, VoxelParams, WindParams,
 };

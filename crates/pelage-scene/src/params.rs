@@ -638,6 +638,152 @@ impl VoxelParams {
     }
 }
 
+/// Texel format of the deep opacity layers.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum OpacityFormat {
+    /// 8-bit unorm: accumulated opacity clamps at 1 (the seeds' format, and its failure).
+    Unorm8,
+    /// 16-bit float.
+    #[default]
+    Float16,
+    /// 32-bit float.
+    Float32,
+}
+
+/// How the deep opacity layers are spaced behind the front-most hair.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case", tag = "kind")]
+pub enum LayerSpacing {
+    /// Every layer `depth` scene units deep (the last one runs to the back of the hair).
+    Linear {
+        /// Depth of one layer, scene units (> 0).
+        depth: f32,
+    },
+    /// Layer ends at these increasing fractions of the hair's depth along the light
+    /// (seed 003: 0.05, 0.15, then the rest); the last layer runs to the back.
+    Fractions {
+        /// Increasing fractions in (0, 1], one per layer but the last.
+        ends: Vec<f32>,
+    },
+}
+
+/// A hair depth map seen from the light, shared by the map methods.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct MapParams {
+    /// Side of the map in texels, 16..=8192.
+    pub size: u32,
+    /// PCF radius: 0 = one texel, 1 = 3x3, 2 = 5x5 (shadow map and ADSM).
+    pub pcf_radius: u32,
+    /// Side of the mesh shadow map (0 = the mesh casts no shadow).
+    pub mesh_map_size: u32,
+}
+
+impl Default for MapParams {
+    fn default() -> Self {
+        Self {
+            size: 1024,
+            pcf_radius: 1,
+            mesh_map_size: 1024,
+        }
+    }
+}
+
+impl MapParams {
+    fn validate(&self, method: &str) -> Result<(), ParamError> {
+        if !(16..=8192).contains(&self.size) {
+            return Err(ParamError::new(
+                &format!("shadow.{method}.size"),
+                self.size,
+                "must be in 16..=8192",
+            ));
+        }
+        if self.pcf_radius > 2 {
+            return Err(ParamError::new(
+                &format!("shadow.{method}.pcf_radius"),
+                self.pcf_radius,
+                "must be 0, 1 or 2",
+            ));
+        }
+        if self.mesh_map_size > 8192 {
+            return Err(ParamError::new(
+                &format!("shadow.{method}.mesh_map_size"),
+                self.mesh_map_size,
+                "must be at most 8192",
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Deep opacity maps (Yuksel and Keyser 2008): the front-most hair depth from the
+/// light, then layers of accumulated opacity behind it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct DeepOpacityParams {
+    /// The maps' size and the mesh map.
+    pub map: MapParams,
+    /// Opacity layers, 2..=8 (seed 000 used 3).
+    pub layers: u32,
+    /// Where the layers end.
+    pub spacing: LayerSpacing,
+    /// Texel format of the layers.
+    pub format: OpacityFormat,
+}
+
+impl Default for DeepOpacityParams {
+    fn default() -> Self {
+        Self {
+            map: MapParams::default(),
+            layers: 3,
+            spacing: LayerSpacing::Fractions {
+                ends: vec![0.05, 0.15],
+            },
+            format: OpacityFormat::Float16,
+        }
+    }
+}
+
+/// A hair shadow map with percentage-closer filtering: hair treated as opaque.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct ShadowMapParams {
+    /// The map's size, its PCF kernel and the mesh map.
+    pub map: MapParams,
+    /// Depth bias, scene units (>= 0): a point this close behind the front-most hair is lit.
+    pub bias: f32,
+}
+
+impl Default for ShadowMapParams {
+    fn default() -> Self {
+        Self {
+            map: MapParams::default(),
+            bias: 0.01,
+        }
+    }
+}
+
+/// Approximated deep shadow maps (TressFX): the number of fibres in front of a point is
+/// its depth behind the front-most hair divided by a fibre spacing, T = (1 - opacity)^n.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct AdsmParams {
+    /// The map's size, its PCF kernel and the mesh map.
+    pub map: MapParams,
+    /// Mean distance between fibres along the light, scene units (> 0).
+    pub fiber_spacing: f32,
+}
+
+impl Default for AdsmParams {
+    fn default() -> Self {
+        Self {
+            map: MapParams::default(),
+            fiber_spacing: 0.02,
+        }
+    }
+}
+
 /// Which shadow method stage 2 runs.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case", tag = "method")]
@@ -646,6 +792,12 @@ pub enum ShadowParams {
     None,
     /// Voxel density with a prefix sum along the light.
     Voxel(VoxelParams),
+    /// Deep opacity maps.
+    DeepOpacity(DeepOpacityParams),
+    /// Hair shadow map with PCF.
+    ShadowMap(ShadowMapParams),
+    /// Approximated deep shadow maps.
+    Adsm(AdsmParams),
 }
 
 impl Default for ShadowParams {
@@ -661,6 +813,47 @@ impl ShadowParams {
         match self {
             Self::None => Ok(()),
             Self::Voxel(v) => v.validate(),
+            Self::DeepOpacity(d) => {
+                d.map.validate("deep_opacity")?;
+                if !(2..=8).contains(&d.layers) {
+                    return Err(ParamError::new(
+                        "shadow.deep_opacity.layers",
+                        d.layers,
+                        "must be in 2..=8",
+                    ));
+                }
+                match &d.spacing {
+                    LayerSpacing::Linear { depth } => {
+                        positive("shadow.deep_opacity.spacing.depth", *depth)
+                    }
+                    LayerSpacing::Fractions { ends } => {
+                        if ends.len() + 1 != d.layers as usize {
+                            return Err(ParamError::new(
+                                "shadow.deep_opacity.spacing.ends",
+                                ends,
+                                &format!("needs layers - 1 = {} values", d.layers - 1),
+                            ));
+                        }
+                        let increasing = ends.windows(2).all(|w| w[0] < w[1]);
+                        if !increasing || ends.iter().any(|e| !(*e > 0.0 && *e <= 1.0)) {
+                            return Err(ParamError::new(
+                                "shadow.deep_opacity.spacing.ends",
+                                ends,
+                                "must increase strictly within (0, 1]",
+                            ));
+                        }
+                        Ok(())
+                    }
+                }
+            }
+            Self::ShadowMap(m) => {
+                m.map.validate("shadow_map")?;
+                non_negative("shadow.shadow_map.bias", m.bias)
+            }
+            Self::Adsm(a) => {
+                a.map.validate("adsm")?;
+                positive("shadow.adsm.fiber_spacing", a.fiber_spacing)
+            }
         }
     }
 }

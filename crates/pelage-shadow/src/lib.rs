@@ -9,16 +9,23 @@
 //!
 //! - [`VoxelShadow`] (seed 001, corrected): a light-space grid fitted to the hair
 //!   on the GPU ([`LightFit`]), segments splatted as `atomic<u32>` fixed-point
-//!   optical depth, an exclusive prefix sum along the light.
+//!   optical depth, an exclusive prefix sum along the light;
+//! - [`DeepOpacityMaps`] (Yuksel and Keyser 2008, seed 000 corrected): the front-most
+//!   hair depth from the light and layers of accumulated opacity behind it;
+//! - [`HairShadowMap`]: the hair as an opaque occluder, with PCF;
+//! - [`Adsm`] (TressFX): fibres in front of a point estimated from its depth behind
+//!   the front-most hair.
 
 mod fit;
 mod light_space;
+mod map;
 mod mesh_shadow;
 mod probe;
 mod voxel;
 
 pub use fit::{LightFit, LightGrid, LightGridUniforms};
 pub use light_space::LightSpace;
+pub use map::{Adsm, DeepOpacityMaps, HairShadowMap, MapUniforms};
 pub use mesh_shadow::{MeshShadowMap, MeshShadowUniforms};
 pub use probe::TransmittanceProbe;
 pub use voxel::VoxelShadow;
@@ -61,6 +68,13 @@ pub fn build(
         ShadowParams::Voxel(p) => Some(Box::new(VoxelShadow::new(
             gpu, p, growth, strands, mesh, reach,
         )?)),
+        ShadowParams::DeepOpacity(p) => Some(Box::new(DeepOpacityMaps::new(
+            gpu, p, growth, strands, mesh, reach,
+        )?)),
+        ShadowParams::ShadowMap(p) => Some(Box::new(HairShadowMap::new(
+            gpu, p, growth, strands, mesh, reach,
+        )?)),
+        ShadowParams::Adsm(p) => Some(Box::new(Adsm::new(gpu, p, growth, strands, mesh, reach)?)),
     })
 }
 

@@ -1,73 +1,15 @@
 //! Voxel shadows on a real adapter: the scan against its CPU mirror, transmittance
 //! against ray tracing through the real strands, self-shadowing and saturation.
 
-use glam::{Vec2, Vec3, Vec4};
-use pelage_gpu::{Gpu, read_buffer, storage_buffer, wgpu, zeroed_storage};
-use pelage_reference::transmittance::{
-    SegmentBvh, rmse_p95, segments_from_strands, transmittance_at_vertices,
-};
+mod common;
+
+use common::*;
+use glam::Vec3;
+use pelage_gpu::{Gpu, read_buffer};
 use pelage_reference::voxel::exclusive_scan_column;
-use pelage_scene::{
-    DirectionalLight, GrowthParams, HairParams, Mesh, Splat, VoxelParams, WindParams,
-};
-use pelage_shadow::{ShadowMethod, TransmittanceProbe, VoxelShadow};
-use pelage_strands::{GrowStrands, MeshBuffers, StrandBuffers, StrandRoot};
-
-fn gpu() -> Gpu {
-    Gpu::headless().unwrap_or_else(|e| panic!("these tests need a GPU adapter: {e}"))
-}
-
-fn light() -> DirectionalLight {
-    DirectionalLight::default()
-}
-
-/// Strand buffers holding exactly `strands` (each the same vertex count), all of `width`.
-fn strand_buffers(gpu: &Gpu, strands: &[Vec<Vec3>], width: f32) -> StrandBuffers {
-    let per = strands[0].len();
-    let segments = (per - 1) as u32;
-    let vertices: Vec<Vec4> = strands
-        .iter()
-        .flat_map(|s| {
-            s.iter()
-                .enumerate()
-                .map(move |(i, p)| p.extend(i as f32 / segments as f32))
-        })
-        .collect();
-    let roots: Vec<StrandRoot> = (0..strands.len())
-        .map(|i| StrandRoot {
-            triangle: 0,
-            seed: i as u32,
-            bary: Vec2::ZERO,
-            length: 1.0,
-            width,
-            phase: 0.0,
-            tilt: 0.0,
-            azimuth: 0.0,
-            color: Vec3::ONE,
-        })
-        .collect();
-    let usage = wgpu::BufferUsages::STORAGE;
-    StrandBuffers {
-        vertices: storage_buffer(gpu, "test vertices", &vertices, usage).unwrap(),
-        roots: storage_buffer(gpu, "test roots", &roots, usage).unwrap(),
-        strand_count: strands.len() as u32,
-        segments,
-    }
-}
-
-/// A one-triangle mesh out of the way (the voxel method needs a mesh for its mesh map).
-fn dummy_mesh(gpu: &Gpu) -> MeshBuffers {
-    let mesh = Mesh {
-        positions: vec![
-            Vec3::new(50.0, 0.0, 0.0),
-            Vec3::new(51.0, 0.0, 0.0),
-            Vec3::new(50.0, 0.0, 1.0),
-        ],
-        normals: vec![Vec3::Y; 3],
-        indices: vec![0, 2, 1],
-    };
-    MeshBuffers::upload(gpu, &mesh).unwrap()
-}
+use pelage_scene::{GrowthParams, HairParams, Mesh, Splat, VoxelParams, WindParams};
+use pelage_shadow::{ShadowMethod, VoxelShadow};
+use pelage_strands::{GrowStrands, StrandBuffers};
 
 /// The voxel method on `strands` alone (a dummy mesh, no mesh map needed), reach box `reach`.
 fn isolated(
@@ -86,43 +28,6 @@ fn voxel_params(resolution: u32) -> VoxelParams {
         mesh_map_size: 0,
         ..VoxelParams::default()
     }
-}
-
-fn growth(width: f32, opacity: f32) -> GrowthParams {
-    GrowthParams {
-        width,
-        tip_width: 1.0,
-        opacity,
-        ..GrowthParams::default()
-    }
-}
-
-/// Runs the whole method and returns the hair transmittance at every strand vertex
-/// (the tests' methods have no mesh map, so the contract gives the hair's alone).
-fn voxel_transmittance(gpu: &Gpu, shadow: &VoxelShadow, strands: &StrandBuffers) -> Vec<f32> {
-    shadow.set_light(&gpu.queue, &light()).unwrap();
-    let out = zeroed_storage(
-        gpu,
-        "transmittance",
-        strands.vertices.size() / 4,
-        wgpu::BufferUsages::STORAGE,
-    )
-    .unwrap();
-    let probe = TransmittanceProbe::new(gpu, &shadow.binding()).unwrap();
-    let mut encoder = gpu.device.create_command_encoder(&Default::default());
-    shadow.encode(&mut encoder, None);
-    probe
-        .encode(gpu, &mut encoder, &strands.vertices, &out)
-        .unwrap();
-    gpu.submit_and_wait([encoder.finish()]).unwrap();
-    bytemuck::cast_slice(&read_buffer(gpu, &out).unwrap()).to_vec()
-}
-
-fn read_vec4(gpu: &Gpu, buffer: &wgpu::Buffer) -> Vec<Vec4> {
-    bytemuck::cast_slice::<u8, [f32; 4]>(&read_buffer(gpu, buffer).unwrap())
-        .iter()
-        .map(|v| Vec4::from_array(*v))
-        .collect()
 }
 
 #[test]
@@ -193,84 +98,18 @@ fn scan_equals_cpu_scan_on_columns_of_every_length() {
     );
 }
 
-/// Grows `hair` on `mesh` at t = 0 and returns the stage and its mesh buffers.
-fn grow(gpu: &Gpu, mesh: &Mesh, hair: &HairParams) -> (GrowStrands, MeshBuffers) {
-    let buffers = MeshBuffers::upload(gpu, mesh).unwrap();
-    let strands = GrowStrands::new(gpu, mesh, &buffers, hair).unwrap();
-    strands.set_time(&gpu.queue, 0.0).unwrap();
-    let mut encoder = gpu.device.create_command_encoder(&Default::default());
-    strands.encode(&mut encoder, None);
-    gpu.submit_and_wait([encoder.finish()]).unwrap();
-    (strands, buffers)
-}
-
-fn long_hair() -> (Mesh, HairParams) {
-    let mut hair = HairParams::default();
-    hair.roots.count = 6000;
-    hair.growth.segments = 16;
-    hair.growth.length = 0.9;
-    hair.growth.force_weight = 0.12;
-    hair.growth.direction_jitter = 0.15;
-    hair.wind = WindParams::calm();
-    (Mesh::icosphere(0.5, 3).unwrap(), hair)
-}
-
-/// A groom grown at t = 0 and the ray-traced transmittance at every one of its vertices.
-struct Reference {
-    strands: GrowStrands,
-    mesh_buffers: MeshBuffers,
-    truth: Vec<f32>,
-}
-
-fn reference(gpu: &Gpu, mesh: &Mesh, hair: &HairParams) -> Reference {
-    let (strands, mesh_buffers) = grow(gpu, mesh, hair);
-    let buffers = strands.buffers();
-    let vertices = read_vec4(gpu, &buffers.vertices);
-    let widths: Vec<f32> = strands.roots().iter().map(|r| r.width).collect();
-    let per = (buffers.segments + 1) as usize;
-    let g = &hair.growth;
-    let bvh = SegmentBvh::build(segments_from_strands(
-        &vertices,
-        per,
-        &widths,
-        g.tip_width,
-        g.opacity,
-    ));
-    let to_light = light().to_light().unwrap();
-    let truth = transmittance_at_vertices(
-        &bvh,
-        &vertices,
-        per,
-        to_light,
-        REFERENCE_DISC,
-        REFERENCE_RAYS,
-    );
-    Reference {
-        strands,
-        mesh_buffers,
-        truth,
-    }
-}
-
-/// Radius of the disc of rays the reference averages over per sample, scene units
-/// (the default creature is about 2.5 units across), and the rays per sample.
-const REFERENCE_DISC: f32 = 0.01;
-const REFERENCE_RAYS: u32 = 16;
-
 /// RMSE and p95 of voxel transmittance against the reference.
 fn voxel_error(gpu: &Gpu, r: &Reference, hair: &HairParams, params: &VoxelParams) -> (f32, f32) {
-    let buffers = r.strands.buffers();
     let shadow = VoxelShadow::new(
         gpu,
         params,
         &hair.growth,
-        buffers,
+        r.strands.buffers(),
         &r.mesh_buffers,
         (Vec3::ZERO, Vec3::ONE),
     )
     .unwrap();
-    let voxel = voxel_transmittance(gpu, &shadow, buffers);
-    rmse_p95(&voxel, &r.truth).unwrap()
+    error(gpu, r, &shadow)
 }
 
 #[test]
@@ -333,7 +172,7 @@ fn an_isolated_strand_does_not_shadow_itself() {
                 (Vec3::ZERO, Vec3::ONE),
             )
             .unwrap();
-            let t = voxel_transmittance(&gpu, &shadow, &buffers);
+            let t = transmittance(&gpu, &shadow, &buffers);
             let worst = t.iter().copied().fold(1.0f32, f32::min);
             println!(
                 "isolated strand at {angle_deg} deg to the light, {resolution}^3: min T {worst:.4}"
@@ -469,7 +308,7 @@ fn the_grid_is_fitted_to_the_hair_on_the_gpu() {
 fn shadows_only_darken_and_the_far_side_is_darker() {
     let gpu = gpu();
     let (strands, shadow) = long_hair_shadow(&gpu, 64);
-    let t = voxel_transmittance(&gpu, &shadow, strands.buffers());
+    let t = transmittance(&gpu, &shadow, strands.buffers());
     assert!(t.iter().all(|v| (0.0..=1.0).contains(v)));
     let vertices = read_vec4(&gpu, &strands.buffers().vertices);
     let to_light = light().to_light().unwrap();

@@ -1,0 +1,181 @@
+//! Helpers shared by the shadow tests: grooms, hand-made strands, the ray-traced
+//! reference, and any method's transmittance at the strand vertices.
+
+#![allow(dead_code)] // each test file uses its own subset
+
+use glam::{Vec2, Vec3, Vec4};
+use pelage_gpu::{Gpu, read_buffer, storage_buffer, wgpu, zeroed_storage};
+use pelage_reference::transmittance::{
+    SegmentBvh, rmse_p95, segments_from_strands, transmittance_at_vertices,
+};
+use pelage_scene::{DirectionalLight, GrowthParams, HairParams, Mesh, WindParams};
+use pelage_shadow::{ShadowMethod, TransmittanceProbe};
+use pelage_strands::{GrowStrands, MeshBuffers, StrandBuffers, StrandRoot};
+
+pub fn gpu() -> Gpu {
+    Gpu::headless().unwrap_or_else(|e| panic!("these tests need a GPU adapter: {e}"))
+}
+
+pub fn light() -> DirectionalLight {
+    DirectionalLight::default()
+}
+
+/// Strand buffers holding exactly `strands` (each the same vertex count), all of `width`.
+pub fn strand_buffers(gpu: &Gpu, strands: &[Vec<Vec3>], width: f32) -> StrandBuffers {
+    let per = strands[0].len();
+    let segments = (per - 1) as u32;
+    let vertices: Vec<Vec4> = strands
+        .iter()
+        .flat_map(|s| {
+            s.iter()
+                .enumerate()
+                .map(move |(i, p)| p.extend(i as f32 / segments as f32))
+        })
+        .collect();
+    let roots: Vec<StrandRoot> = (0..strands.len())
+        .map(|i| StrandRoot {
+            triangle: 0,
+            seed: i as u32,
+            bary: Vec2::ZERO,
+            length: 1.0,
+            width,
+            phase: 0.0,
+            tilt: 0.0,
+            azimuth: 0.0,
+            color: Vec3::ONE,
+        })
+        .collect();
+    let usage = wgpu::BufferUsages::STORAGE;
+    StrandBuffers {
+        vertices: storage_buffer(gpu, "test vertices", &vertices, usage).unwrap(),
+        roots: storage_buffer(gpu, "test roots", &roots, usage).unwrap(),
+        strand_count: strands.len() as u32,
+        segments,
+    }
+}
+
+/// A one-triangle mesh out of the way (every method needs a mesh for its mesh map).
+pub fn dummy_mesh(gpu: &Gpu) -> MeshBuffers {
+    let mesh = Mesh {
+        positions: vec![
+            Vec3::new(50.0, 0.0, 0.0),
+            Vec3::new(51.0, 0.0, 0.0),
+            Vec3::new(50.0, 0.0, 1.0),
+        ],
+        normals: vec![Vec3::Y; 3],
+        indices: vec![0, 2, 1],
+    };
+    MeshBuffers::upload(gpu, &mesh).unwrap()
+}
+
+pub fn growth(width: f32, opacity: f32) -> GrowthParams {
+    GrowthParams {
+        width,
+        tip_width: 1.0,
+        opacity,
+        ..GrowthParams::default()
+    }
+}
+
+/// Runs `method` aimed at the default light and returns its `light_visibility` at every
+/// strand vertex (the tests' methods have no mesh map, so this is the hair's transmittance).
+pub fn transmittance(gpu: &Gpu, method: &dyn ShadowMethod, strands: &StrandBuffers) -> Vec<f32> {
+    method.set_light(&gpu.queue, &light()).unwrap();
+    let out = zeroed_storage(
+        gpu,
+        "transmittance",
+        strands.vertices.size() / 4,
+        wgpu::BufferUsages::STORAGE,
+    )
+    .unwrap();
+    let probe = TransmittanceProbe::new(gpu, &method.binding()).unwrap();
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    method.encode(&mut encoder, None);
+    probe
+        .encode(gpu, &mut encoder, &strands.vertices, &out)
+        .unwrap();
+    gpu.submit_and_wait([encoder.finish()]).unwrap();
+    bytemuck::cast_slice(&read_buffer(gpu, &out).unwrap()).to_vec()
+}
+
+pub fn read_vec4(gpu: &Gpu, buffer: &wgpu::Buffer) -> Vec<Vec4> {
+    bytemuck::cast_slice::<u8, [f32; 4]>(&read_buffer(gpu, buffer).unwrap())
+        .iter()
+        .map(|v| Vec4::from_array(*v))
+        .collect()
+}
+
+/// Grows `hair` on `mesh` at t = 0 and returns the stage and its mesh buffers.
+pub fn grow(gpu: &Gpu, mesh: &Mesh, hair: &HairParams) -> (GrowStrands, MeshBuffers) {
+    let buffers = MeshBuffers::upload(gpu, mesh).unwrap();
+    let strands = GrowStrands::new(gpu, mesh, &buffers, hair).unwrap();
+    strands.set_time(&gpu.queue, 0.0).unwrap();
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    strands.encode(&mut encoder, None);
+    gpu.submit_and_wait([encoder.finish()]).unwrap();
+    (strands, buffers)
+}
+
+pub fn long_hair() -> (Mesh, HairParams) {
+    let mut hair = HairParams::default();
+    hair.roots.count = 6000;
+    hair.growth.segments = 16;
+    hair.growth.length = 0.9;
+    hair.growth.force_weight = 0.12;
+    hair.growth.direction_jitter = 0.15;
+    hair.wind = WindParams::calm();
+    (Mesh::icosphere(0.5, 3).unwrap(), hair)
+}
+
+/// A groom grown at t = 0 and the ray-traced transmittance at every one of its vertices.
+pub struct Reference {
+    pub strands: GrowStrands,
+    pub mesh_buffers: MeshBuffers,
+    pub truth: Vec<f32>,
+}
+
+pub fn reference(gpu: &Gpu, mesh: &Mesh, hair: &HairParams) -> Reference {
+    let (strands, mesh_buffers) = grow(gpu, mesh, hair);
+    let buffers = strands.buffers();
+    let vertices = read_vec4(gpu, &buffers.vertices);
+    let widths: Vec<f32> = strands.roots().iter().map(|r| r.width).collect();
+    let per = (buffers.segments + 1) as usize;
+    let g = &hair.growth;
+    let bvh = SegmentBvh::build(segments_from_strands(
+        &vertices,
+        per,
+        &widths,
+        g.tip_width,
+        g.opacity,
+    ));
+    let to_light = light().to_light().unwrap();
+    let truth = transmittance_at_vertices(
+        &bvh,
+        &vertices,
+        per,
+        to_light,
+        REFERENCE_DISC,
+        REFERENCE_RAYS,
+    );
+    Reference {
+        strands,
+        mesh_buffers,
+        truth,
+    }
+}
+
+/// Radius of the disc of rays the reference averages over per sample, scene units
+/// (the default creature is about 2.5 units across), and the rays per sample.
+pub const REFERENCE_DISC: f32 = 0.01;
+pub const REFERENCE_RAYS: u32 = 16;
+
+/// RMSE and p95 of `method`'s transmittance against the reference.
+pub fn error(gpu: &Gpu, r: &Reference, method: &dyn ShadowMethod) -> (f32, f32) {
+    let t = transmittance(gpu, method, r.strands.buffers());
+    rmse_p95(&t, &r.truth).unwrap()
+}
+
+/// Mean of a slice.
+pub fn mean(v: &[f32]) -> f32 {
+    v.iter().sum::<f32>() / v.len().max(1) as f32
+}
