@@ -80,7 +80,17 @@ pub fn growth(width: f32, opacity: f32) -> GrowthParams {
 /// Runs `method` aimed at the default light and returns its `light_visibility` at every
 /// strand vertex (the tests' methods have no mesh map, so this is the hair's transmittance).
 pub fn transmittance(gpu: &Gpu, method: &dyn ShadowMethod, strands: &StrandBuffers) -> Vec<f32> {
-    method.set_light(&gpu.queue, &light()).unwrap();
+    transmittance_from(gpu, method, strands, &light())
+}
+
+/// [`transmittance`] for a given light.
+pub fn transmittance_from(
+    gpu: &Gpu,
+    method: &dyn ShadowMethod,
+    strands: &StrandBuffers,
+    light: &DirectionalLight,
+) -> Vec<f32> {
+    method.set_light(&gpu.queue, light).unwrap();
     let out = zeroed_storage(
         gpu,
         "transmittance",
@@ -129,12 +139,23 @@ pub fn long_hair() -> (Mesh, HairParams) {
 
 /// A groom grown at t = 0 and the ray-traced transmittance at every one of its vertices.
 pub struct Reference {
+    pub light: DirectionalLight,
     pub strands: GrowStrands,
     pub mesh_buffers: MeshBuffers,
     pub truth: Vec<f32>,
 }
 
 pub fn reference(gpu: &Gpu, mesh: &Mesh, hair: &HairParams) -> Reference {
+    reference_from(gpu, mesh, hair, &light())
+}
+
+/// [`reference`] for a given light.
+pub fn reference_from(
+    gpu: &Gpu,
+    mesh: &Mesh,
+    hair: &HairParams,
+    light: &DirectionalLight,
+) -> Reference {
     let (strands, mesh_buffers) = grow(gpu, mesh, hair);
     let buffers = strands.buffers();
     let vertices = read_vec4(gpu, &buffers.vertices);
@@ -148,7 +169,7 @@ pub fn reference(gpu: &Gpu, mesh: &Mesh, hair: &HairParams) -> Reference {
         g.tip_width,
         g.opacity,
     ));
-    let to_light = light().to_light().unwrap();
+    let to_light = light.to_light().unwrap();
     let truth = transmittance_at_vertices(
         &bvh,
         &vertices,
@@ -158,6 +179,7 @@ pub fn reference(gpu: &Gpu, mesh: &Mesh, hair: &HairParams) -> Reference {
         REFERENCE_RAYS,
     );
     Reference {
+        light: light.clone(),
         strands,
         mesh_buffers,
         truth,
@@ -171,7 +193,7 @@ pub const REFERENCE_RAYS: u32 = 16;
 
 /// RMSE and p95 of `method`'s transmittance against the reference.
 pub fn error(gpu: &Gpu, r: &Reference, method: &dyn ShadowMethod) -> (f32, f32) {
-    let t = transmittance(gpu, method, r.strands.buffers());
+    let t = transmittance_from(gpu, method, r.strands.buffers(), &r.light);
     rmse_p95(&t, &r.truth).unwrap()
 }
 
