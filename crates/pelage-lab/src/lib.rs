@@ -1,0 +1,27 @@
+//! Measurement output for the pelage lab programs (shadow lab, OIT lab,
+//! benchmarks).
+//!
+//! - [`Table`]: CSV (RFC 4180 quoting) and an aligned plain-text table for
+//!   the terminal.
+//! - [`pareto_front`]: the Pareto-optimal points of a cost/error cloud.
+//! - [`ScatterChart`]: "error against time" scatter plots with the Pareto
+//!   front marked and marker area encoding a third quantity, written as a
+//!   self-contained SVG or as a PNG. The PNG is rasterised here with a
+//!   built-in bitmap font: no system fonts, no C libraries, works headless.
+//! - [`write_file_atomically`]: every file is written to a temporary name and
+//!   renamed, so an interrupted run never leaves a half-written result.
+
+#![deny(missing_docs)]
+
+mod chart;
+mod error;
+mod font;
+mod fs;
+mod pareto;
+mod table;
+
+pub use chart::{ScatterChart, ScatterPoint};
+pub use error::LabError;
+pub use fs::write_file_atomically;
+pub use pareto::pareto_front;
+pub use table::Table;
