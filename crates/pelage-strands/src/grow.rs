@@ -170,10 +170,11 @@ impl GrowStrands {
                 ),
             });
         }
-        let roots = sample_roots(mesh, &params.roots, &params.growth)?;
+        // Refuse a groom the device cannot hold before spending time on its roots.
         let count = params.roots.count;
         let vertex_bytes = u64::from(count) * u64::from(params.growth.segments + 1) * 16;
         gpu.check_storage_size("strand vertices", vertex_bytes)?;
+        let roots = sample_roots(mesh, &params.roots, &params.growth)?;
 
         let groups = dispatch_size(gpu.limits(), u64::from(count), WORKGROUP);
         let uniforms =
