@@ -190,10 +190,10 @@ fn vec3(c: &[f32]) -> Vec3 {
     Vec3::new(next(), next(), next())
 }
 
-/// Checks that every index on every `f` line resolves to an element the file
-/// defines, the way `tobj` resolves it (positive: 1-based into all elements
-/// of the file; negative: relative to the elements defined so far; 0 is
-/// never valid). Texture and normal indices are only checked when the file
+/// Checks that every index on every `f` and `l` line resolves to an element
+/// the file defines, the way `tobj` resolves it (positive: 1-based into all
+/// elements of the file; negative: relative to the elements defined so far;
+/// 0 is never valid). Texture and normal indices are only checked when the file
 /// has texture coordinates / normals at all (otherwise `tobj` ignores them).
 /// Tokens that do not parse as integers are left for `tobj` to refuse.
 fn check_face_indices(text: &str, source_name: &str) -> Result<(), ObjError> {
@@ -213,7 +213,10 @@ fn check_face_indices(text: &str, source_name: &str) -> Result<(), ObjError> {
             Some("v") => counts[0] += 1,
             Some("vt") => counts[1] += 1,
             Some("vn") => counts[2] += 1,
-            Some("f") => {
+            // `tobj` parses `l` like `f` and turns an `l` with three or
+            // more vertices into triangles even with `ignore_lines`, so its
+            // indices reach the same arithmetic.
+            Some("f" | "l") => {
                 for word in words {
                     for (kind, part) in word.split('/').take(3).enumerate() {
                         if part.is_empty() {
