@@ -1,0 +1,267 @@
+//! Writes the seed corpora `corpus/hair_file/seed-*` and `corpus/obj/seed-*`:
+//! small valid files (the `.hair` ones through pelage's own writer) plus edge
+//! cases. Run from `fuzz/`: `cargo run --example make_seeds`.
+
+use std::path::Path;
+
+use glam::Vec3;
+use pelage_scene::HairFile;
+use pelage_scene::hair_file::{HEADER_SIZE, INFO_SIZE, SIGNATURE};
+
+/// A `.hair` header with the given counts and array bits, default segment
+/// count 0, thickness 1, transparency 0, colour white, empty info.
+fn header(hair_count: u32, point_count: u32, arrays: u32, default_segments: u32) -> Vec<u8> {
+    let mut out = Vec::with_capacity(HEADER_SIZE);
+    out.extend_from_slice(&SIGNATURE);
+    for x in [hair_count, point_count, arrays, default_segments] {
+        out.extend_from_slice(&x.to_le_bytes());
+    }
+    for x in [1.0f32, 0.0, 1.0, 1.0, 1.0] {
+        out.extend_from_slice(&x.to_le_bytes());
+    }
+    out.resize(HEADER_SIZE, 0);
+    out
+}
+
+fn strand(root: Vec3, points: usize) -> Vec<Vec3> {
+    (0..points)
+        .map(|i| root + Vec3::new(0.01 * i as f32, 0.1 * i as f32, 0.0))
+        .collect()
+}
+
+fn hair_seeds() -> Vec<(&'static str, Vec<u8>)> {
+    let mut seeds = Vec::new();
+
+    // Valid files written by pelage's writer.
+    let two = HairFile::from_strands(&[strand(Vec3::ZERO, 3), strand(Vec3::X, 2)]).unwrap();
+    seeds.push(("two-strands", two.write().unwrap()));
+
+    let mut full = HairFile::from_strands(&[
+        strand(Vec3::ZERO, 4),
+        strand(Vec3::Y, 2),
+        strand(Vec3::Z, 3),
+    ])
+    .unwrap();
+    let n = full.points.len();
+    full.has_thickness = true;
+    full.has_transparency = true;
+    full.has_colors = true;
+    full.thickness = (0..n).map(|i| 0.1 + i as f32 * 0.01).collect();
+    full.transparency = (0..n).map(|i| i as f32 / n as f32).collect();
+    full.colors = (0..n)
+        .map(|i| Vec3::new(0.5, 0.3, i as f32 * 0.1))
+        .collect();
+    full.info = "pelage fuzz seed: every array".to_owned();
+    seeds.push(("all-arrays", full.write().unwrap()));
+
+    // No segments array: every strand has the default segment count.
+    let mut uniform = HairFile::from_strands(&[
+        strand(Vec3::ZERO, 3),
+        strand(Vec3::X, 3),
+        strand(Vec3::Y, 3),
+    ])
+    .unwrap();
+    uniform.has_segments = false;
+    uniform.default_segments = 2;
+    uniform.info = "default segments".to_owned();
+    seeds.push(("default-segments", uniform.write().unwrap()));
+
+    // Odd hair count (the point array starts at an odd, unaligned offset),
+    // one long strand, with a thickness array.
+    let mut odd = HairFile::from_strands(&[
+        strand(Vec3::ZERO, 2),
+        strand(Vec3::ONE, 17),
+        strand(-Vec3::ONE, 2),
+    ])
+    .unwrap();
+    odd.has_thickness = true;
+    odd.thickness = vec![0.25; odd.points.len()];
+    seeds.push(("odd-hair-count", odd.write().unwrap()));
+
+    // Edge cases, hand-made.
+    seeds.push(("empty", Vec::new()));
+    seeds.push(("signature-only", SIGNATURE.to_vec()));
+    seeds.push(("header-only-no-hair", header(0, 0, 2, 0)));
+    seeds.push(("header-only-claims-hair", header(3, 9, 3, 2)));
+    seeds.push(("header-no-points-bit", header(0, 0, 1, 0)));
+    seeds.push((
+        "header-huge-counts",
+        header(u32::MAX, u32::MAX, 31, u32::MAX),
+    ));
+    seeds.push((
+        "header-short-by-one",
+        header(0, 0, 2, 0)[..HEADER_SIZE - 1].to_vec(),
+    ));
+    let mut bad_sig = header(0, 0, 2, 0);
+    bad_sig[..4].copy_from_slice(b"HIAR");
+    seeds.push(("bad-signature", bad_sig));
+
+    // One strand, default segments larger than a u16 can hold (needs points
+    // the file does not have: counts mismatch / size checks trip first).
+    seeds.push(("default-segments-too-large", header(1, 65537, 2, 65536)));
+
+    // Truncated valid file, and a valid file with trailing bytes.
+    let two_bytes = two.write().unwrap();
+    seeds.push(("truncated", two_bytes[..two_bytes.len() - 1].to_vec()));
+    let mut trailing = two_bytes.clone();
+    trailing.extend_from_slice(b"trailing bytes");
+    seeds.push(("trailing-bytes", trailing));
+
+    // Unknown array bits set alongside the known ones.
+    let mut unknown = two_bytes.clone();
+    unknown[12..16].copy_from_slice(&(0xffff_ffe0u32 | 3).to_le_bytes());
+    seeds.push(("unknown-array-bits", unknown));
+
+    // Info: 88 bytes without a NUL, and invalid UTF-8.
+    let mut full_info = two_bytes.clone();
+    full_info[HEADER_SIZE - INFO_SIZE..HEADER_SIZE].fill(b'x');
+    seeds.push(("info-no-nul", full_info));
+    let mut bad_info = two_bytes.clone();
+    bad_info[HEADER_SIZE - INFO_SIZE..HEADER_SIZE].fill(0xff);
+    seeds.push(("info-not-utf8", bad_info));
+
+    // Segments that do not add up to the point count.
+    let mut mismatch = two_bytes.clone();
+    mismatch[HEADER_SIZE..HEADER_SIZE + 2].copy_from_slice(&7u16.to_le_bytes());
+    seeds.push(("segment-point-mismatch", mismatch));
+
+    // A NaN point, and a NaN thickness default (allowed: only points must be finite).
+    let mut nan_point = two_bytes.clone();
+    let first_point = HEADER_SIZE + 2 * 2;
+    nan_point[first_point..first_point + 4].copy_from_slice(&f32::NAN.to_le_bytes());
+    seeds.push(("nan-point", nan_point));
+    let mut nan_default = two_bytes.clone();
+    nan_default[20..24].copy_from_slice(&f32::NAN.to_le_bytes());
+    seeds.push(("nan-default-thickness", nan_default));
+
+    seeds
+}
+
+const CUBE: &str = "\
+# unit cube, quads, no normals
+o cube
+v -0.5 -0.5 -0.5
+v  0.5 -0.5 -0.5
+v  0.5  0.5 -0.5
+v -0.5  0.5 -0.5
+v -0.5 -0.5  0.5
+v  0.5 -0.5  0.5
+v  0.5  0.5  0.5
+v -0.5  0.5  0.5
+f 1 4 3 2
+f 5 6 7 8
+f 1 2 6 5
+f 4 8 7 3
+f 1 5 8 4
+f 2 3 7 6
+";
+
+fn obj_seeds() -> Vec<(&'static str, String)> {
+    let seeds: Vec<(&'static str, String)> = vec![
+        ("cube-quads", CUBE.to_owned()),
+        (
+            "triangle-normals",
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//1 3//1\n".to_owned(),
+        ),
+        (
+            "triangle-texcoords-normals",
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nvn 0 0 1\n\
+             f 1/1/1 2/2/1 3/3/1\n"
+                .to_owned(),
+        ),
+        (
+            "triangle-texcoords",
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/1 3/1\n".to_owned(),
+        ),
+        (
+            "negative-indices",
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nf -3 -2 -1\nv 1 1 0\nf -3 -1 -2\n".to_owned(),
+        ),
+        (
+            "groups-materials",
+            "mtllib scene.mtl\no a\ng left\nusemtl red\nv 0 0 0\nv 1 0 0\nv 0 1 0\n\
+             f 1 2 3\ng right\nusemtl blue\nv 0 0 1\nf 1 2 4\no b\nf 2 3 4\n"
+                .to_owned(),
+        ),
+        (
+            "w-and-colours",
+            "v 0 0 0 1\nv 2 0 0 2\nv 0 1 0 0.5 0.5 0.5\nf 1 2 3\n".to_owned(),
+        ),
+        (
+            "vertex-colours",
+            "v 0 0 0 1 0 0\nv 1 0 0 0 1 0\nv 0 1 0 0 0 1\nf 1 2 3\n".to_owned(),
+        ),
+        (
+            "points-lines-polygon",
+            "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv -1 0.5 0\np 1\nl 1 2\nf 1\nf 1 2\n\
+             f 1 2 3 4 5\n"
+                .to_owned(),
+        ),
+        (
+            "polyline-three-vertices",
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvn 0 0 1\nf 1/1/1 2/1/1 3/1/1\n\
+             l 1/1/1 2/1/1 3/1/1\nl -3 -2 -1 -3\n"
+                .to_owned(),
+        ),
+        (
+            "crlf",
+            "v 0 0 0\r\nv 1 0 0\r\nv 0 1 0\r\nf 1 2 3\r\n".to_owned(),
+        ),
+        (
+            "degenerate-and-good",
+            "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 4\n".to_owned(),
+        ),
+        (
+            "all-degenerate",
+            "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n".to_owned(),
+        ),
+        (
+            "nan-position",
+            "v nan 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n".to_owned(),
+        ),
+        (
+            "zero-normal",
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 0\nf 1//1 2//1 3//1\n".to_owned(),
+        ),
+        (
+            "index-out-of-range",
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n".to_owned(),
+        ),
+        (
+            "index-zero",
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n".to_owned(),
+        ),
+        ("comments-only", "# nothing here\n\n   \n".to_owned()),
+        ("empty", String::new()),
+        ("no-faces", "v 0 0 0\nv 1 0 0\nv 0 1 0\n".to_owned()),
+        (
+            "huge-coordinates",
+            "v -3e38 0 0\nv 3e38 0 0\nv 0 3e38 0\nf 1 2 3\n".to_owned(),
+        ),
+        ("bad-float", "v 0 0 zero\nf 1 1 1\n".to_owned()),
+        // Crashed before the fix (see crates/pelage-scene/tests/fuzz_regressions.rs).
+        (
+            "regression-polyline-huge-normal",
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nl 1//9223372036854775807 2 3\n".to_owned(),
+        ),
+    ];
+    seeds
+}
+
+fn write_all(dir: &Path, seeds: impl IntoIterator<Item = (&'static str, Vec<u8>)>) {
+    std::fs::create_dir_all(dir).unwrap();
+    for (name, bytes) in seeds {
+        let path = dir.join(format!("seed-{name}"));
+        std::fs::write(&path, bytes).unwrap();
+        println!("{}", path.display());
+    }
+}
+
+fn main() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("corpus");
+    write_all(&root.join("hair_file"), hair_seeds());
+    write_all(
+        &root.join("obj"),
+        obj_seeds().into_iter().map(|(n, s)| (n, s.into_bytes())),
+    );
+}
