@@ -10,6 +10,7 @@
 
 #import shared/math.wgsl
 #import shared/strand.wgsl
+#import shared/ribbon.wgsl
 #import shade/frame.wgsl
 #import shadow/none.wgsl
 
@@ -44,23 +45,15 @@ struct VertexOut {
     @location(4) visibility: f32,
 }
 
-// Which end of the segment (0 start, 1 end) and which side (-1, +1) each of the six corners takes.
-const CORNER_END = array<u32, 6>(0u, 0u, 1u, 1u, 0u, 1u);
-const CORNER_SIDE = array<f32, 6>(-1.0, 1.0, -1.0, -1.0, 1.0, 1.0);
 
 @vertex
 fn vs_main(@builtin(vertex_index) vi: u32) -> VertexOut {
-    let segment = vi / 6u;
-    let corner = vi % 6u;
-    let segments = style.segments;
-    let strand = segment / segments;
-    let k = segment % segments + CORNER_END[corner];
-    let base = strand * (segments + 1u);
-
-    let here = vertices[base + k];
+    let c = ribbon_corner(vi, style.segments);
+    let strand = c.strand;
+    let here = vertices[c.here];
     // Vertex tangent from the neighbours, so consecutive segments share their edge.
-    let prev = vertices[base + select(k - 1u, 0u, k == 0u)].xyz;
-    let next = vertices[base + min(k + 1u, segments)].xyz;
+    let prev = vertices[c.prev].xyz;
+    let next = vertices[c.next].xyz;
     let tangent = safe_normalize(next - prev, vec3<f32>(0.0, 1.0, 0.0));
 
     let root = roots[strand];
@@ -69,7 +62,7 @@ fn vs_main(@builtin(vertex_index) vi: u32) -> VertexOut {
     var half_width = 0.5 * root.width * mix(1.0, style.tip_width, here.w);
     half_width = max(half_width, 0.5 * style.min_pixels * frame.pixel_scale * distance);
     let side = safe_normalize(cross(tangent, to_eye), perpendicular_any(tangent));
-    let world = here.xyz + side * (half_width * CORNER_SIDE[corner]);
+    let world = here.xyz + side * (half_width * c.side);
 
     var out: VertexOut;
     out.clip = frame.view_proj * vec4<f32>(world, 1.0);

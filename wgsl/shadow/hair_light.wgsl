@@ -14,6 +14,7 @@
 
 #import shared/math.wgsl
 #import shared/strand.wgsl
+#import shared/ribbon.wgsl
 #import shadow/map_common.wgsl
 
 @group(0) @binding(0) var<uniform> u: LightGridUniforms;
@@ -29,19 +30,13 @@ struct VertexOut {
     @location(0) alpha: f32,
 }
 
-const CORNER_END = array<u32, 6>(0u, 0u, 1u, 1u, 0u, 1u);
-const CORNER_SIDE = array<f32, 6>(-1.0, 1.0, -1.0, -1.0, 1.0, 1.0);
-
 @vertex
 fn vs_main(@builtin(vertex_index) vi: u32) -> VertexOut {
-    let segment = vi / 6u;
-    let corner = vi % 6u;
-    let strand = segment / u.segments;
-    let k = segment % u.segments + CORNER_END[corner];
-    let base = strand * (u.segments + 1u);
-    let here = vertices[base + k];
-    let prev = vertices[base + select(k - 1u, 0u, k == 0u)].xyz;
-    let next = vertices[base + min(k + 1u, u.segments)].xyz;
+    let c = ribbon_corner(vi, u.segments);
+    let strand = c.strand;
+    let here = vertices[c.here];
+    let prev = vertices[c.prev].xyz;
+    let next = vertices[c.next].xyz;
 
     let ls = to_light_space(u, here.xyz);
     // Tangent across the light; a strand pointing straight at the light gets any side.
@@ -53,7 +48,7 @@ fn vs_main(@builtin(vertex_index) vi: u32) -> VertexOut {
     let width = roots[strand].width * mix(1.0, u.tip_width, here.w);
     let texel = max(grid.cell.x, grid.cell.y);
     let drawn = max(width, map.min_texels * texel);
-    let p = ls + vec3<f32>(side * (0.5 * drawn * CORNER_SIDE[corner]), 0.0);
+    let p = ls + vec3<f32>(side * (0.5 * drawn * c.side), 0.0);
 
     let m = map_coords(u, grid, p);
     var out: VertexOut;
