@@ -6,12 +6,13 @@
 //! ```text
 //! cargo run --release --example wind -- [--frames N] [--size WxH] [--strands N] [--fps N]
 //!     [--out DIR] [--shadow none|voxel|dom|map|adsm] [--shadow-res N]
+//!     [--oit opaque|wboit|k_buffer|a_buffer|dbk|random_subsets]
 //! ```
 
 use std::path::PathBuf;
 use std::time::Instant;
 
-use pelage::scene::ShadowParams;
+use pelage::scene::{ShadowParams, Transparency};
 use pelage::{Renderer, Scene, gpu::Gpu, save_png, write_atomically};
 
 struct Args {
@@ -22,6 +23,7 @@ struct Args {
     fps: u32,
     out: PathBuf,
     shadow: ShadowParams,
+    transparency: Transparency,
 }
 
 fn parse_args() -> Result<Args, String> {
@@ -33,6 +35,7 @@ fn parse_args() -> Result<Args, String> {
         fps: 24,
         out: PathBuf::from("out/wind"),
         shadow: ShadowParams::default(),
+        transparency: Transparency::Opaque,
     };
     let mut it = std::env::args().skip(1);
     while let Some(flag) = it.next() {
@@ -53,6 +56,21 @@ fn parse_args() -> Result<Args, String> {
                     other => {
                         return Err(format!(
                             "--shadow {other}: expected none, voxel, dom, map or adsm"
+                        ));
+                    }
+                }
+            }
+            "--oit" => {
+                args.transparency = match value()?.as_str() {
+                    "opaque" => Transparency::Opaque,
+                    "wboit" => Transparency::wboit(),
+                    "k_buffer" => Transparency::k_buffer(8),
+                    "a_buffer" => Transparency::a_buffer(),
+                    "dbk" => Transparency::dbk(0.05),
+                    "random_subsets" => Transparency::random_subsets(8),
+                    other => {
+                        return Err(format!(
+                            "--oit {other}: expected opaque, wboit, k_buffer, a_buffer, dbk or random_subsets"
                         ));
                     }
                 }
@@ -87,7 +105,9 @@ fn parse_args() -> Result<Args, String> {
                      --out DIR      output folder (out/wind)\n\
                      --shadow M     shadow method: none, voxel, dom (deep opacity maps),\n\
                      \x20              map (shadow map with PCF) or adsm; default voxel\n\
-                     --shadow-res N voxels per axis, or map side in texels (128 / 1024)"
+                     --shadow-res N voxels per axis, or map side in texels (128 / 1024)\n\
+                     --oit M        transparency: opaque (4x MSAA, the default), wboit,\n\
+                     \x20              k_buffer (k = 8), a_buffer, dbk or random_subsets (k = 8)"
                 );
                 std::process::exit(0);
             }
@@ -117,6 +137,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         shadow: args.shadow.clone(),
         ..Scene::default()
     };
+    scene.shade.transparency = args.transparency.clone();
     if let Some(n) = args.strands {
         scene.hair.roots.count = n;
     }

@@ -12,7 +12,7 @@
 //! [`Renderer`] chains the stages for the common case: one mesh, one groom, one
 //! light, an offscreen image. Engines that bring their own device, buffers and
 //! render targets call the stage types directly ([`strands::GrowStrands`],
-//! [`shadow::VoxelShadow`], [`shade::RibbonPass`]) on their own encoder.
+//! [`shadow::VoxelShadow`], [`shade::Opaque`]) on their own encoder.
 //!
 //! ```no_run
 //! let gpu = pelage::gpu::Gpu::headless()?;

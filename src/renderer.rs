@@ -2,7 +2,7 @@
 
 use pelage_gpu::{Gpu, GpuTimer, wgpu};
 use pelage_scene::{Camera, DirectionalLight, HairParams, Mesh, ShadeParams, ShadowParams};
-use pelage_shade::{RibbonPass, Targets};
+use pelage_shade::{HairInputs, HairPass, OitStats, Targets};
 use pelage_shadow::ShadowMethod;
 use pelage_strands::{GrowStrands, MeshBuffers};
 
@@ -74,7 +74,7 @@ pub struct Renderer {
     mesh_buffers: MeshBuffers,
     strands: GrowStrands,
     shadow: Option<Box<dyn ShadowMethod>>,
-    ribbons: RibbonPass,
+    hair: Box<dyn HairPass>,
     targets: Targets,
     timer: Option<GpuTimer>,
     light: DirectionalLight,
@@ -94,21 +94,29 @@ impl Renderer {
             scene.reach(),
         )?;
         let binding = shadow.as_ref().map(|s| s.binding());
-        let ribbons = RibbonPass::new(
+        scene
+            .shade
+            .validate()
+            .map_err(pelage_shade::ShadeError::from)?;
+        let targets = Targets::new(gpu, width, height, scene.shade.samples())?;
+        let hair = pelage_shade::build(
             gpu,
-            &scene.shade,
-            &scene.hair,
-            &mesh_buffers,
-            strands.buffers(),
-            binding.as_ref(),
+            &HairInputs {
+                params: &scene.shade,
+                hair: &scene.hair,
+                mesh: &mesh_buffers,
+                strands: strands.buffers(),
+                shadow: binding.as_ref(),
+            },
+            width,
+            height,
         )?;
-        let targets = Targets::new(gpu, width, height, scene.shade.sample_count)?;
-        let timer = GpuTimer::new(gpu, 16)?;
+        let timer = GpuTimer::new(gpu, 64)?;
         Ok(Self {
             mesh_buffers,
             strands,
             shadow,
-            ribbons,
+            hair,
             targets,
             timer,
             light: scene.light.clone(),
@@ -122,7 +130,7 @@ impl Renderer {
             shadow.set_light(&gpu.queue, &self.light)?;
         }
         let (width, height) = (self.targets.width, self.targets.height);
-        self.ribbons
+        self.hair
             .set_frame(&gpu.queue, camera, &self.light, width, height)?;
         Ok(())
     }
@@ -137,9 +145,9 @@ impl Renderer {
         }
         let (color, resolve) = self.targets.color_views();
         let depth = self.targets.depth_view();
-        let timer = self.timer.as_mut();
-        self.ribbons
-            .encode(&mut encoder, &color, resolve.as_ref(), &depth, timer);
+        let views = self.targets.views(&color, resolve.as_ref(), &depth);
+        self.hair
+            .encode(gpu, &mut encoder, &views, self.timer.as_mut())?;
         if let Some(timer) = &self.timer {
             timer.resolve(&mut encoder);
         }
@@ -174,10 +182,8 @@ impl Renderer {
             let ms = time_alone(gpu, repeats, |e| shadow.encode(e, None))?;
             stages.push(("shadow".to_string(), ms));
         }
-        let shade = time_alone(gpu, repeats, |e| {
-            self.ribbons
-                .encode(e, &color, resolve.as_ref(), &depth, None)
-        })?;
+        let views = self.targets.views(&color, resolve.as_ref(), &depth);
+        let shade = time_alone(gpu, repeats, |e| self.hair.encode(gpu, e, &views, None))?;
         stages.push(("shade".to_string(), shade));
         Ok(stages)
     }
@@ -197,6 +203,16 @@ impl Renderer {
         &self.strands
     }
 
+    /// Stage 3's method.
+    pub fn hair_pass(&self) -> &dyn HairPass {
+        self.hair.as_ref()
+    }
+
+    /// Counters of stage 3's node pool (linked-list methods); waits for the GPU.
+    pub fn oit_stats(&self, gpu: &Gpu) -> crate::Result<OitStats> {
+        Ok(self.hair.stats(gpu)?)
+    }
+
     /// The mesh buffers every stage reads.
     pub fn mesh_buffers(&self) -> &MeshBuffers {
         &self.mesh_buffers
@@ -204,15 +220,18 @@ impl Renderer {
 }
 
 /// Median wall-clock milliseconds of `repeats` submissions of what `encode` records, each waited for.
-fn time_alone(
+fn time_alone<R>(
     gpu: &Gpu,
     repeats: usize,
-    encode: impl Fn(&mut wgpu::CommandEncoder),
-) -> crate::Result<f64> {
+    encode: impl Fn(&mut wgpu::CommandEncoder) -> R,
+) -> crate::Result<f64>
+where
+    R: IntoUnitResult,
+{
     let mut times = Vec::with_capacity(repeats.max(1));
     for _ in 0..repeats.max(1) {
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
-        encode(&mut encoder);
+        encode(&mut encoder).into_unit_result()?;
         let command = encoder.finish();
         let started = std::time::Instant::now();
         gpu.submit_and_wait([command])?;
@@ -220,4 +239,21 @@ fn time_alone(
     }
     times.sort_by(f64::total_cmp);
     Ok(times[times.len() / 2])
+}
+
+/// What an encoding closure may return: nothing, or a stage's result.
+trait IntoUnitResult {
+    fn into_unit_result(self) -> crate::Result<()>;
+}
+
+impl IntoUnitResult for () {
+    fn into_unit_result(self) -> crate::Result<()> {
+        Ok(())
+    }
+}
+
+impl IntoUnitResult for pelage_shade::Result<()> {
+    fn into_unit_result(self) -> crate::Result<()> {
+        Ok(self?)
+    }
 }

@@ -5,7 +5,7 @@
 use glam::Vec3;
 use pelage::scene::{
     AdsmParams, DeepOpacityParams, HairType, LayerSpacing, ShadowMapParams, ShadowParams,
-    VoxelParams,
+    Transparency, VoxelParams,
 };
 use pelage::{Error, Renderer, Scene, gpu::Gpu, gpu::GpuError, strands::StrandsError};
 
@@ -229,6 +229,42 @@ const CASES: &[Case] = &[
         "root occlusion above 1",
         |s| s.shade.root_occlusion = 3.0,
         Kind::Param("shade.root_occlusion"),
+    ),
+    // Transparency.
+    (
+        "k-buffer with k = 0",
+        |s| s.shade.transparency = Transparency::k_buffer(0),
+        Kind::Param("transparency.k"),
+    ),
+    (
+        "random subsets beyond 64",
+        |s| s.shade.transparency = Transparency::random_subsets(65),
+        Kind::Param("transparency.k"),
+    ),
+    (
+        "A-buffer pool NaN",
+        |s| {
+            s.shade.transparency = Transparency::ABuffer {
+                nodes_per_pixel: f32::NAN,
+                resolve_k: 8,
+            }
+        },
+        Kind::Param("transparency.nodes_per_pixel"),
+    ),
+    (
+        "DBK negative depth shift",
+        |s| s.shade.transparency = Transparency::dbk(-0.1),
+        Kind::Param("transparency.depth_shift"),
+    ),
+    (
+        "A-buffer resolve of 0",
+        |s| {
+            s.shade.transparency = Transparency::ABuffer {
+                nodes_per_pixel: 4.0,
+                resolve_k: 0,
+            }
+        },
+        Kind::Param("transparency.resolve_k"),
     ),
     (
         "light without direction",

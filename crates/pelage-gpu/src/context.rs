@@ -10,7 +10,10 @@ use crate::error::{GpuError, Result};
 const WANTED_FEATURES: wgpu::Features = wgpu::Features::TIMESTAMP_QUERY
     .union(wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS)
     .union(wgpu::Features::TIMESTAMP_QUERY_INSIDE_PASSES)
-    .union(wgpu::Features::FLOAT32_BLENDABLE);
+    .union(wgpu::Features::FLOAT32_BLENDABLE)
+    .union(wgpu::Features::SHADER_INT64)
+    .union(wgpu::Features::SHADER_INT64_ATOMIC_MIN_MAX)
+    .union(wgpu::Features::SHADER_INT64_ATOMIC_ALL_OPS);
 
 /// Errors that wgpu reported outside any error scope, recorded by the
 /// handlers [`Gpu::headless`] installs.

@@ -5,7 +5,9 @@
 //! can be compared against it within float noise. Nothing here ships in the
 //! frame path: only tests, labs and benchmarks depend on this crate.
 
+pub mod flip;
 pub mod noise;
+pub mod oit;
 pub mod strands;
 pub mod transmittance;
 pub mod voxel;

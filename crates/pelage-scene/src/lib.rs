@@ -5,13 +5,17 @@
 //! about the GPU. The stage crates turn these types into GPU buffers.
 
 pub mod camera;
+pub mod groom;
 pub mod hair_file;
 pub mod light;
 pub mod mesh;
 pub mod obj;
 pub mod params;
+pub mod tfx_file;
+pub mod transparency;
 
 pub use camera::Camera;
+pub use groom::{Groom, GroomError, Resampled};
 pub use hair_file::{HairFile, HairFileError};
 pub use light::DirectionalLight;
 pub use mesh::{Mesh, MeshError, MeshReport};
@@ -21,3 +25,5 @@ pub use params::{
     MAX_SEGMENTS, MapParams, OpacityFormat, ParamError, RootParams, ShadeParams, ShadowMapParams,
     ShadowParams, Splat, SurfaceInterpolation, VoxelParams, WindParams,
 };
+pub use tfx_file::{TfxFile, TfxFileError};
+pub use transparency::{MAX_OIT_K, Transparency, WboitWeight};

@@ -24,7 +24,8 @@ pub struct ParamError {
 }
 
 impl ParamError {
-    fn new(name: &str, value: impl std::fmt::Debug, reason: &str) -> Self {
+    /// An error for parameter `name` holding `value`, with what its valid range is.
+    pub fn new(name: &str, value: impl std::fmt::Debug, reason: &str) -> Self {
         Self {
             name: name.to_string(),
             value: format!("{value:?}"),
@@ -33,7 +34,7 @@ impl ParamError {
     }
 }
 
-fn finite(name: &str, v: f32) -> Result<(), ParamError> {
+pub(crate) fn finite(name: &str, v: f32) -> Result<(), ParamError> {
     if v.is_finite() {
         Ok(())
     } else {
@@ -41,7 +42,7 @@ fn finite(name: &str, v: f32) -> Result<(), ParamError> {
     }
 }
 
-fn non_negative(name: &str, v: f32) -> Result<(), ParamError> {
+pub(crate) fn non_negative(name: &str, v: f32) -> Result<(), ParamError> {
     finite(name, v)?;
     if v < 0.0 {
         return Err(ParamError::new(name, v, "must be >= 0"));
@@ -49,7 +50,7 @@ fn non_negative(name: &str, v: f32) -> Result<(), ParamError> {
     Ok(())
 }
 
-fn positive(name: &str, v: f32) -> Result<(), ParamError> {
+pub(crate) fn positive(name: &str, v: f32) -> Result<(), ParamError> {
     finite(name, v)?;
     if v <= 0.0 {
         return Err(ParamError::new(name, v, "must be > 0"));
@@ -57,7 +58,7 @@ fn positive(name: &str, v: f32) -> Result<(), ParamError> {
     Ok(())
 }
 
-fn finite_vec(name: &str, v: Vec3) -> Result<(), ParamError> {
+pub(crate) fn finite_vec(name: &str, v: Vec3) -> Result<(), ParamError> {
     if v.is_finite() {
         Ok(())
     } else {
@@ -474,8 +475,12 @@ pub struct ShadeParams {
     pub root_occlusion: f32,
     /// Ribbons are at least this many pixels wide (>= 0).
     pub min_pixels: f32,
-    /// Samples per pixel: 1 or 4.
+    /// Samples per pixel of the opaque method: 1 or 4. The transparency methods
+    /// composite per pixel and always draw 1 sample: the ribbons' coverage alpha does
+    /// their anti-aliasing (see [`ShadeParams::samples`]).
     pub sample_count: u32,
+    /// How the hair's fragments are composited (opaque, or an OIT method).
+    pub transparency: crate::Transparency,
 }
 
 impl Default for ShadeParams {
@@ -491,6 +496,7 @@ impl Default for ShadeParams {
             root_occlusion: 0.65,
             min_pixels: 0.7,
             sample_count: 4,
+            transparency: crate::Transparency::Opaque,
         }
     }
 }
@@ -521,7 +527,16 @@ impl ShadeParams {
                 "must be 1 or 4",
             ));
         }
-        Ok(())
+        self.transparency.validate()
+    }
+
+    /// Samples per pixel the targets need: `sample_count` for the opaque method, 1 for
+    /// the transparency methods.
+    pub fn samples(&self) -> u32 {
+        match self.transparency {
+            crate::Transparency::Opaque => self.sample_count,
+            _ => 1,
+        }
     }
 }
 

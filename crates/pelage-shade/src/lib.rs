@@ -1,18 +1,25 @@
 //! Stage 3 of pelage: strands drawn as camera-facing ribbons and shaded.
 //!
-//! [`RibbonPass`] draws the opaque mesh and then the hair, pulled straight from
-//! stage 1's [`StrandBuffers`](pelage_strands::StrandBuffers) in the vertex
-//! shader, Kajiya-Kay shaded, depth tested. It renders into colour and depth
-//! views the caller owns ([`Targets`] makes offscreen ones).
-//!
-//! Transparency and the other shading models have their own methods (to come);
-//! this pass is the opaque baseline.
+//! Every method ([`HairPass`]: [`Opaque`], [`Wboit`], [`KBuffer`], [`ABuffer`],
+//! [`Dbk`], [`RandomSubsets`]; [`build`] picks one from
+//! [`ShadeParams::transparency`]) draws the opaque mesh and then the hair, pulled
+//! straight from stage 1's [`StrandBuffers`](pelage_strands::StrandBuffers) in the
+//! vertex shader (`wgsl/shade/hair.wgsl`), shaded, and composited its own way. They
+//! render into colour and depth views the caller owns ([`Targets`] makes offscreen
+//! ones).
 
+mod draw;
+mod methods;
 mod ribbons;
 mod targets;
 
+pub use draw::{HairInputs, TargetViews};
+pub use methods::{
+    ABuffer, CapturedFragment, Dbk, FragmentCapture, HairPass, KBuffer, OitStats, OitTile, Opaque,
+    RandomSubsets, Wboit, build,
+};
 pub use pelage_scene::ShadeParams;
-pub use ribbons::{FrameUniforms, MeshStyle, RibbonPass, RibbonStyle};
+pub use ribbons::{FrameUniforms, MeshStyle, RibbonStyle};
 pub use targets::{COLOR_FORMAT, DEPTH_FORMAT, Targets};
 
 /// What can go wrong in stage 3.
@@ -24,6 +31,20 @@ pub enum ShadeError {
     /// The GPU refused something.
     #[error(transparent)]
     Gpu(#[from] pelage_gpu::GpuError),
+    /// The adapter lacks a feature the method needs.
+    #[error("{0}")]
+    Unsupported(String),
+    /// The targets passed to `encode` differ in size from those the method was built for.
+    #[error(
+        "the method was built for {}x{} targets but was given {}x{}; build it again for the new size",
+        .built.0, .built.1, .given.0, .given.1
+    )]
+    TargetSize {
+        /// Size the method's buffers were made for.
+        built: (u32, u32),
+        /// Size of the targets given.
+        given: (u32, u32),
+    },
 }
 
 /// Result of stage 3.

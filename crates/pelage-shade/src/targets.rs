@@ -73,7 +73,12 @@ impl Targets {
                 1,
                 attach | wgpu::TextureUsages::COPY_SRC | wgpu::TextureUsages::TEXTURE_BINDING,
             ),
-            depth: texture("pelage depth", DEPTH_FORMAT, sample_count, attach),
+            depth: texture(
+                "pelage depth",
+                DEPTH_FORMAT,
+                sample_count,
+                attach | wgpu::TextureUsages::TEXTURE_BINDING,
+            ),
         })
         .map_err(Into::into)
     }
@@ -84,6 +89,22 @@ impl Targets {
         match &self.msaa {
             Some(msaa) => (msaa.create_view(&Default::default()), Some(color)),
             None => (color, None),
+        }
+    }
+
+    /// The views to pass to a method's `encode`, with their size.
+    pub fn views<'a>(
+        &self,
+        color: &'a wgpu::TextureView,
+        resolve: Option<&'a wgpu::TextureView>,
+        depth: &'a wgpu::TextureView,
+    ) -> crate::TargetViews<'a> {
+        crate::TargetViews {
+            color,
+            resolve,
+            depth,
+            width: self.width,
+            height: self.height,
         }
     }
 

@@ -5,7 +5,7 @@ use pelage_gpu::Gpu;
 use pelage_scene::{
     Camera, DirectionalLight, HairParams, Mesh, RootParams, ShadeParams, WindParams,
 };
-use pelage_shade::{RibbonPass, Targets};
+use pelage_shade::{HairInputs, HairPass, Opaque, Targets};
 use pelage_strands::{GrowStrands, MeshBuffers};
 
 const SIZE: u32 = 128;
@@ -62,7 +62,14 @@ fn render(gpu: &Gpu, mesh: &Mesh, hair: &HairParams, camera: &Camera) -> Vec<u8>
     let mesh_buffers = MeshBuffers::upload(gpu, mesh).unwrap();
     let strands = GrowStrands::new(gpu, mesh, &mesh_buffers, hair).unwrap();
     let params = shade_params();
-    let pass = RibbonPass::new(gpu, &params, hair, &mesh_buffers, strands.buffers(), None).unwrap();
+    let inputs = HairInputs {
+        params: &params,
+        hair,
+        mesh: &mesh_buffers,
+        strands: strands.buffers(),
+        shadow: None,
+    };
+    let pass = Opaque::new(gpu, &inputs).unwrap();
     let targets = Targets::new(gpu, SIZE, SIZE, params.sample_count).unwrap();
     strands.set_time(&gpu.queue, 0.0).unwrap();
     pass.set_frame(&gpu.queue, camera, &DirectionalLight::default(), SIZE, SIZE)
@@ -70,13 +77,14 @@ fn render(gpu: &Gpu, mesh: &Mesh, hair: &HairParams, camera: &Camera) -> Vec<u8>
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
     strands.encode(&mut encoder, None);
     let (color, resolve) = targets.color_views();
+    let depth = targets.depth_view();
     pass.encode(
+        gpu,
         &mut encoder,
-        &color,
-        resolve.as_ref(),
-        &targets.depth_view(),
+        &targets.views(&color, resolve.as_ref(), &depth),
         None,
-    );
+    )
+    .unwrap();
     gpu.submit_and_wait([encoder.finish()]).unwrap();
     let data = targets.read_color(gpu).unwrap();
     data.data.chunks(4).map(|p| p[0]).collect()

@@ -1,0 +1,222 @@
+//! Parameters of stage 3's order-independent transparency methods.
+//!
+//! Each variant of [`Transparency`] is one method in `pelage-shade` (a type of the
+//! same name) with one WGSL file under `wgsl/shade/oit/`. Hair alpha is the strand's
+//! opacity ([`GrowthParams::opacity`](crate::GrowthParams::opacity)) times its
+//! coverage of the drawn ribbon, so sub-pixel strands fade instead of looking dense.
+
+use serde::{Deserialize, Serialize};
+
+use crate::params::{ParamError, positive};
+
+/// The largest k of the bounded methods (k-buffer, random subsets) and of the
+/// linked-list resolves: the resolve sorts k fragments in registers.
+pub const MAX_OIT_K: u32 = 64;
+
+/// The weight function of weighted blended OIT (McGuire and Bavoil 2013, eq. 7 to 10).
+/// `z` is the fragment's view depth in scene units and `d` its window depth in [0, 1].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum WboitWeight {
+    /// Eq. 7: `a * clamp(10 / (1e-5 + (z/5)^2 + (z/200)^6), 1e-2, 3e3)`.
+    #[default]
+    Eq7,
+    /// Eq. 8: `a * clamp(10 / (1e-5 + (z/10)^3 + (z/200)^6), 1e-2, 3e3)`.
+    Eq8,
+    /// Eq. 9: `a * clamp(0.03 / (1e-5 + (z/200)^4), 1e-2, 3e3)`.
+    Eq9,
+    /// Eq. 10: `a * max(1e-2, 3e3 * (1 - d)^3)`.
+    Eq10,
+    /// No depth weighting (`w = a`): plain weighted average, for comparison.
+    Constant,
+}
+
+/// How stage 3 composites the hair's fragments.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "method", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Transparency {
+    /// Depth-tested opaque ribbons, no blending (the baseline; works with 4x MSAA).
+    #[default]
+    Opaque,
+    /// Weighted blended OIT (McGuire and Bavoil 2013): one pass into an accumulation
+    /// and a revealage target, then a resolve. No per-pixel lists; approximate.
+    Wboit {
+        /// The depth weight.
+        #[serde(default)]
+        weight: WboitWeight,
+    },
+    /// The k nearest fragments per pixel, kept by a 64-bit `atomicMax` insertion
+    /// (depth in the high word, packed colour in the low word); fragments behind the
+    /// k nearest are blended approximately (accumulated colour, summed optical depth),
+    /// never dropped. Needs `SHADER_INT64_ATOMIC_ALL_OPS`.
+    KBuffer {
+        /// Fragments kept per pixel, 1..=64 (4 to 16 are useful).
+        #[serde(default = "default_k")]
+        k: u32,
+    },
+    /// A per-pixel linked list of every fragment (PPLL) in a node pool the caller sizes;
+    /// the resolve sorts the `resolve_k` nearest and blends the rest approximately.
+    /// Fragments beyond the pool are counted and dropped.
+    ABuffer {
+        /// Pool size as an average number of nodes per pixel (16 bytes each); the pool
+        /// is capped by the device's storage binding size, and the screen is drawn in
+        /// horizontal slices when it does not fit.
+        #[serde(default = "default_nodes_per_pixel")]
+        nodes_per_pixel: f32,
+        /// Fragments sorted exactly per pixel at resolve, 1..=64.
+        #[serde(default = "default_resolve_k")]
+        resolve_k: u32,
+    },
+    /// Hunz 2016's DBK-buffer: a depth pre-pass finds the nearest hair per pixel; the
+    /// fragments within `depth_shift` behind it go into a linked list, the others are
+    /// drawn as opaque hair behind it (the opaque fallback).
+    Dbk {
+        /// Thickness of the blended layer, in scene units along the view ray (> 0).
+        #[serde(default = "default_depth_shift")]
+        depth_shift: f32,
+        /// Pool size as an average number of nodes per pixel, as for the A-buffer.
+        #[serde(default = "default_dbk_nodes")]
+        nodes_per_pixel: f32,
+        /// Fragments sorted exactly per pixel at resolve, 1..=64.
+        #[serde(default = "default_resolve_k")]
+        resolve_k: u32,
+    },
+    /// Hunz 2016's random subsets: strands are split into k random subsets and each
+    /// pixel keeps the nearest fragment of each subset; the k are sorted and blended.
+    /// Needs `SHADER_INT64_ATOMIC_MIN_MAX`.
+    RandomSubsets {
+        /// Number of subsets, 1..=64.
+        #[serde(default = "default_k")]
+        k: u32,
+    },
+}
+
+fn default_k() -> u32 {
+    8
+}
+fn default_nodes_per_pixel() -> f32 {
+    16.0
+}
+fn default_resolve_k() -> u32 {
+    32
+}
+fn default_depth_shift() -> f32 {
+    0.05
+}
+fn default_dbk_nodes() -> f32 {
+    8.0
+}
+
+impl Transparency {
+    /// Weighted blended OIT with the paper's eq. 7.
+    pub fn wboit() -> Self {
+        Self::Wboit {
+            weight: WboitWeight::default(),
+        }
+    }
+
+    /// The k-buffer with `k` fragments per pixel.
+    pub fn k_buffer(k: u32) -> Self {
+        Self::KBuffer { k }
+    }
+
+    /// The A-buffer with its default pool (16 nodes per pixel) and resolve depth (32).
+    pub fn a_buffer() -> Self {
+        Self::ABuffer {
+            nodes_per_pixel: default_nodes_per_pixel(),
+            resolve_k: default_resolve_k(),
+        }
+    }
+
+    /// The DBK-buffer with layer thickness `depth_shift`.
+    pub fn dbk(depth_shift: f32) -> Self {
+        Self::Dbk {
+            depth_shift,
+            nodes_per_pixel: default_dbk_nodes(),
+            resolve_k: default_resolve_k(),
+        }
+    }
+
+    /// Random subsets with `k` subsets.
+    pub fn random_subsets(k: u32) -> Self {
+        Self::RandomSubsets { k }
+    }
+
+    /// Short name, as in file names and the lab's tables (`opaque`, `wboit`, `k_buffer`, ...).
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::Opaque => "opaque",
+            Self::Wboit { .. } => "wboit",
+            Self::KBuffer { .. } => "k_buffer",
+            Self::ABuffer { .. } => "a_buffer",
+            Self::Dbk { .. } => "dbk",
+            Self::RandomSubsets { .. } => "random_subsets",
+        }
+    }
+
+    /// Name with its parameters, e.g. `k_buffer k=8`.
+    pub fn label(&self) -> String {
+        match self {
+            Self::Opaque => "opaque".into(),
+            Self::Wboit { weight } => format!("wboit {weight:?}").to_lowercase(),
+            Self::KBuffer { k } => format!("k_buffer k={k}"),
+            Self::ABuffer {
+                nodes_per_pixel,
+                resolve_k,
+            } => format!("a_buffer pool={nodes_per_pixel}/px resolve={resolve_k}"),
+            Self::Dbk {
+                depth_shift,
+                nodes_per_pixel,
+                ..
+            } => format!("dbk shift={depth_shift} pool={nodes_per_pixel}/px"),
+            Self::RandomSubsets { k } => format!("random_subsets k={k}"),
+        }
+    }
+
+    /// Checks every field; the error names the first bad one.
+    pub fn validate(&self) -> Result<(), ParamError> {
+        let k_range = |name: &str, k: u32| {
+            if (1..=MAX_OIT_K).contains(&k) {
+                Ok(())
+            } else {
+                Err(ParamError::new(
+                    name,
+                    k,
+                    &format!("must be in 1..={MAX_OIT_K}"),
+                ))
+            }
+        };
+        let pool = |name: &str, n: f32| {
+            positive(name, n)?;
+            if n > 4096.0 {
+                return Err(ParamError::new(
+                    name,
+                    n,
+                    "must be at most 4096 nodes per pixel",
+                ));
+            }
+            Ok(())
+        };
+        match *self {
+            Self::Opaque | Self::Wboit { .. } => Ok(()),
+            Self::KBuffer { k } => k_range("transparency.k", k),
+            Self::RandomSubsets { k } => k_range("transparency.k", k),
+            Self::ABuffer {
+                nodes_per_pixel,
+                resolve_k,
+            } => {
+                pool("transparency.nodes_per_pixel", nodes_per_pixel)?;
+                k_range("transparency.resolve_k", resolve_k)
+            }
+            Self::Dbk {
+                depth_shift,
+                nodes_per_pixel,
+                resolve_k,
+            } => {
+                positive("transparency.depth_shift", depth_shift)?;
+                pool("transparency.nodes_per_pixel", nodes_per_pixel)?;
+                k_range("transparency.resolve_k", resolve_k)
+            }
+        }
+    }
+}

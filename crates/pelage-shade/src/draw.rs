@@ -1,0 +1,374 @@
+//! What every stage 3 method shares: the frame and style uniforms, the opaque mesh
+//! draw, and building hair and full-screen pipelines with their bind groups.
+
+use pelage_gpu::{Gpu, GpuTimer, ShaderBinding, ShaderLibrary, UniformBuffer, bind_buffers, wgpu};
+use pelage_scene::{Camera, DirectionalLight, HairParams, ParamError, ShadeParams};
+use pelage_strands::{MeshBuffers, StrandBuffers};
+
+use crate::ribbons::{FrameUniforms, MeshStyle, RibbonStyle};
+use crate::targets::{COLOR_FORMAT, DEPTH_FORMAT};
+
+/// The inputs every method is built from.
+#[derive(Clone, Copy, Debug)]
+pub struct HairInputs<'a> {
+    /// How to draw and shade.
+    pub params: &'a ShadeParams,
+    /// The hair (width, tip width, opacity).
+    pub hair: &'a HairParams,
+    /// Stage 1's mesh buffers (the opaque surface).
+    pub mesh: &'a MeshBuffers,
+    /// Stage 1's strands.
+    pub strands: &'a StrandBuffers,
+    /// Stage 2's implementation of the shadow contract (`shadow/none.wgsl`); `None`
+    /// draws without shadows.
+    pub shadow: Option<&'a ShaderBinding>,
+}
+
+/// The views a method renders into, owned by the caller.
+#[derive(Clone, Copy, Debug)]
+pub struct TargetViews<'a> {
+    /// Colour to render into: multisampled when the method uses MSAA (see
+    /// [`ShadeParams::samples`]), in [`COLOR_FORMAT`].
+    pub color: &'a wgpu::TextureView,
+    /// The single-sample target `color` resolves into when it is multisampled.
+    pub resolve: Option<&'a wgpu::TextureView>,
+    /// Depth ([`DEPTH_FORMAT`], same sample count as `color`); the transparency
+    /// methods also bind it as a texture, so it needs `TEXTURE_BINDING` usage.
+    pub depth: &'a wgpu::TextureView,
+    /// Size of the targets in pixels.
+    pub width: u32,
+    /// Size of the targets in pixels.
+    pub height: u32,
+}
+
+/// One render pipeline with its bind groups (index = group; `None` = unused).
+#[derive(Debug)]
+pub(crate) struct Draw {
+    pub label: &'static str,
+    pub pipeline: wgpu::RenderPipeline,
+    pub groups: Vec<Option<wgpu::BindGroup>>,
+    pub vertices: u32,
+}
+
+impl Draw {
+    /// Binds the pipeline and its groups, then `extra` (group, bind group) pairs, and draws.
+    pub fn record(&self, pass: &mut wgpu::RenderPass<'_>, extra: Option<(u32, &wgpu::BindGroup)>) {
+        pass.set_pipeline(&self.pipeline);
+        for (group, bind_group) in self.groups.iter().enumerate() {
+            if let Some(bind_group) = bind_group {
+                pass.set_bind_group(group as u32, bind_group, &[]);
+            }
+        }
+        if let Some((group, bind_group)) = extra {
+            pass.set_bind_group(group, bind_group, &[]);
+        }
+        pass.draw(0..self.vertices, 0..1);
+    }
+}
+
+/// The uniforms and the mesh draw every method has.
+#[derive(Debug)]
+pub(crate) struct Common {
+    pub params: ShadeParams,
+    pub frame: UniformBuffer<FrameUniforms>,
+    pub style: UniformBuffer<RibbonStyle>,
+    pub mesh_draw: Draw,
+    pub hair_vertices: u32,
+    pub redirects: Vec<(&'static str, &'static str)>,
+    pub samples: u32,
+}
+
+impl Common {
+    /// Uniforms and the mesh pipeline for targets of `samples` samples; ribbons are at
+    /// least `min_pixels` wide.
+    pub fn new(
+        gpu: &Gpu,
+        inputs: &HairInputs<'_>,
+        samples: u32,
+        min_pixels: f32,
+    ) -> crate::Result<Self> {
+        let HairInputs {
+            params,
+            hair,
+            mesh,
+            strands,
+            shadow,
+        } = *inputs;
+        params.validate()?;
+        hair.growth.validate()?;
+        let hair_vertices = u64::from(strands.strand_count) * u64::from(strands.segments) * 6;
+        let hair_vertices = u32::try_from(hair_vertices).map_err(|_| ParamError {
+            name: "roots.count".into(),
+            value: strands.strand_count.to_string(),
+            reason: format!(
+                "{} strands x {} segments x 6 vertices exceeds one draw's u32 vertex count; use fewer strands or segments",
+                strands.strand_count, strands.segments
+            ),
+        })?;
+        let frame = UniformBuffer::new(
+            gpu,
+            "pelage frame",
+            &FrameUniforms::new(
+                &Camera::default(),
+                &DirectionalLight::default(),
+                params,
+                1,
+                1,
+            )?,
+        )?;
+        let style = UniformBuffer::new(
+            gpu,
+            "pelage ribbon style",
+            &RibbonStyle {
+                segments: strands.segments,
+                tip_width: hair.growth.tip_width,
+                min_pixels,
+                root_occlusion: params.root_occlusion,
+                diffuse: params.diffuse,
+                specular: params.specular,
+                shininess: params.shininess,
+                _pad: 0.0,
+                specular_color: params.specular_color,
+                opacity: hair.growth.opacity,
+            },
+        )?;
+        let mesh_style = UniformBuffer::new(
+            gpu,
+            "pelage mesh style",
+            &MeshStyle {
+                color: params.mesh_color,
+                _pad: 0.0,
+            },
+        )?;
+        // The shadow contract: every pass imports shadow/none.wgsl; a shadow method
+        // redirects it to its own lookup and hands over the resources for group 1.
+        let redirects: Vec<(&'static str, &'static str)> =
+            shadow.iter().map(|b| b.redirect()).collect();
+        let mesh_module = ShaderLibrary::module_redirected(gpu, "shade/mesh.wgsl", &redirects)?;
+        let mesh_draw = gpu.scoped(|device| {
+            let pipeline = raster_pipeline(
+                device,
+                &RasterDesc {
+                    label: "pelage mesh",
+                    module: &mesh_module,
+                    vertex: "vs_main",
+                    fragment: Some("fs_main"),
+                    targets: &[Some(COLOR_FORMAT.into())],
+                    depth: Some(depth_state(true, wgpu::CompareFunction::Less)),
+                    samples,
+                    cull: Some(wgpu::Face::Back),
+                },
+            );
+            let group0 = bind_buffers(
+                device,
+                "pelage mesh",
+                &pipeline.get_bind_group_layout(0),
+                &[
+                    &frame.buffer,
+                    &mesh.positions,
+                    &mesh.normals,
+                    &mesh.indices,
+                    &mesh_style.buffer,
+                ],
+            );
+            let shadow_group = shadow_group(device, shadow, &pipeline, "pelage mesh shadow");
+            Draw {
+                label: "shade: mesh",
+                pipeline,
+                groups: vec![Some(group0), shadow_group],
+                vertices: mesh.triangle_count.saturating_mul(3),
+            }
+        })?;
+        Ok(Self {
+            params: params.clone(),
+            frame,
+            style,
+            mesh_draw,
+            hair_vertices,
+            redirects,
+            samples,
+        })
+    }
+
+    /// A pipeline drawing the hair with `fragment` of `module` (a file importing
+    /// `shade/hair.wgsl`), with groups 0 (strands, uniforms) and 1 (shadow) bound.
+    pub fn hair_draw(
+        &self,
+        gpu: &Gpu,
+        inputs: &HairInputs<'_>,
+        module: &wgpu::ShaderModule,
+        label: &'static str,
+        fragment: &str,
+        targets: &[Option<wgpu::ColorTargetState>],
+        depth: wgpu::DepthStencilState,
+    ) -> crate::Result<Draw> {
+        Ok(gpu.scoped(|device| {
+            let pipeline = raster_pipeline(
+                device,
+                &RasterDesc {
+                    label,
+                    module,
+                    vertex: "vs_main",
+                    fragment: Some(fragment),
+                    targets,
+                    depth: Some(depth),
+                    samples: self.samples,
+                    // Ribbons face the camera by construction; either winding may reach the rasterizer.
+                    cull: None,
+                },
+            );
+            let group0 = bind_buffers(
+                device,
+                label,
+                &pipeline.get_bind_group_layout(0),
+                &[
+                    &self.frame.buffer,
+                    &inputs.strands.vertices,
+                    &inputs.strands.roots,
+                    &self.style.buffer,
+                ],
+            );
+            let shadow_group = shadow_group(device, inputs.shadow, &pipeline, label);
+            Draw {
+                label,
+                pipeline,
+                groups: vec![Some(group0), shadow_group],
+                vertices: self.hair_vertices,
+            }
+        })?)
+    }
+
+    /// The shader `name` with the shadow contract redirected to this frame's method.
+    pub fn module(&self, gpu: &Gpu, name: &str) -> crate::Result<wgpu::ShaderModule> {
+        Ok(ShaderLibrary::module_redirected(
+            gpu,
+            name,
+            &self.redirects,
+        )?)
+    }
+
+    /// Writes the frame uniforms.
+    pub fn set_frame(
+        &self,
+        queue: &wgpu::Queue,
+        camera: &Camera,
+        light: &DirectionalLight,
+        width: u32,
+        height: u32,
+    ) -> crate::Result<()> {
+        let u = FrameUniforms::new(camera, light, &self.params, width, height)?;
+        Ok(self.frame.write(queue, &u)?)
+    }
+
+    /// Records the mesh pass: clears colour (to the background) and depth, draws the mesh.
+    pub fn encode_mesh(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        target: &TargetViews<'_>,
+        resolve: Option<&wgpu::TextureView>,
+        timer: Option<&mut GpuTimer>,
+    ) {
+        let bg = self.params.background;
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some(self.mesh_draw.label),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: target.color,
+                depth_slice: None,
+                resolve_target: resolve,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color {
+                        r: f64::from(bg.x),
+                        g: f64::from(bg.y),
+                        b: f64::from(bg.z),
+                        a: 1.0,
+                    }),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: target.depth,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: timer.and_then(|t| t.render_pass(self.mesh_draw.label)),
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        self.mesh_draw.record(&mut pass, None);
+    }
+}
+
+/// The bind group of the shadow method for `pipeline`, if it binds anything.
+fn shadow_group(
+    device: &wgpu::Device,
+    shadow: Option<&ShaderBinding>,
+    pipeline: &wgpu::RenderPipeline,
+    label: &str,
+) -> Option<wgpu::BindGroup> {
+    shadow.and_then(|b| b.bind_group(device, label, &pipeline.get_bind_group_layout(b.group)))
+}
+
+/// Depth state: test with `compare`, write when `write`.
+pub(crate) fn depth_state(write: bool, compare: wgpu::CompareFunction) -> wgpu::DepthStencilState {
+    wgpu::DepthStencilState {
+        format: DEPTH_FORMAT,
+        depth_write_enabled: Some(write),
+        depth_compare: Some(compare),
+        stencil: Default::default(),
+        bias: Default::default(),
+    }
+}
+
+/// Premultiplied "over": what a resolve pass writes, `(colour, 1 - transmittance)`,
+/// lands as `colour + transmittance * destination`.
+pub(crate) fn over_target() -> wgpu::ColorTargetState {
+    wgpu::ColorTargetState {
+        format: COLOR_FORMAT,
+        blend: Some(wgpu::BlendState::PREMULTIPLIED_ALPHA_BLENDING),
+        write_mask: wgpu::ColorWrites::ALL,
+    }
+}
+
+pub(crate) struct RasterDesc<'a> {
+    pub label: &'a str,
+    pub module: &'a wgpu::ShaderModule,
+    pub vertex: &'a str,
+    pub fragment: Option<&'a str>,
+    pub targets: &'a [Option<wgpu::ColorTargetState>],
+    pub depth: Option<wgpu::DepthStencilState>,
+    pub samples: u32,
+    pub cull: Option<wgpu::Face>,
+}
+
+pub(crate) fn raster_pipeline(device: &wgpu::Device, d: &RasterDesc<'_>) -> wgpu::RenderPipeline {
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some(d.label),
+        layout: None,
+        vertex: wgpu::VertexState {
+            module: d.module,
+            entry_point: Some(d.vertex),
+            compilation_options: Default::default(),
+            buffers: &[],
+        },
+        primitive: wgpu::PrimitiveState {
+            cull_mode: d.cull,
+            ..Default::default()
+        },
+        depth_stencil: d.depth.clone(),
+        multisample: wgpu::MultisampleState {
+            count: d.samples,
+            ..Default::default()
+        },
+        fragment: d.fragment.map(|entry| wgpu::FragmentState {
+            module: d.module,
+            entry_point: Some(entry),
+            compilation_options: Default::default(),
+            targets: d.targets,
+        }),
+        multiview_mask: None,
+        cache: None,
+    })
+}

@@ -1,0 +1,138 @@
+//! Hunz 2016's DBK-buffer: a depth pre-pass, a linked list of the fragments within a
+//! depth shift behind the nearest hair, the rest drawn opaque behind it
+//! (`shade/oit/dbk.wgsl`).
+
+use pelage_gpu::{Gpu, GpuTimer, wgpu, zeroed_storage};
+use pelage_scene::{Camera, DirectionalLight};
+
+use super::a_buffer::{list_buffers, list_stats};
+use super::sliced::{OitTile, PassKind, Sliced};
+use super::{HairPass, OitStats};
+use crate::draw::{Common, HairInputs, TargetViews};
+
+/// The DBK-buffer: 8 bytes per pixel (head, nearest depth) plus 16 bytes per node.
+#[derive(Debug)]
+pub struct Dbk {
+    common: Common,
+    sliced: Sliced,
+}
+
+impl Dbk {
+    /// Builds the DBK-buffer for `width` x `height` targets: a layer `depth_shift` thick
+    /// (scene units along the view axis), a pool of `nodes_per_pixel` nodes per pixel,
+    /// `resolve_k` sorted per pixel.
+    pub fn new(
+        gpu: &Gpu,
+        inputs: &HairInputs<'_>,
+        depth_shift: f32,
+        nodes_per_pixel: f32,
+        resolve_k: u32,
+        width: u32,
+        height: u32,
+    ) -> crate::Result<Self> {
+        pelage_scene::Transparency::Dbk {
+            depth_shift,
+            nodes_per_pixel,
+            resolve_k,
+        }
+        .validate()?;
+        let common = Common::new(gpu, inputs, 1, inputs.params.min_pixels.max(1.0))?;
+        let base = OitTile {
+            width,
+            k: resolve_k,
+            depth_shift,
+            ..Default::default()
+        };
+        let mut sliced = list_buffers(gpu, "DBK node pool", base, nodes_per_pixel, width, height)?;
+        let pixels = u64::from(width) * u64::from(sliced.rows);
+        sliced.buffers.push((
+            5,
+            zeroed_storage(
+                gpu,
+                "pelage dbk nearest",
+                pixels * 4,
+                wgpu::BufferUsages::STORAGE,
+            )?,
+        ));
+        let module = common.module(gpu, "shade/oit/dbk.wgsl")?;
+        sliced.add_hair_pass(
+            gpu,
+            &common,
+            inputs,
+            &module,
+            "shade: dbk nearest",
+            "fs_nearest",
+            PassKind::Storage,
+            &[0, 1, 5],
+        )?;
+        sliced.add_hair_pass(
+            gpu,
+            &common,
+            inputs,
+            &module,
+            "shade: dbk fill",
+            "fs_fill",
+            PassKind::Storage,
+            &[0, 1, 2, 3, 4, 5],
+        )?;
+        sliced.add_hair_pass(
+            gpu,
+            &common,
+            inputs,
+            &module,
+            "shade: dbk fallback",
+            "fs_fallback",
+            PassKind::OpaqueHair,
+            &[0, 5],
+        )?;
+        sliced.add_resolve_pass(
+            gpu,
+            &module,
+            "shade: dbk resolve",
+            "fs_resolve",
+            &[0, 2, 3, 4, 5],
+        )?;
+        Ok(Self { common, sliced })
+    }
+}
+
+impl HairPass for Dbk {
+    fn name(&self) -> &'static str {
+        "dbk"
+    }
+
+    fn set_frame(
+        &self,
+        queue: &wgpu::Queue,
+        camera: &Camera,
+        light: &DirectionalLight,
+        width: u32,
+        height: u32,
+    ) -> crate::Result<()> {
+        self.common.set_frame(queue, camera, light, width, height)
+    }
+
+    fn encode(
+        &self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        target: &TargetViews<'_>,
+        mut timer: Option<&mut GpuTimer>,
+    ) -> crate::Result<()> {
+        self.common
+            .encode_mesh(encoder, target, None, timer.as_deref_mut());
+        self.sliced.encode(gpu, encoder, target, timer)
+    }
+
+    fn memory_bytes(&self) -> u64 {
+        self.sliced.memory_bytes()
+    }
+
+    fn slices(&self) -> u32 {
+        self.sliced.count
+    }
+
+    fn stats(&self, gpu: &Gpu) -> crate::Result<OitStats> {
+        list_stats(gpu, &self.sliced, self.sliced.capacity)
+    }
+}

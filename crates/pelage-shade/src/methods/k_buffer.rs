@@ -1,0 +1,124 @@
+//! The k-buffer: the k nearest fragments per pixel by 64-bit atomicMax insertion, the
+//! rest blended approximately (`shade/oit/k_buffer.wgsl`).
+
+use pelage_gpu::{Gpu, GpuTimer, wgpu, zeroed_storage};
+use pelage_scene::{Camera, DirectionalLight};
+
+use super::sliced::{OitTile, PassKind, Sliced, rows_per_slice};
+use super::{HairPass, require_feature};
+use crate::draw::{Common, HairInputs, TargetViews};
+
+/// Bytes per pixel of the approximate tail (`shade/oit/tail.wgsl`: 5 words).
+pub(crate) const TAIL_BYTES: u64 = 20;
+
+/// The bounded k-buffer: 8k + 20 bytes per pixel.
+#[derive(Debug)]
+pub struct KBuffer {
+    common: Common,
+    sliced: Sliced,
+}
+
+impl KBuffer {
+    /// Builds the k-buffer for `width` x `height` targets. Needs
+    /// `SHADER_INT64_ATOMIC_ALL_OPS` (the insertion reads back what atomicMax displaced).
+    pub fn new(
+        gpu: &Gpu,
+        inputs: &HairInputs<'_>,
+        k: u32,
+        width: u32,
+        height: u32,
+    ) -> crate::Result<Self> {
+        pelage_scene::Transparency::KBuffer { k }.validate()?;
+        require_feature(
+            gpu,
+            "the k-buffer",
+            wgpu::Features::SHADER_INT64_ATOMIC_ALL_OPS,
+        )?;
+        let common = Common::new(gpu, inputs, 1, inputs.params.min_pixels.max(1.0))?;
+        let slot_bytes = 8 * u64::from(k);
+        let rows = rows_per_slice(gpu, "k-buffer slots", width, height, slot_bytes)?;
+        let base = OitTile {
+            width,
+            k,
+            ..Default::default()
+        };
+        let mut sliced = Sliced::new(gpu, base, height, rows)?;
+        let pixels = u64::from(width) * u64::from(sliced.rows);
+        sliced.buffers = vec![
+            (
+                2,
+                zeroed_storage(
+                    gpu,
+                    "pelage k-buffer slots",
+                    pixels * slot_bytes,
+                    wgpu::BufferUsages::STORAGE,
+                )?,
+            ),
+            (
+                8,
+                zeroed_storage(
+                    gpu,
+                    "pelage oit tail",
+                    pixels * TAIL_BYTES,
+                    wgpu::BufferUsages::STORAGE,
+                )?,
+            ),
+        ];
+        let module = common.module(gpu, "shade/oit/k_buffer.wgsl")?;
+        sliced.add_hair_pass(
+            gpu,
+            &common,
+            inputs,
+            &module,
+            "shade: k-buffer fill",
+            "fs_fill",
+            PassKind::Storage,
+            &[0, 1, 2, 8],
+        )?;
+        sliced.add_resolve_pass(
+            gpu,
+            &module,
+            "shade: k-buffer resolve",
+            "fs_resolve",
+            &[0, 2, 8],
+        )?;
+        Ok(Self { common, sliced })
+    }
+}
+
+impl HairPass for KBuffer {
+    fn name(&self) -> &'static str {
+        "k_buffer"
+    }
+
+    fn set_frame(
+        &self,
+        queue: &wgpu::Queue,
+        camera: &Camera,
+        light: &DirectionalLight,
+        width: u32,
+        height: u32,
+    ) -> crate::Result<()> {
+        self.common.set_frame(queue, camera, light, width, height)
+    }
+
+    fn encode(
+        &self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        target: &TargetViews<'_>,
+        mut timer: Option<&mut GpuTimer>,
+    ) -> crate::Result<()> {
+        self.common
+            .encode_mesh(encoder, target, None, timer.as_deref_mut());
+        self.sliced.encode(gpu, encoder, target, timer)
+    }
+
+    fn memory_bytes(&self) -> u64 {
+        self.sliced.memory_bytes()
+    }
+
+    fn slices(&self) -> u32 {
+        self.sliced.count
+    }
+}

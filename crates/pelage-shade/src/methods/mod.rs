@@ -1,0 +1,143 @@
+//! Stage 3's methods: one type per way of compositing the hair, all with the same shape.
+//!
+//! | method | type | WGSL |
+//! |---|---|---|
+//! | opaque | [`Opaque`] | `shade/ribbons.wgsl` |
+//! | weighted blended OIT | [`Wboit`] | `shade/oit/wboit.wgsl` |
+//! | k-buffer (64-bit atomics) | [`KBuffer`] | `shade/oit/k_buffer.wgsl` |
+//! | A-buffer (linked lists) | [`ABuffer`] | `shade/oit/a_buffer.wgsl` |
+//! | DBK-buffer | [`Dbk`] | `shade/oit/dbk.wgsl` |
+//! | random subsets | [`RandomSubsets`] | `shade/oit/random_subsets.wgsl` |
+//!
+//! Each draws the opaque mesh first (clearing the caller's colour and depth), then
+//! the hair. Per-pixel storage is sized for the target and sliced into horizontal
+//! bands when it would pass the device's storage binding limit.
+
+mod a_buffer;
+mod dbk;
+mod k_buffer;
+mod opaque;
+mod random_subsets;
+mod sliced;
+mod wboit;
+
+pub use a_buffer::{ABuffer, CapturedFragment, FragmentCapture};
+pub use dbk::Dbk;
+pub use k_buffer::KBuffer;
+pub use opaque::Opaque;
+pub use random_subsets::RandomSubsets;
+pub use sliced::OitTile;
+pub use wboit::Wboit;
+
+use pelage_gpu::{Gpu, GpuTimer, wgpu};
+use pelage_scene::{Camera, DirectionalLight, Transparency};
+
+use crate::draw::{HairInputs, TargetViews};
+
+/// What a transparency method counted, read back on request (never in the frame loop).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct OitStats {
+    /// Fragments stored in the node pool since the method was built (linked lists).
+    pub stored: u64,
+    /// Fragments that found the pool full and were dropped.
+    pub dropped: u64,
+    /// The most nodes one slice of one frame asked for: the pool size that would have held everything.
+    pub peak_nodes: u64,
+    /// Nodes in the pool per slice.
+    pub capacity: u64,
+}
+
+/// One stage 3 method: draws the mesh and the hair into the caller's targets.
+pub trait HairPass: std::fmt::Debug {
+    /// Short name (`opaque`, `wboit`, `k_buffer`, `a_buffer`, `dbk`, `random_subsets`).
+    fn name(&self) -> &'static str;
+
+    /// Writes camera and light for the next [`HairPass::encode`].
+    fn set_frame(
+        &self,
+        queue: &wgpu::Queue,
+        camera: &Camera,
+        light: &DirectionalLight,
+        width: u32,
+        height: u32,
+    ) -> crate::Result<()>;
+
+    /// Records the method's passes into `encoder`: the mesh (clearing colour and depth),
+    /// then the hair. The targets must have the size the method was built for.
+    fn encode(
+        &self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        target: &TargetViews<'_>,
+        timer: Option<&mut GpuTimer>,
+    ) -> crate::Result<()>;
+
+    /// Bytes of GPU memory the method owns beyond the caller's targets.
+    fn memory_bytes(&self) -> u64;
+
+    /// Horizontal slices the screen is drawn in (1 unless per-pixel storage for the
+    /// whole target would pass the storage binding limit).
+    fn slices(&self) -> u32 {
+        1
+    }
+
+    /// Counters of the node pool (linked-list methods); zeros for the others. Waits for the GPU.
+    fn stats(&self, _gpu: &Gpu) -> crate::Result<OitStats> {
+        Ok(OitStats::default())
+    }
+}
+
+/// Builds the method `inputs.params.transparency` names for `width` x `height` targets
+/// with [`ShadeParams::samples`](pelage_scene::ShadeParams::samples) samples.
+pub fn build(
+    gpu: &Gpu,
+    inputs: &HairInputs<'_>,
+    width: u32,
+    height: u32,
+) -> crate::Result<Box<dyn HairPass>> {
+    inputs.params.validate()?;
+    Ok(match inputs.params.transparency {
+        Transparency::Opaque => Box::new(Opaque::new(gpu, inputs)?),
+        Transparency::Wboit { weight } => Box::new(Wboit::new(gpu, inputs, weight, width, height)?),
+        Transparency::KBuffer { k } => Box::new(KBuffer::new(gpu, inputs, k, width, height)?),
+        Transparency::ABuffer {
+            nodes_per_pixel,
+            resolve_k,
+        } => Box::new(ABuffer::new(
+            gpu,
+            inputs,
+            nodes_per_pixel,
+            resolve_k,
+            width,
+            height,
+        )?),
+        Transparency::Dbk {
+            depth_shift,
+            nodes_per_pixel,
+            resolve_k,
+        } => Box::new(Dbk::new(
+            gpu,
+            inputs,
+            depth_shift,
+            nodes_per_pixel,
+            resolve_k,
+            width,
+            height,
+        )?),
+        Transparency::RandomSubsets { k } => {
+            Box::new(RandomSubsets::new(gpu, inputs, k, width, height)?)
+        }
+    })
+}
+
+/// Errors unless the device has `feature`, naming the method and the alternatives.
+fn require_feature(gpu: &Gpu, method: &str, feature: wgpu::Features) -> crate::Result<()> {
+    if gpu.features().contains(feature) {
+        return Ok(());
+    }
+    Err(crate::ShadeError::Unsupported(format!(
+        "{method} needs the device feature {feature:?}, which this adapter ({}) lacks; \
+         use the a_buffer, dbk or wboit method instead (they need no 64-bit atomics)",
+        gpu.describe()
+    )))
+}

@@ -1,0 +1,93 @@
+//! The opaque method: depth-tested ribbons, alpha ignored (`shade/ribbons.wgsl`).
+
+use pelage_gpu::{Gpu, GpuTimer, wgpu};
+use pelage_scene::{Camera, DirectionalLight};
+
+use super::HairPass;
+use crate::COLOR_FORMAT;
+use crate::draw::{Common, Draw, HairInputs, TargetViews, depth_state};
+
+/// The mesh, then the hair as opaque ribbons, depth tested; the only method that uses
+/// MSAA (`ShadeParams::sample_count`).
+#[derive(Debug)]
+pub struct Opaque {
+    common: Common,
+    hair: Draw,
+}
+
+impl Opaque {
+    /// Builds the pipelines for targets of `ShadeParams::sample_count` samples.
+    pub fn new(gpu: &Gpu, inputs: &HairInputs<'_>) -> crate::Result<Self> {
+        let params = inputs.params;
+        let common = Common::new(gpu, inputs, params.sample_count, params.min_pixels)?;
+        let module = common.module(gpu, "shade/ribbons.wgsl")?;
+        let hair = common.hair_draw(
+            gpu,
+            inputs,
+            &module,
+            "shade: hair",
+            "fs_main",
+            &[Some(COLOR_FORMAT.into())],
+            depth_state(true, wgpu::CompareFunction::Less),
+        )?;
+        Ok(Self { common, hair })
+    }
+}
+
+impl HairPass for Opaque {
+    fn name(&self) -> &'static str {
+        "opaque"
+    }
+
+    fn set_frame(
+        &self,
+        queue: &wgpu::Queue,
+        camera: &Camera,
+        light: &DirectionalLight,
+        width: u32,
+        height: u32,
+    ) -> crate::Result<()> {
+        self.common.set_frame(queue, camera, light, width, height)
+    }
+
+    fn encode(
+        &self,
+        _gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        target: &TargetViews<'_>,
+        mut timer: Option<&mut GpuTimer>,
+    ) -> crate::Result<()> {
+        // The mesh does not resolve: the hair pass that follows does.
+        self.common
+            .encode_mesh(encoder, target, None, timer.as_deref_mut());
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some(self.hair.label),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: target.color,
+                depth_slice: None,
+                resolve_target: target.resolve,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Load,
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: target.depth,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Load,
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: timer.and_then(|t| t.render_pass(self.hair.label)),
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        self.hair.record(&mut pass, None);
+        Ok(())
+    }
+
+    fn memory_bytes(&self) -> u64 {
+        0
+    }
+}

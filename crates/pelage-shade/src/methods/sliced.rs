@@ -1,0 +1,349 @@
+//! The machinery of the per-pixel-storage methods: slicing the screen into bands whose
+//! buffers fit one storage binding, and recording each method's passes per band.
+
+use encase::ShaderType;
+use pelage_gpu::{Gpu, GpuError, GpuTimer, wgpu};
+
+use crate::draw::{
+    Common, Draw, HairInputs, RasterDesc, TargetViews, depth_state, over_target, raster_pipeline,
+};
+
+/// One slice of the screen and the method's constants (`OitTile` in `shade/oit/common.wgsl`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, ShaderType)]
+pub struct OitTile {
+    /// First row of the slice.
+    pub y0: u32,
+    /// Rows in the slice.
+    pub rows: u32,
+    /// Width of the target.
+    pub width: u32,
+    /// Fragments kept (k-buffer, subsets) or sorted at resolve (lists).
+    pub k: u32,
+    /// Node pool capacity (lists).
+    pub capacity: u32,
+    /// WBOIT weight function index.
+    pub weight: u32,
+    /// DBK layer thickness.
+    pub depth_shift: f32,
+    /// Padding.
+    pub _pad: f32,
+}
+
+/// How a pass of a sliced method attaches the targets.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum PassKind {
+    /// Hair into storage only: depth attached read-only, no colour.
+    Storage,
+    /// Hair drawn opaque into colour and depth (DBK's fallback).
+    OpaqueHair,
+    /// The full-screen resolve, blended over the colour.
+    Resolve,
+}
+
+/// One pass: its pipeline and which `@group(3)` bindings its entry point uses.
+#[derive(Debug)]
+pub(crate) struct SlicedPass {
+    pub draw: Draw,
+    pub kind: PassKind,
+    pub bindings: &'static [u32],
+}
+
+/// The slices and group-3 resources of a method.
+#[derive(Debug)]
+pub(crate) struct Sliced {
+    width: u32,
+    height: u32,
+    pub rows: u32,
+    pub capacity: u32,
+    pub count: u32,
+    tiles: wgpu::Buffer,
+    stride: u64,
+    /// `(binding, buffer)` of the method's storage.
+    pub buffers: Vec<(u32, wgpu::Buffer)>,
+    pub passes: Vec<SlicedPass>,
+}
+
+/// Rows per slice so that a per-pixel buffer of `bytes_per_pixel` (the method's
+/// largest) fits the storage binding limit.
+pub(crate) fn rows_per_slice(
+    gpu: &Gpu,
+    what: &str,
+    width: u32,
+    height: u32,
+    bytes_per_pixel: u64,
+) -> crate::Result<u32> {
+    let limit = gpu
+        .limits()
+        .max_storage_buffer_binding_size
+        .min(gpu.limits().max_buffer_size);
+    let row = u64::from(width) * bytes_per_pixel.max(1);
+    let rows = (limit / row).min(u64::from(height));
+    if rows == 0 {
+        return Err(GpuError::TooLarge {
+            what: format!("{what} for one row of {width} pixels"),
+            bytes: row,
+            limit,
+        }
+        .into());
+    }
+    Ok(rows as u32)
+}
+
+impl Sliced {
+    /// Uniforms for `height` rows in slices of `rows`, each a copy of `base` with its own rows.
+    pub fn new(gpu: &Gpu, base: OitTile, height: u32, rows: u32) -> crate::Result<Self> {
+        let rows = rows.clamp(1, height.max(1));
+        let count = height.div_ceil(rows);
+        let stride = u64::from(gpu.limits().min_uniform_buffer_offset_alignment)
+            .max(OitTile::min_size().get());
+        let mut bytes = vec![0u8; (stride * u64::from(count)) as usize];
+        for i in 0..count {
+            let tile = OitTile {
+                y0: i * rows,
+                rows: rows.min(height - i * rows),
+                ..base
+            };
+            let mut one = encase::UniformBuffer::new(Vec::<u8>::new());
+            one.write(&tile)
+                .map_err(|e| GpuError::Validation(format!("laying out OitTile: {e}")))?;
+            let one = one.into_inner();
+            let at = (stride * u64::from(i)) as usize;
+            bytes[at..at + one.len()].copy_from_slice(&one);
+        }
+        let tiles = gpu.scoped(|device| {
+            use wgpu::util::DeviceExt;
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("pelage oit slices"),
+                contents: &bytes,
+                usage: wgpu::BufferUsages::UNIFORM,
+            })
+        })?;
+        Ok(Self {
+            width: base.width,
+            height,
+            rows,
+            capacity: base.capacity,
+            count,
+            tiles,
+            stride,
+            buffers: Vec::new(),
+            passes: Vec::new(),
+        })
+    }
+
+    /// The uniform of slice `slice`, for binding 0 of `@group(3)`.
+    pub fn tile_binding(&self, slice: u32) -> wgpu::BindingResource<'_> {
+        wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+            buffer: &self.tiles,
+            offset: self.stride * u64::from(slice),
+            size: Some(OitTile::min_size()),
+        })
+    }
+
+    /// Errors unless `target` has the size the buffers were made for.
+    pub fn check_target(&self, target: &TargetViews<'_>) -> crate::Result<()> {
+        if (target.width, target.height) != (self.width, self.height) {
+            return Err(crate::ShadeError::TargetSize {
+                built: (self.width, self.height),
+                given: (target.width, target.height),
+            });
+        }
+        Ok(())
+    }
+
+    /// Bytes of the method's storage buffers.
+    pub fn memory_bytes(&self) -> u64 {
+        self.buffers.iter().map(|(_, b)| b.size()).sum::<u64>() + self.tiles.size()
+    }
+
+    /// The storage buffer at `binding`.
+    pub fn buffer(&self, binding: u32) -> Option<&wgpu::Buffer> {
+        self.buffers
+            .iter()
+            .find(|(b, _)| *b == binding)
+            .map(|(_, b)| b)
+    }
+
+    /// Adds a hair pass drawing `fragment` of `module`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn add_hair_pass(
+        &mut self,
+        gpu: &Gpu,
+        common: &Common,
+        inputs: &HairInputs<'_>,
+        module: &wgpu::ShaderModule,
+        label: &'static str,
+        fragment: &str,
+        kind: PassKind,
+        bindings: &'static [u32],
+    ) -> crate::Result<()> {
+        let (targets, depth) = match kind {
+            PassKind::OpaqueHair => (
+                vec![Some(crate::COLOR_FORMAT.into())],
+                depth_state(true, wgpu::CompareFunction::Less),
+            ),
+            _ => (Vec::new(), depth_state(false, wgpu::CompareFunction::Less)),
+        };
+        let draw = common.hair_draw(gpu, inputs, module, label, fragment, &targets, depth)?;
+        self.passes.push(SlicedPass {
+            draw,
+            kind,
+            bindings,
+        });
+        Ok(())
+    }
+
+    /// Adds the full-screen resolve `fragment` of `module`.
+    pub fn add_resolve_pass(
+        &mut self,
+        gpu: &Gpu,
+        module: &wgpu::ShaderModule,
+        label: &'static str,
+        fragment: &str,
+        bindings: &'static [u32],
+    ) -> crate::Result<()> {
+        let draw = gpu.scoped(|device| {
+            let pipeline = raster_pipeline(
+                device,
+                &RasterDesc {
+                    label,
+                    module,
+                    vertex: "vs_fullscreen",
+                    fragment: Some(fragment),
+                    targets: &[Some(over_target())],
+                    depth: None,
+                    samples: 1,
+                    cull: None,
+                },
+            );
+            // Groups 0 to 2 are empty in the resolve's layout but must still be bound.
+            let groups = (0..3)
+                .map(|g| {
+                    Some(device.create_bind_group(&wgpu::BindGroupDescriptor {
+                        label: Some(label),
+                        layout: &pipeline.get_bind_group_layout(g),
+                        entries: &[],
+                    }))
+                })
+                .collect();
+            Draw {
+                label,
+                pipeline,
+                groups,
+                vertices: 3,
+            }
+        })?;
+        self.passes.push(SlicedPass {
+            draw,
+            kind: PassKind::Resolve,
+            bindings,
+        });
+        Ok(())
+    }
+
+    /// Records every pass for every slice.
+    pub fn encode(
+        &self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        target: &TargetViews<'_>,
+        timer: Option<&mut GpuTimer>,
+    ) -> crate::Result<()> {
+        self.encode_with(gpu, encoder, target, timer, &mut |_, _| {})
+    }
+
+    /// As [`Sliced::encode`], calling `between(encoder, pass index)` after each pass of the
+    /// first slice (the lab copies the lists out before the resolve empties them).
+    pub fn encode_with(
+        &self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        target: &TargetViews<'_>,
+        mut timer: Option<&mut GpuTimer>,
+        between: &mut dyn FnMut(&mut wgpu::CommandEncoder, usize),
+    ) -> crate::Result<()> {
+        self.check_target(target)?;
+        // Bind groups per slice and pass: they hold this frame's depth view.
+        let groups = gpu.scoped(|device| {
+            let mut groups = Vec::new();
+            for slice in 0..self.count {
+                for pass in &self.passes {
+                    let entries: Vec<wgpu::BindGroupEntry<'_>> = pass
+                        .bindings
+                        .iter()
+                        .filter_map(|&binding| {
+                            let resource = match binding {
+                                0 => self.tile_binding(slice),
+                                1 => wgpu::BindingResource::TextureView(target.depth),
+                                _ => self.buffer(binding)?.as_entire_binding(),
+                            };
+                            Some(wgpu::BindGroupEntry { binding, resource })
+                        })
+                        .collect();
+                    groups.push(device.create_bind_group(&wgpu::BindGroupDescriptor {
+                        label: Some(pass.draw.label),
+                        layout: &pass.draw.pipeline.get_bind_group_layout(3),
+                        entries: &entries,
+                    }));
+                }
+            }
+            groups
+        })?;
+        let mut groups = groups.iter();
+        for slice in 0..self.count {
+            let y0 = slice * self.rows;
+            let rows = self.rows.min(target.height.saturating_sub(y0));
+            for (index, pass) in self.passes.iter().enumerate() {
+                if slice == 0 && index > 0 {
+                    between(encoder, index - 1);
+                }
+                let Some(group) = groups.next() else {
+                    break;
+                };
+                let label = pass.draw.label;
+                let timestamp_writes = timer.as_deref_mut().and_then(|t| t.render_pass(label));
+                let color = wgpu::RenderPassColorAttachment {
+                    view: target.color,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Load,
+                        store: wgpu::StoreOp::Store,
+                    },
+                };
+                let color_attachments = match pass.kind {
+                    PassKind::Storage => Vec::new(),
+                    PassKind::OpaqueHair | PassKind::Resolve => vec![Some(color)],
+                };
+                let depth_stencil_attachment = match pass.kind {
+                    // Read-only: the same texture is bound for the shader's own depth test.
+                    PassKind::Storage => Some(wgpu::RenderPassDepthStencilAttachment {
+                        view: target.depth,
+                        depth_ops: None,
+                        stencil_ops: None,
+                    }),
+                    PassKind::OpaqueHair => Some(wgpu::RenderPassDepthStencilAttachment {
+                        view: target.depth,
+                        depth_ops: Some(wgpu::Operations {
+                            load: wgpu::LoadOp::Load,
+                            store: wgpu::StoreOp::Store,
+                        }),
+                        stencil_ops: None,
+                    }),
+                    PassKind::Resolve => None,
+                };
+                let mut render = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some(label),
+                    color_attachments: &color_attachments,
+                    depth_stencil_attachment,
+                    timestamp_writes,
+                    occlusion_query_set: None,
+                    multiview_mask: None,
+                });
+                render.set_scissor_rect(0, y0, target.width, rows.max(1));
+                pass.draw.record(&mut render, Some((3, group)));
+            }
+        }
+        Ok(())
+    }
+}

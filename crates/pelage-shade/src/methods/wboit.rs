@@ -1,0 +1,235 @@
+//! Weighted blended OIT (McGuire and Bavoil 2013) (`shade/oit/wboit.wgsl`).
+
+use pelage_gpu::{Gpu, GpuTimer, wgpu};
+use pelage_scene::{Camera, DirectionalLight, WboitWeight};
+
+use super::HairPass;
+use super::sliced::{OitTile, Sliced};
+use crate::draw::{Common, Draw, HairInputs, TargetViews, depth_state};
+
+const ACCUMULATION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+const REVEALAGE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R16Float;
+
+/// Weighted blended OIT: an Rgba16Float accumulation and an R16Float revealage target
+/// (10 bytes per pixel), no per-pixel lists.
+#[derive(Debug)]
+pub struct Wboit {
+    common: Common,
+    accum: Draw,
+    resolve: Sliced,
+    accumulation: wgpu::Texture,
+    revealage: wgpu::Texture,
+    bind_accum: wgpu::BindGroup,
+    bind_resolve: wgpu::BindGroup,
+    width: u32,
+    height: u32,
+}
+
+impl Wboit {
+    /// Builds WBOIT with the weight function `weight` for `width` x `height` targets.
+    pub fn new(
+        gpu: &Gpu,
+        inputs: &HairInputs<'_>,
+        weight: WboitWeight,
+        width: u32,
+        height: u32,
+    ) -> crate::Result<Self> {
+        let common = Common::new(gpu, inputs, 1, inputs.params.min_pixels.max(1.0))?;
+        let module = common.module(gpu, "shade/oit/wboit.wgsl")?;
+        let additive = wgpu::BlendComponent {
+            src_factor: wgpu::BlendFactor::One,
+            dst_factor: wgpu::BlendFactor::One,
+            operation: wgpu::BlendOperation::Add,
+        };
+        let reveal = wgpu::BlendComponent {
+            src_factor: wgpu::BlendFactor::Zero,
+            dst_factor: wgpu::BlendFactor::OneMinusSrc,
+            operation: wgpu::BlendOperation::Add,
+        };
+        let targets = [
+            Some(wgpu::ColorTargetState {
+                format: ACCUMULATION_FORMAT,
+                blend: Some(wgpu::BlendState {
+                    color: additive,
+                    alpha: additive,
+                }),
+                write_mask: wgpu::ColorWrites::ALL,
+            }),
+            Some(wgpu::ColorTargetState {
+                format: REVEALAGE_FORMAT,
+                blend: Some(wgpu::BlendState {
+                    color: reveal,
+                    alpha: reveal,
+                }),
+                write_mask: wgpu::ColorWrites::ALL,
+            }),
+        ];
+        let accum = common.hair_draw(
+            gpu,
+            inputs,
+            &module,
+            "shade: wboit accumulate",
+            "fs_accum",
+            &targets,
+            depth_state(false, wgpu::CompareFunction::Less),
+        )?;
+        let weight_index = match weight {
+            WboitWeight::Eq7 => 0,
+            WboitWeight::Eq8 => 1,
+            WboitWeight::Eq9 => 2,
+            WboitWeight::Eq10 => 3,
+            WboitWeight::Constant => 4,
+        };
+        let base = OitTile {
+            width,
+            weight: weight_index,
+            ..Default::default()
+        };
+        let mut resolve = Sliced::new(gpu, base, height, height)?;
+        resolve.add_resolve_pass(gpu, &module, "shade: wboit resolve", "fs_resolve", &[0])?;
+        let (accumulation, revealage, bind_accum, bind_resolve) = gpu.scoped(|device| {
+            let texture = |label: &str, format| {
+                device.create_texture(&wgpu::TextureDescriptor {
+                    label: Some(label),
+                    size: wgpu::Extent3d {
+                        width,
+                        height,
+                        depth_or_array_layers: 1,
+                    },
+                    mip_level_count: 1,
+                    sample_count: 1,
+                    dimension: wgpu::TextureDimension::D2,
+                    format,
+                    usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                        | wgpu::TextureUsages::TEXTURE_BINDING,
+                    view_formats: &[],
+                })
+            };
+            let accumulation = texture("pelage wboit accumulation", ACCUMULATION_FORMAT);
+            let revealage = texture("pelage wboit revealage", REVEALAGE_FORMAT);
+            let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("pelage wboit resolve"),
+                layout: &resolve.passes[0].draw.pipeline.get_bind_group_layout(3),
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: wgpu::BindingResource::TextureView(
+                            &accumulation.create_view(&Default::default()),
+                        ),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 2,
+                        resource: wgpu::BindingResource::TextureView(
+                            &revealage.create_view(&Default::default()),
+                        ),
+                    },
+                ],
+            });
+            let bind_accum = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("pelage wboit accumulate"),
+                layout: &accum.pipeline.get_bind_group_layout(3),
+                entries: &[wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: resolve.tile_binding(0),
+                }],
+            });
+            (accumulation, revealage, bind_accum, bind)
+        })?;
+        Ok(Self {
+            common,
+            accum,
+            resolve,
+            accumulation,
+            revealage,
+            bind_accum,
+            bind_resolve,
+            width,
+            height,
+        })
+    }
+}
+
+impl HairPass for Wboit {
+    fn name(&self) -> &'static str {
+        "wboit"
+    }
+
+    fn set_frame(
+        &self,
+        queue: &wgpu::Queue,
+        camera: &Camera,
+        light: &DirectionalLight,
+        width: u32,
+        height: u32,
+    ) -> crate::Result<()> {
+        self.common.set_frame(queue, camera, light, width, height)
+    }
+
+    fn encode(
+        &self,
+        _gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        target: &TargetViews<'_>,
+        mut timer: Option<&mut GpuTimer>,
+    ) -> crate::Result<()> {
+        self.resolve.check_target(target)?;
+        self.common
+            .encode_mesh(encoder, target, None, timer.as_deref_mut());
+        let accumulation = self.accumulation.create_view(&Default::default());
+        let revealage = self.revealage.create_view(&Default::default());
+        {
+            let attachment = |view, clear| {
+                Some(wgpu::RenderPassColorAttachment {
+                    view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(clear),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })
+            };
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some(self.accum.label),
+                color_attachments: &[
+                    attachment(&accumulation, wgpu::Color::TRANSPARENT),
+                    attachment(&revealage, wgpu::Color::WHITE),
+                ],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: target.depth,
+                    depth_ops: None,
+                    stencil_ops: None,
+                }),
+                timestamp_writes: timer
+                    .as_deref_mut()
+                    .and_then(|t| t.render_pass(self.accum.label)),
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            self.accum.record(&mut pass, Some((3, &self.bind_accum)));
+        }
+        let resolve = &self.resolve.passes[0].draw;
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some(resolve.label),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: target.color,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Load,
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: None,
+            timestamp_writes: timer.and_then(|t| t.render_pass(resolve.label)),
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        resolve.record(&mut pass, Some((3, &self.bind_resolve)));
+        Ok(())
+    }
+
+    fn memory_bytes(&self) -> u64 {
+        10 * u64::from(self.width) * u64::from(self.height)
+    }
+}

@@ -1,0 +1,508 @@
+//! The transparency lab: every stage 3 method and parameter on several scenes and two
+//! hair opacities, measured for GPU time, memory and image error against the exact
+//! composite (every fragment of every pixel, captured from the A-buffer, sorted and
+//! blended on the CPU by `pelage_reference::oit`).
+//!
+//! ```text
+//! cargo run --release --example oit_lab -- [--quick] [--out DIR]
+//! ```
+//!
+//! Writes `DIR/oit.csv` (default `out/lab`), one chart per scene and opacity
+//! (`oit_<scene>_<opacity>.png|svg`: mean FLIP against GPU time, marker area =
+//! memory), `oit_memory.csv` (every method built at 656x861 and 1920x1080), and prints
+//! both tables. `--quick` runs one small scene and a few configurations (CI).
+//!
+//! GPU time is the median over the frames of the method's hair passes (timestamp
+//! queries around each render pass; the opaque mesh pass is left out). Flicker is
+//! the mean absolute change of linear RGB between consecutive frames while the camera
+//! turns 0.25 degrees a frame around the scene, per method; the exact composite's
+//! own flicker is the A-buffer row with the largest resolve depth.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use glam::{Quat, Vec3};
+use pelage::gpu::{Gpu, GpuTimer};
+use pelage_lab::{ScatterChart, ScatterPoint, Table, pareto_front};
+use pelage_reference::flip::{DEFAULT_PIXELS_PER_DEGREE, LinearImage, flip, rmse_linear};
+use pelage_reference::oit::{Fragment, composite_sorted, linear_to_srgb8, srgb8_to_linear};
+use pelage_scene::{
+    Camera, DirectionalLight, HairParams, Mesh, ShadeParams, Transparency, WboitWeight, WindParams,
+};
+use pelage_shade::{ABuffer, HairInputs, HairPass, Targets};
+use pelage_strands::{GrowStrands, MeshBuffers};
+
+struct Case {
+    name: &'static str,
+    mesh: Mesh,
+    hair: HairParams,
+    camera: Camera,
+}
+
+fn cases(quick: bool) -> Vec<Case> {
+    let scale = |full: u32, small: u32| if quick { small } else { full };
+    let mut fur = HairParams::default();
+    fur.roots.count = scale(20_000, 4_000);
+    fur.wind = WindParams::calm();
+    let mut long = HairParams::default();
+    long.roots.count = scale(6_000, 1_500);
+    long.growth.segments = 16;
+    long.growth.length = 0.9;
+    long.growth.force_weight = 0.12;
+    long.growth.direction_jitter = 0.15;
+    long.wind = WindParams::calm();
+    let head = Mesh::icosphere(0.5, 3).unwrap_or_else(|_| Mesh::creature());
+    let creature = Case {
+        name: "creature",
+        mesh: Mesh::creature(),
+        hair: fur.clone(),
+        camera: Camera::default(),
+    };
+    if quick {
+        return vec![creature];
+    }
+    vec![
+        creature,
+        // Closer: the fur's silhouettes fill most of the screen.
+        Case {
+            name: "close_up",
+            mesh: Mesh::creature(),
+            hair: fur,
+            camera: Camera {
+                eye: Vec3::new(1.2, 0.5, 1.3),
+                target: Vec3::new(0.0, 0.0, 0.2),
+                ..Default::default()
+            },
+        },
+        // Long hair covering the whole screen: the deepest pixels.
+        Case {
+            name: "long_hair",
+            mesh: head,
+            hair: long,
+            camera: Camera {
+                eye: Vec3::new(1.6, 0.3, 2.0),
+                target: Vec3::new(0.0, -0.15, 0.0),
+                ..Default::default()
+            },
+        },
+    ]
+}
+
+fn configurations(quick: bool) -> Vec<Transparency> {
+    let mut out = vec![Transparency::Opaque];
+    let weights: &[WboitWeight] = if quick {
+        &[WboitWeight::Eq7]
+    } else {
+        &[
+            WboitWeight::Eq7,
+            WboitWeight::Eq8,
+            WboitWeight::Eq9,
+            WboitWeight::Eq10,
+            WboitWeight::Constant,
+        ]
+    };
+    out.extend(weights.iter().map(|&weight| Transparency::Wboit { weight }));
+    let ks: &[u32] = if quick { &[8] } else { &[4, 8, 16] };
+    out.extend(ks.iter().map(|&k| Transparency::k_buffer(k)));
+    out.extend(ks.iter().map(|&k| Transparency::random_subsets(k)));
+    let shifts: &[f32] = if quick { &[0.05] } else { &[0.02, 0.05, 0.1] };
+    out.extend(shifts.iter().map(|&s| Transparency::dbk(s)));
+    let resolves: &[u32] = if quick { &[32] } else { &[8, 16, 64] };
+    out.extend(resolves.iter().map(|&resolve_k| Transparency::ABuffer {
+        nodes_per_pixel: 16.0,
+        resolve_k,
+    }));
+    out
+}
+
+struct Args {
+    quick: bool,
+    out: PathBuf,
+}
+
+fn parse_args() -> Result<Args, String> {
+    let mut args = Args {
+        quick: false,
+        out: PathBuf::from("out/lab"),
+    };
+    let mut it = std::env::args().skip(1);
+    while let Some(a) = it.next() {
+        match a.as_str() {
+            "--quick" => args.quick = true,
+            "--out" => args.out = it.next().ok_or("--out needs a directory")?.into(),
+            "-h" | "--help" => {
+                return Err("usage: oit_lab [--quick] [--out DIR]\n  \
+                     --quick     one small scene, few configurations (a CI smoke run)\n  \
+                     --out DIR   where oit.csv, oit_memory.csv and the charts go (default out/lab)"
+                    .into());
+            }
+            other => return Err(format!("unknown argument `{other}`; try --help")),
+        }
+    }
+    Ok(args)
+}
+
+fn main() {
+    if let Err(e) = run() {
+        eprintln!("oit_lab: {e}");
+        std::process::exit(1);
+    }
+}
+
+/// Stage 1 for one case, grown once at t = 0.
+struct Grown {
+    mesh: MeshBuffers,
+    strands: GrowStrands,
+}
+
+fn grow(gpu: &Gpu, case: &Case) -> Result<Grown, Box<dyn std::error::Error>> {
+    let mesh = MeshBuffers::upload(gpu, &case.mesh)?;
+    let strands = GrowStrands::new(gpu, &case.mesh, &mesh, &case.hair)?;
+    strands.set_time(&gpu.queue, 0.0)?;
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    strands.encode(&mut encoder, None);
+    gpu.submit_and_wait([encoder.finish()])?;
+    Ok(Grown { mesh, strands })
+}
+
+/// The camera of frame `i`: turned 0.25 degrees a frame about the vertical through the target.
+fn camera_at(base: &Camera, i: usize) -> Camera {
+    let turn = Quat::from_rotation_y((0.25 * i as f32).to_radians());
+    Camera {
+        eye: base.target + turn * (base.eye - base.target),
+        ..base.clone()
+    }
+}
+
+fn linear(
+    bytes: &[u8],
+    width: u32,
+    height: u32,
+) -> Result<LinearImage, Box<dyn std::error::Error>> {
+    Ok(LinearImage::from_srgb8_rgba(width, height, bytes)?)
+}
+
+struct Measured {
+    frames: Vec<Vec<u8>>,
+    gpu_ms: f64,
+    memory_mb: f64,
+    slices: u32,
+    dropped: u64,
+}
+
+fn render_method(
+    gpu: &Gpu,
+    grown: &Grown,
+    case: &Case,
+    shade: &ShadeParams,
+    size: (u32, u32),
+    frames: usize,
+) -> Result<Measured, Box<dyn std::error::Error>> {
+    let (width, height) = size;
+    let inputs = HairInputs {
+        params: shade,
+        hair: &case.hair,
+        mesh: &grown.mesh,
+        strands: grown.strands.buffers(),
+        shadow: None,
+    };
+    let method = pelage_shade::build(gpu, &inputs, width, height)?;
+    let targets = Targets::new(gpu, width, height, shade.samples())?;
+    let mut timer = GpuTimer::new(gpu, 64)?;
+    let light = DirectionalLight::default();
+    let mut images = Vec::new();
+    let mut times = Vec::new();
+    for i in 0..frames {
+        method.set_frame(
+            &gpu.queue,
+            &camera_at(&case.camera, i),
+            &light,
+            width,
+            height,
+        )?;
+        let (color, resolve) = targets.color_views();
+        let depth = targets.depth_view();
+        let views = targets.views(&color, resolve.as_ref(), &depth);
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        method.encode(gpu, &mut encoder, &views, timer.as_mut())?;
+        if let Some(t) = &timer {
+            t.resolve(&mut encoder);
+        }
+        gpu.submit_and_wait([encoder.finish()])?;
+        if let Some(t) = &mut timer {
+            let report = t.read(gpu)?;
+            times.push(
+                report
+                    .scopes
+                    .iter()
+                    .filter(|(label, _)| label != "shade: mesh")
+                    .map(|(_, ms)| ms)
+                    .sum::<f64>(),
+            );
+        }
+        images.push(targets.read_color(gpu)?.data);
+    }
+    times.sort_by(f64::total_cmp);
+    Ok(Measured {
+        frames: images,
+        gpu_ms: times.get(times.len() / 2).copied().unwrap_or(f64::NAN),
+        memory_mb: method.memory_bytes() as f64 / 1e6,
+        slices: method.slices(),
+        dropped: method.stats(gpu)?.dropped,
+    })
+}
+
+/// The exact composite of frame 0 (sRGB8 RGBA) and the fragments per pixel it took.
+fn exact(
+    gpu: &Gpu,
+    grown: &Grown,
+    case: &Case,
+    shade: &ShadeParams,
+    size: (u32, u32),
+) -> Result<(Vec<u8>, u64, usize), Box<dyn std::error::Error>> {
+    let (width, height) = size;
+    let inputs = HairInputs {
+        params: shade,
+        hair: &case.hair,
+        mesh: &grown.mesh,
+        strands: grown.strands.buffers(),
+        shadow: None,
+    };
+    let targets = Targets::new(gpu, width, height, 1)?;
+    let light = DirectionalLight::default();
+    // Grow the pool until nothing is dropped.
+    let mut nodes_per_pixel = 32.0f32;
+    loop {
+        let abuffer = ABuffer::new(gpu, &inputs, nodes_per_pixel, 64, width, height)?;
+        abuffer.set_frame(&gpu.queue, &case.camera, &light, width, height)?;
+        let capture = abuffer.capture(gpu, &targets)?;
+        let stats = abuffer.stats(gpu)?;
+        if stats.dropped > 0 {
+            nodes_per_pixel *= 4.0;
+            continue;
+        }
+        let mut out = Vec::with_capacity(capture.background.len());
+        let mut deepest = 0;
+        for (p, list) in capture.lists.iter().enumerate() {
+            let bg = &capture.background[4 * p..4 * p + 4];
+            let background = [
+                srgb8_to_linear(bg[0]),
+                srgb8_to_linear(bg[1]),
+                srgb8_to_linear(bg[2]),
+            ];
+            let mut fragments: Vec<Fragment> = list
+                .iter()
+                .map(|f| Fragment {
+                    depth: f.depth,
+                    color: f.color,
+                    alpha: f.alpha,
+                })
+                .collect();
+            deepest = deepest.max(fragments.len());
+            let c = composite_sorted(&mut fragments, background);
+            out.extend([
+                linear_to_srgb8(c[0]),
+                linear_to_srgb8(c[1]),
+                linear_to_srgb8(c[2]),
+                255,
+            ]);
+        }
+        return Ok((out, stats.stored, deepest));
+    }
+}
+
+fn mean_abs_change(frames: &[Vec<u8>]) -> f64 {
+    let mut total = 0.0;
+    let mut count = 0usize;
+    for pair in frames.windows(2) {
+        for (a, b) in pair[0]
+            .iter()
+            .zip(&pair[1])
+            .enumerate()
+            .filter(|(i, _)| i % 4 != 3)
+            .map(|(_, x)| x)
+        {
+            total += f64::from((srgb8_to_linear(*a) - srgb8_to_linear(*b)).abs());
+            count += 1;
+        }
+    }
+    if count == 0 {
+        0.0
+    } else {
+        total / count as f64
+    }
+}
+
+fn run() -> Result<(), Box<dyn std::error::Error>> {
+    let args = parse_args()?;
+    let started = Instant::now();
+    let size = if args.quick { (160, 120) } else { (320, 240) };
+    let frames = if args.quick { 3 } else { 5 };
+    let opacities: &[f32] = if args.quick { &[0.8] } else { &[0.3, 0.8] };
+    let configs = configurations(args.quick);
+    let mut table = Table::new(&[
+        "scene",
+        "opacity",
+        "method",
+        "config",
+        "gpu_ms",
+        "memory_mb",
+        "slices",
+        "mean_flip",
+        "p99_flip",
+        "rmse_linear",
+        "flicker",
+        "dropped",
+    ]);
+    let mut notes = String::new();
+    for case in cases(args.quick) {
+        for &opacity in opacities {
+            let mut case_hair = case.hair.clone();
+            case_hair.growth.opacity = opacity;
+            let case = Case {
+                hair: case_hair,
+                mesh: case.mesh.clone(),
+                camera: case.camera.clone(),
+                name: case.name,
+            };
+            let gpu = Gpu::headless()?;
+            let grown = grow(&gpu, &case)?;
+            let shade = ShadeParams::default();
+            let (reference, fragments, deepest) = exact(&gpu, &grown, &case, &shade, size)?;
+            let pixels = size.0 as usize * size.1 as usize;
+            let line = format!(
+                "{} opacity {opacity}: {fragments} fragments, {:.2} per pixel, deepest pixel {deepest}; \
+                 an A-buffer holding them all needs {:.2} MB\n",
+                case.name,
+                fragments as f64 / pixels as f64,
+                (fragments * 16 + pixels as u64 * 4) as f64 / 1e6
+            );
+            print!("{line}");
+            notes.push_str(&line);
+            let reference_image = linear(&reference, size.0, size.1)?;
+            let mut points = Vec::new();
+            for config in &configs {
+                let params = ShadeParams {
+                    transparency: config.clone(),
+                    ..ShadeParams::default()
+                };
+                let m = render_method(&gpu, &grown, &case, &params, size, frames)?;
+                let first = linear(&m.frames[0], size.0, size.1)?;
+                let map = flip(&reference_image, &first, DEFAULT_PIXELS_PER_DEGREE)?;
+                let (rmse, _) = rmse_linear(&reference_image, &first)?;
+                let mean = map.mean();
+                let p99 = map.percentile(99.0);
+                let flicker = mean_abs_change(&m.frames);
+                table.push(vec![
+                    case.name.into(),
+                    format!("{opacity}"),
+                    config.name().into(),
+                    config.label(),
+                    format!("{:.3}", m.gpu_ms),
+                    format!("{:.3}", m.memory_mb),
+                    m.slices.to_string(),
+                    format!("{mean:.4}"),
+                    format!("{p99:.4}"),
+                    format!("{rmse:.4}"),
+                    format!("{flicker:.5}"),
+                    m.dropped.to_string(),
+                ])?;
+                println!(
+                    "  {:<40} {:8.2} ms {:7.2} MB  FLIP {mean:.4} (p99 {p99:.3})  flicker {flicker:.5}",
+                    config.label(),
+                    m.gpu_ms,
+                    m.memory_mb
+                );
+                points.push(ScatterPoint {
+                    series: config.name().into(),
+                    label: config.label(),
+                    x: m.gpu_ms,
+                    y: mean,
+                    size: Some(m.memory_mb.max(0.01)),
+                });
+                if case.name == "creature" && (opacity - 0.8).abs() < 1e-6 {
+                    let path = args.out.join(format!("oit_{}.png", config.name()));
+                    if let Some(img) =
+                        image::RgbaImage::from_raw(size.0, size.1, m.frames[0].clone())
+                    {
+                        pelage::save_png(&img, &path)?;
+                    }
+                }
+            }
+            if case.name == "creature" && (opacity - 0.8).abs() < 1e-6 {
+                if let Some(img) = image::RgbaImage::from_raw(size.0, size.1, reference.clone()) {
+                    pelage::save_png(&img, &args.out.join("oit_exact.png"))?;
+                }
+            }
+            let xy: Vec<(f64, f64)> = points.iter().map(|p| (p.x, p.y)).collect();
+            notes.push_str(&format!(
+                "  Pareto front ({} opacity {opacity}):",
+                case.name
+            ));
+            for i in pareto_front(&xy) {
+                notes.push_str(&format!(
+                    " [{} {:.1} ms FLIP {:.4}]",
+                    points[i].label, points[i].x, points[i].y
+                ));
+            }
+            notes.push('\n');
+            let chart = ScatterChart {
+                title: format!(
+                    "Transparency on {} (opacity {opacity}): error against GPU time (lavapipe)",
+                    case.name.replace('_', " ")
+                ),
+                x_label: "hair passes GPU time, ms (log)".into(),
+                y_label: "mean FLIP vs exact sorted composite".into(),
+                x_log: true,
+                y_log: false,
+                points,
+                mark_pareto: true,
+                size_label: Some("memory, MB".into()),
+            };
+            let stem = format!("oit_{}_{}", case.name, (opacity * 10.0).round() as u32);
+            chart.write_svg(&args.out.join(format!("{stem}.svg")), 900, 600)?;
+            chart.write_png(&args.out.join(format!("{stem}.png")), 900, 600)?;
+        }
+    }
+    table.write_csv(&args.out.join("oit.csv"))?;
+    println!("{}", table.to_text());
+    print!("{notes}");
+
+    // Memory at the seed's viewport and at 1080p: every method built, nothing drawn.
+    let mut memory = Table::new(&["method", "config", "width", "height", "memory_mb", "slices"]);
+    let gpu = Gpu::headless()?;
+    let case = &cases(true)[0];
+    let grown = grow(&gpu, case)?;
+    for (w, h) in [(656, 861), (1920, 1080)] {
+        for config in &configs {
+            let params = ShadeParams {
+                transparency: config.clone(),
+                ..ShadeParams::default()
+            };
+            let inputs = HairInputs {
+                params: &params,
+                hair: &case.hair,
+                mesh: &grown.mesh,
+                strands: grown.strands.buffers(),
+                shadow: None,
+            };
+            let method = pelage_shade::build(&gpu, &inputs, w, h)?;
+            memory.push(vec![
+                config.name().into(),
+                config.label(),
+                w.to_string(),
+                h.to_string(),
+                format!("{:.2}", method.memory_bytes() as f64 / 1e6),
+                method.slices().to_string(),
+            ])?;
+        }
+    }
+    memory.write_csv(&args.out.join("oit_memory.csv"))?;
+    println!("{}", memory.to_text());
+    println!(
+        "wrote {}/oit.csv, oit_memory.csv and oit_<scene>_<opacity>.png|svg in {:.0} s",
+        args.out.display(),
+        started.elapsed().as_secs_f64()
+    );
+    Ok(())
+}

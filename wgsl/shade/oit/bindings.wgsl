@@ -1,0 +1,16 @@
+// The bindings every transparency method shares, at @group(3): the slice (OitTile)
+// and the opaque scene's depth. Method files add theirs from @binding(2) on; the
+// approximate tail (shade/oit/tail.wgsl) is @binding(8).
+
+#import shade/oit/common.wgsl
+
+@group(3) @binding(0) var<uniform> tile: OitTile;
+@group(3) @binding(1) var opaque_depth: texture_depth_2d;
+
+// True when the fragment at `frag` (its @builtin(position)) is nearer than the opaque
+// mesh. Tested in the shader, not only by the depth attachment: a fragment shader
+// with storage writes may run its side effects before a late depth test rejects it.
+fn in_front_of_opaque(frag: vec4<f32>) -> bool {
+    let d = textureLoad(opaque_depth, vec2<i32>(frag.xy), 0);
+    return frag.z < d;
+}
