@@ -8,6 +8,7 @@
 pub mod flip;
 pub mod noise;
 pub mod oit;
+pub mod shading;
 pub mod strands;
 pub mod transmittance;
 pub mod voxel;

@@ -11,6 +11,7 @@ pub mod light;
 pub mod mesh;
 pub mod obj;
 pub mod params;
+pub mod shading;
 pub mod tfx_file;
 pub mod transparency;
 
@@ -24,6 +25,9 @@ pub use params::{
     AdsmParams, DeepOpacityParams, GrowthParams, HairParams, HairType, LayerSpacing, MAX_FORCE,
     MAX_SEGMENTS, MapParams, OpacityFormat, ParamError, RootParams, ShadeParams, ShadowMapParams,
     ShadowParams, Splat, SurfaceInterpolation, VoxelParams, WindParams,
+};
+pub use shading::{
+    KajiyaKayParams, MarschnerParams, SadeghiParams, ShadingModel, sigma_a_from_color,
 };
 pub use tfx_file::{TfxFile, TfxFileError};
 pub use transparency::{MAX_OIT_K, Transparency, WboitWeight};

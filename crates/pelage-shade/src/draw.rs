@@ -66,6 +66,15 @@ impl Draw {
     }
 }
 
+/// A hair pipeline: `fragment` of `module` (a file importing `shade/hair.wgsl`).
+pub(crate) struct HairPipe<'a> {
+    pub module: &'a wgpu::ShaderModule,
+    pub label: &'static str,
+    pub fragment: &'a str,
+    pub targets: &'a [Option<wgpu::ColorTargetState>],
+    pub depth: wgpu::DepthStencilState,
+}
+
 /// The uniforms and the mesh draw every method has.
 #[derive(Debug)]
 pub(crate) struct Common {
@@ -196,12 +205,15 @@ impl Common {
         &self,
         gpu: &Gpu,
         inputs: &HairInputs<'_>,
-        module: &wgpu::ShaderModule,
-        label: &'static str,
-        fragment: &str,
-        targets: &[Option<wgpu::ColorTargetState>],
-        depth: wgpu::DepthStencilState,
+        pipe: &HairPipe<'_>,
     ) -> crate::Result<Draw> {
+        let HairPipe {
+            module,
+            label,
+            fragment,
+            targets,
+            ref depth,
+        } = *pipe;
         Ok(gpu.scoped(|device| {
             let pipeline = raster_pipeline(
                 device,
@@ -211,7 +223,7 @@ impl Common {
                     vertex: "vs_main",
                     fragment: Some(fragment),
                     targets,
-                    depth: Some(depth),
+                    depth: Some(depth.clone()),
                     samples: self.samples,
                     // Ribbons face the camera by construction; either winding may reach the rasterizer.
                     cull: None,

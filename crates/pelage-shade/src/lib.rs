@@ -10,6 +10,7 @@
 
 mod draw;
 mod methods;
+mod models;
 mod ribbons;
 mod targets;
 
@@ -17,6 +18,9 @@ pub use draw::{HairInputs, TargetViews};
 pub use methods::{
     ABuffer, CapturedFragment, Dbk, FragmentCapture, HairPass, KBuffer, OitStats, OitTile, Opaque,
     RandomSubsets, Wboit, build,
+};
+pub use models::{
+    KajiyaKayUniforms, MarschnerLut, MarschnerLutInfo, MarschnerUniforms, SadeghiUniforms,
 };
 pub use pelage_scene::ShadeParams;
 pub use ribbons::{FrameUniforms, MeshStyle, RibbonStyle};

@@ -27,14 +27,14 @@ fn fs_nearest(in: VertexOut) {
 }
 
 // The far end of the blended layer at this pixel.
-fn layer_end(pixel: u32) -> f32 {
+fn dbk_layer_end(pixel: u32) -> f32 {
     return bitcast<f32>(~atomicLoad(&nearest[pixel])) + tile.depth_shift;
 }
 
 @fragment
 fn fs_fill(in: VertexOut) {
     let pixel = tile_pixel(in.clip, tile);
-    if (!in_front_of_opaque(in.clip) || in.view_depth > layer_end(pixel)) {
+    if (!in_front_of_opaque(in.clip) || in.view_depth > dbk_layer_end(pixel)) {
         discard;
     }
     ppll_append(pixel, in.view_depth, hair_shade(in));
@@ -42,7 +42,7 @@ fn fs_fill(in: VertexOut) {
 
 @fragment
 fn fs_fallback(in: VertexOut) -> @location(0) vec4<f32> {
-    if (in.view_depth <= layer_end(tile_pixel(in.clip, tile))) {
+    if (in.view_depth <= dbk_layer_end(tile_pixel(in.clip, tile))) {
         discard;
     }
     return vec4<f32>(hair_shade(in).rgb, 1.0);

@@ -1,22 +1,20 @@
 //! The A-buffer: per-pixel linked lists of every fragment in a pool the caller sizes
 //! (`shade/oit/a_buffer.wgsl`, `shade/oit/ppll.wgsl`).
 
-use pelage_gpu::{Gpu, GpuTimer, read_buffer, wgpu, zeroed_storage};
-use pelage_scene::{Camera, DirectionalLight};
+use pelage_gpu::{Gpu, read_buffer, wgpu, zeroed_storage};
 
-use super::sliced::{OitTile, PassKind, Sliced, rows_per_slice};
-use super::{HairPass, OitStats};
-use crate::draw::{Common, HairInputs, TargetViews};
+use super::OitStats;
+use super::sliced::{
+    OitTile, PassContext, PassKind, Sliced, SlicedMethod, rows_per_slice, sliced_hair_pass,
+};
+use crate::draw::{Common, HairInputs};
 
 /// Bytes of one linked-list node.
 pub(crate) const NODE_BYTES: u64 = 16;
 
 /// The A-buffer: 4 bytes of head per pixel plus 16 bytes per node.
 #[derive(Debug)]
-pub struct ABuffer {
-    common: Common,
-    sliced: Sliced,
-}
+pub struct ABuffer(SlicedMethod);
 
 /// The linked-list buffers (heads at 2, nodes at 3, counters at 4) for `nodes_per_pixel`
 /// nodes on average; returns the slices with the buffers added.
@@ -55,7 +53,7 @@ pub(crate) fn list_buffers(
 }
 
 /// Reads the list counters (`shade/oit/ppll.wgsl`).
-pub(crate) fn list_stats(gpu: &Gpu, sliced: &Sliced, capacity: u32) -> crate::Result<OitStats> {
+pub(crate) fn list_stats(gpu: &Gpu, sliced: &Sliced) -> crate::Result<OitStats> {
     let Some(counters) = sliced.buffer(4) else {
         return Ok(OitStats::default());
     };
@@ -70,7 +68,7 @@ pub(crate) fn list_stats(gpu: &Gpu, sliced: &Sliced, capacity: u32) -> crate::Re
         stored: word(3),
         dropped: word(1),
         peak_nodes: word(2),
-        capacity: u64::from(capacity),
+        capacity: u64::from(sliced.capacity),
     })
 }
 
@@ -105,11 +103,14 @@ impl ABuffer {
             height,
         )?;
         let module = common.module(gpu, "shade/oit/a_buffer.wgsl")?;
-        sliced.add_hair_pass(
+        let ctx = PassContext {
             gpu,
-            &common,
+            common: &common,
             inputs,
-            &module,
+            module: &module,
+        };
+        sliced.add_hair_pass(
+            &ctx,
             "shade: a-buffer fill",
             "fs_fill",
             PassKind::Storage,
@@ -122,12 +123,16 @@ impl ABuffer {
             "fs_resolve",
             &[0, 2, 3, 4],
         )?;
-        Ok(Self { common, sliced })
+        Ok(Self(SlicedMethod {
+            name: "a_buffer",
+            common,
+            sliced,
+        }))
     }
 
     /// Nodes in the pool (per slice).
     pub fn capacity(&self) -> u32 {
-        self.sliced.capacity
+        self.0.sliced.capacity
     }
 
     /// Draws a frame into `targets` (as `encode` does) and reads back, between the fill
@@ -136,14 +141,14 @@ impl ABuffer {
     /// screen in one slice; fragments beyond the pool are missing (check
     /// [`HairPass::stats`]). Waits for the GPU.
     pub fn capture(&self, gpu: &Gpu, targets: &crate::Targets) -> crate::Result<FragmentCapture> {
-        if self.sliced.count != 1 {
+        if self.0.sliced.count != 1 {
             return Err(crate::ShadeError::Unsupported(format!(
                 "capturing fragments needs the screen in one slice, but this A-buffer uses {}; \
                  use a smaller image or fewer nodes per pixel",
-                self.sliced.count
+                self.0.sliced.count
             )));
         }
-        let (Some(heads), Some(nodes)) = (self.sliced.buffer(2), self.sliced.buffer(3)) else {
+        let (Some(heads), Some(nodes)) = (self.0.sliced.buffer(2), self.0.sliced.buffer(3)) else {
             return Err(crate::ShadeError::Unsupported(
                 "the A-buffer has no lists".into(),
             ));
@@ -177,8 +182,9 @@ impl ABuffer {
         let depth = targets.depth_view();
         let views = targets.views(&color, resolve.as_ref(), &depth);
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
-        self.common.encode_mesh(&mut encoder, &views, None, None);
-        self.sliced
+        self.0.common.encode_mesh(&mut encoder, &views, None, None);
+        self.0
+            .sliced
             .encode_with(gpu, &mut encoder, &views, None, &mut |encoder, pass| {
                 if pass == 0 {
                     encoder.copy_buffer_to_buffer(heads, 0, &heads_copy, 0, heads.size());
@@ -268,43 +274,4 @@ fn half_to_f32(h: u16) -> f32 {
     }
 }
 
-impl HairPass for ABuffer {
-    fn name(&self) -> &'static str {
-        "a_buffer"
-    }
-
-    fn set_frame(
-        &self,
-        queue: &wgpu::Queue,
-        camera: &Camera,
-        light: &DirectionalLight,
-        width: u32,
-        height: u32,
-    ) -> crate::Result<()> {
-        self.common.set_frame(queue, camera, light, width, height)
-    }
-
-    fn encode(
-        &self,
-        gpu: &Gpu,
-        encoder: &mut wgpu::CommandEncoder,
-        target: &TargetViews<'_>,
-        mut timer: Option<&mut GpuTimer>,
-    ) -> crate::Result<()> {
-        self.common
-            .encode_mesh(encoder, target, None, timer.as_deref_mut());
-        self.sliced.encode(gpu, encoder, target, timer)
-    }
-
-    fn memory_bytes(&self) -> u64 {
-        self.sliced.memory_bytes()
-    }
-
-    fn slices(&self) -> u32 {
-        self.sliced.count
-    }
-
-    fn stats(&self, gpu: &Gpu) -> crate::Result<OitStats> {
-        list_stats(gpu, &self.sliced, self.sliced.capacity)
-    }
-}
+sliced_hair_pass!(ABuffer);

@@ -2,20 +2,15 @@
 //! depth shift behind the nearest hair, the rest drawn opaque behind it
 //! (`shade/oit/dbk.wgsl`).
 
-use pelage_gpu::{Gpu, GpuTimer, wgpu, zeroed_storage};
-use pelage_scene::{Camera, DirectionalLight};
+use pelage_gpu::{Gpu, wgpu, zeroed_storage};
 
-use super::a_buffer::{list_buffers, list_stats};
-use super::sliced::{OitTile, PassKind, Sliced};
-use super::{HairPass, OitStats};
-use crate::draw::{Common, HairInputs, TargetViews};
+use super::a_buffer::list_buffers;
+use super::sliced::{OitTile, PassContext, PassKind, SlicedMethod, sliced_hair_pass};
+use crate::draw::{Common, HairInputs};
 
 /// The DBK-buffer: 8 bytes per pixel (head, nearest depth) plus 16 bytes per node.
 #[derive(Debug)]
-pub struct Dbk {
-    common: Common,
-    sliced: Sliced,
-}
+pub struct Dbk(SlicedMethod);
 
 impl Dbk {
     /// Builds the DBK-buffer for `width` x `height` targets: a layer `depth_shift` thick
@@ -45,41 +40,34 @@ impl Dbk {
         };
         let mut sliced = list_buffers(gpu, "DBK node pool", base, nodes_per_pixel, width, height)?;
         let pixels = u64::from(width) * u64::from(sliced.rows);
+        let usage = wgpu::BufferUsages::STORAGE;
         sliced.buffers.push((
             5,
-            zeroed_storage(
-                gpu,
-                "pelage dbk nearest",
-                pixels * 4,
-                wgpu::BufferUsages::STORAGE,
-            )?,
+            zeroed_storage(gpu, "pelage dbk nearest", pixels * 4, usage)?,
         ));
         let module = common.module(gpu, "shade/oit/dbk.wgsl")?;
-        sliced.add_hair_pass(
+        let ctx = PassContext {
             gpu,
-            &common,
+            common: &common,
             inputs,
-            &module,
+            module: &module,
+        };
+        sliced.add_hair_pass(
+            &ctx,
             "shade: dbk nearest",
             "fs_nearest",
             PassKind::Storage,
             &[0, 1, 5],
         )?;
         sliced.add_hair_pass(
-            gpu,
-            &common,
-            inputs,
-            &module,
+            &ctx,
             "shade: dbk fill",
             "fs_fill",
             PassKind::Storage,
             &[0, 1, 2, 3, 4, 5],
         )?;
         sliced.add_hair_pass(
-            gpu,
-            &common,
-            inputs,
-            &module,
+            &ctx,
             "shade: dbk fallback",
             "fs_fallback",
             PassKind::OpaqueHair,
@@ -92,47 +80,12 @@ impl Dbk {
             "fs_resolve",
             &[0, 2, 3, 4, 5],
         )?;
-        Ok(Self { common, sliced })
+        Ok(Self(SlicedMethod {
+            name: "dbk",
+            common,
+            sliced,
+        }))
     }
 }
 
-impl HairPass for Dbk {
-    fn name(&self) -> &'static str {
-        "dbk"
-    }
-
-    fn set_frame(
-        &self,
-        queue: &wgpu::Queue,
-        camera: &Camera,
-        light: &DirectionalLight,
-        width: u32,
-        height: u32,
-    ) -> crate::Result<()> {
-        self.common.set_frame(queue, camera, light, width, height)
-    }
-
-    fn encode(
-        &self,
-        gpu: &Gpu,
-        encoder: &mut wgpu::CommandEncoder,
-        target: &TargetViews<'_>,
-        mut timer: Option<&mut GpuTimer>,
-    ) -> crate::Result<()> {
-        self.common
-            .encode_mesh(encoder, target, None, timer.as_deref_mut());
-        self.sliced.encode(gpu, encoder, target, timer)
-    }
-
-    fn memory_bytes(&self) -> u64 {
-        self.sliced.memory_bytes()
-    }
-
-    fn slices(&self) -> u32 {
-        self.sliced.count
-    }
-
-    fn stats(&self, gpu: &Gpu) -> crate::Result<OitStats> {
-        list_stats(gpu, &self.sliced, self.sliced.capacity)
-    }
-}
+sliced_hair_pass!(Dbk);

@@ -1,22 +1,20 @@
 //! The k-buffer: the k nearest fragments per pixel by 64-bit atomicMax insertion, the
 //! rest blended approximately (`shade/oit/k_buffer.wgsl`).
 
-use pelage_gpu::{Gpu, GpuTimer, wgpu, zeroed_storage};
-use pelage_scene::{Camera, DirectionalLight};
+use pelage_gpu::{Gpu, wgpu, zeroed_storage};
 
-use super::sliced::{OitTile, PassKind, Sliced, rows_per_slice};
-use super::{HairPass, require_feature};
-use crate::draw::{Common, HairInputs, TargetViews};
+use super::require_feature;
+use super::sliced::{
+    OitTile, PassContext, PassKind, Sliced, SlicedMethod, rows_per_slice, sliced_hair_pass,
+};
+use crate::draw::{Common, HairInputs};
 
 /// Bytes per pixel of the approximate tail (`shade/oit/tail.wgsl`: 5 words).
 pub(crate) const TAIL_BYTES: u64 = 20;
 
 /// The bounded k-buffer: 8k + 20 bytes per pixel.
 #[derive(Debug)]
-pub struct KBuffer {
-    common: Common,
-    sliced: Sliced,
-}
+pub struct KBuffer(SlicedMethod);
 
 impl KBuffer {
     /// Builds the k-buffer for `width` x `height` targets. Needs
@@ -44,32 +42,26 @@ impl KBuffer {
         };
         let mut sliced = Sliced::new(gpu, base, height, rows)?;
         let pixels = u64::from(width) * u64::from(sliced.rows);
+        let usage = wgpu::BufferUsages::STORAGE;
         sliced.buffers = vec![
             (
                 2,
-                zeroed_storage(
-                    gpu,
-                    "pelage k-buffer slots",
-                    pixels * slot_bytes,
-                    wgpu::BufferUsages::STORAGE,
-                )?,
+                zeroed_storage(gpu, "pelage k-buffer slots", pixels * slot_bytes, usage)?,
             ),
             (
                 8,
-                zeroed_storage(
-                    gpu,
-                    "pelage oit tail",
-                    pixels * TAIL_BYTES,
-                    wgpu::BufferUsages::STORAGE,
-                )?,
+                zeroed_storage(gpu, "pelage oit tail", pixels * TAIL_BYTES, usage)?,
             ),
         ];
         let module = common.module(gpu, "shade/oit/k_buffer.wgsl")?;
-        sliced.add_hair_pass(
+        let ctx = PassContext {
             gpu,
-            &common,
+            common: &common,
             inputs,
-            &module,
+            module: &module,
+        };
+        sliced.add_hair_pass(
+            &ctx,
             "shade: k-buffer fill",
             "fs_fill",
             PassKind::Storage,
@@ -82,43 +74,12 @@ impl KBuffer {
             "fs_resolve",
             &[0, 2, 8],
         )?;
-        Ok(Self { common, sliced })
+        Ok(Self(SlicedMethod {
+            name: "k_buffer",
+            common,
+            sliced,
+        }))
     }
 }
 
-impl HairPass for KBuffer {
-    fn name(&self) -> &'static str {
-        "k_buffer"
-    }
-
-    fn set_frame(
-        &self,
-        queue: &wgpu::Queue,
-        camera: &Camera,
-        light: &DirectionalLight,
-        width: u32,
-        height: u32,
-    ) -> crate::Result<()> {
-        self.common.set_frame(queue, camera, light, width, height)
-    }
-
-    fn encode(
-        &self,
-        gpu: &Gpu,
-        encoder: &mut wgpu::CommandEncoder,
-        target: &TargetViews<'_>,
-        mut timer: Option<&mut GpuTimer>,
-    ) -> crate::Result<()> {
-        self.common
-            .encode_mesh(encoder, target, None, timer.as_deref_mut());
-        self.sliced.encode(gpu, encoder, target, timer)
-    }
-
-    fn memory_bytes(&self) -> u64 {
-        self.sliced.memory_bytes()
-    }
-
-    fn slices(&self) -> u32 {
-        self.sliced.count
-    }
-}
+sliced_hair_pass!(KBuffer);

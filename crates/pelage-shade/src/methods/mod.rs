@@ -13,7 +13,7 @@
 //! the hair. Per-pixel storage is sized for the target and sliced into horizontal
 //! bands when it would pass the device's storage binding limit.
 
-mod a_buffer;
+pub(crate) mod a_buffer;
 mod dbk;
 mod k_buffer;
 mod opaque;

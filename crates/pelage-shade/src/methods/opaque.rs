@@ -5,7 +5,7 @@ use pelage_scene::{Camera, DirectionalLight};
 
 use super::HairPass;
 use crate::COLOR_FORMAT;
-use crate::draw::{Common, Draw, HairInputs, TargetViews, depth_state};
+use crate::draw::{Common, Draw, HairInputs, HairPipe, TargetViews, depth_state};
 
 /// The mesh, then the hair as opaque ribbons, depth tested; the only method that uses
 /// MSAA (`ShadeParams::sample_count`).
@@ -24,11 +24,13 @@ impl Opaque {
         let hair = common.hair_draw(
             gpu,
             inputs,
-            &module,
-            "shade: hair",
-            "fs_main",
-            &[Some(COLOR_FORMAT.into())],
-            depth_state(true, wgpu::CompareFunction::Less),
+            &HairPipe {
+                module: &module,
+                label: "shade: hair",
+                fragment: "fs_main",
+                targets: &[Some(COLOR_FORMAT.into())],
+                depth: depth_state(true, wgpu::CompareFunction::Less),
+            },
         )?;
         Ok(Self { common, hair })
     }

@@ -1,19 +1,17 @@
 //! Random subsets: the nearest fragment of each of k random strand subsets per pixel
 //! (`shade/oit/random_subsets.wgsl`).
 
-use pelage_gpu::{Gpu, GpuTimer, wgpu, zeroed_storage};
-use pelage_scene::{Camera, DirectionalLight};
+use pelage_gpu::{Gpu, wgpu, zeroed_storage};
 
-use super::sliced::{OitTile, PassKind, Sliced, rows_per_slice};
-use super::{HairPass, require_feature};
-use crate::draw::{Common, HairInputs, TargetViews};
+use super::require_feature;
+use super::sliced::{
+    OitTile, PassContext, PassKind, Sliced, SlicedMethod, rows_per_slice, sliced_hair_pass,
+};
+use crate::draw::{Common, HairInputs};
 
 /// Hunz 2016's random subsets: 8k bytes per pixel.
 #[derive(Debug)]
-pub struct RandomSubsets {
-    common: Common,
-    sliced: Sliced,
-}
+pub struct RandomSubsets(SlicedMethod);
 
 impl RandomSubsets {
     /// Builds the method with `k` subsets for `width` x `height` targets. Needs
@@ -41,21 +39,20 @@ impl RandomSubsets {
         };
         let mut sliced = Sliced::new(gpu, base, height, rows)?;
         let pixels = u64::from(width) * u64::from(sliced.rows);
+        let usage = wgpu::BufferUsages::STORAGE;
         sliced.buffers = vec![(
             2,
-            zeroed_storage(
-                gpu,
-                "pelage subset slots",
-                pixels * slot_bytes,
-                wgpu::BufferUsages::STORAGE,
-            )?,
+            zeroed_storage(gpu, "pelage subset slots", pixels * slot_bytes, usage)?,
         )];
         let module = common.module(gpu, "shade/oit/random_subsets.wgsl")?;
-        sliced.add_hair_pass(
+        let ctx = PassContext {
             gpu,
-            &common,
+            common: &common,
             inputs,
-            &module,
+            module: &module,
+        };
+        sliced.add_hair_pass(
+            &ctx,
             "shade: subsets fill",
             "fs_fill",
             PassKind::Storage,
@@ -68,43 +65,12 @@ impl RandomSubsets {
             "fs_resolve",
             &[0, 2],
         )?;
-        Ok(Self { common, sliced })
+        Ok(Self(SlicedMethod {
+            name: "random_subsets",
+            common,
+            sliced,
+        }))
     }
 }
 
-impl HairPass for RandomSubsets {
-    fn name(&self) -> &'static str {
-        "random_subsets"
-    }
-
-    fn set_frame(
-        &self,
-        queue: &wgpu::Queue,
-        camera: &Camera,
-        light: &DirectionalLight,
-        width: u32,
-        height: u32,
-    ) -> crate::Result<()> {
-        self.common.set_frame(queue, camera, light, width, height)
-    }
-
-    fn encode(
-        &self,
-        gpu: &Gpu,
-        encoder: &mut wgpu::CommandEncoder,
-        target: &TargetViews<'_>,
-        mut timer: Option<&mut GpuTimer>,
-    ) -> crate::Result<()> {
-        self.common
-            .encode_mesh(encoder, target, None, timer.as_deref_mut());
-        self.sliced.encode(gpu, encoder, target, timer)
-    }
-
-    fn memory_bytes(&self) -> u64 {
-        self.sliced.memory_bytes()
-    }
-
-    fn slices(&self) -> u32 {
-        self.sliced.count
-    }
-}
+sliced_hair_pass!(RandomSubsets);

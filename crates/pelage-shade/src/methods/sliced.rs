@@ -5,7 +5,8 @@ use encase::ShaderType;
 use pelage_gpu::{Gpu, GpuError, GpuTimer, wgpu};
 
 use crate::draw::{
-    Common, Draw, HairInputs, RasterDesc, TargetViews, depth_state, over_target, raster_pipeline,
+    Common, Draw, HairInputs, HairPipe, RasterDesc, TargetViews, depth_state, over_target,
+    raster_pipeline,
 };
 
 /// One slice of the screen and the method's constants (`OitTile` in `shade/oit/common.wgsl`).
@@ -164,14 +165,10 @@ impl Sliced {
             .map(|(_, b)| b)
     }
 
-    /// Adds a hair pass drawing `fragment` of `module`.
-    #[allow(clippy::too_many_arguments)]
+    /// Adds a hair pass drawing `fragment` of the method's module.
     pub fn add_hair_pass(
         &mut self,
-        gpu: &Gpu,
-        common: &Common,
-        inputs: &HairInputs<'_>,
-        module: &wgpu::ShaderModule,
+        ctx: &PassContext<'_>,
         label: &'static str,
         fragment: &str,
         kind: PassKind,
@@ -184,7 +181,17 @@ impl Sliced {
             ),
             _ => (Vec::new(), depth_state(false, wgpu::CompareFunction::Less)),
         };
-        let draw = common.hair_draw(gpu, inputs, module, label, fragment, &targets, depth)?;
+        let draw = ctx.common.hair_draw(
+            ctx.gpu,
+            ctx.inputs,
+            &HairPipe {
+                module: ctx.module,
+                label,
+                fragment,
+                targets: &targets,
+                depth,
+            },
+        )?;
         self.passes.push(SlicedPass {
             draw,
             kind,
@@ -347,3 +354,80 @@ impl Sliced {
         Ok(())
     }
 }
+
+/// What a sliced method's hair passes are built from.
+pub(crate) struct PassContext<'a> {
+    pub gpu: &'a Gpu,
+    pub common: &'a Common,
+    pub inputs: &'a HairInputs<'a>,
+    pub module: &'a wgpu::ShaderModule,
+}
+
+/// A method made of the mesh pass and sliced passes: what the k-buffer, the A-buffer,
+/// the DBK-buffer and random subsets have in common.
+#[derive(Debug)]
+pub(crate) struct SlicedMethod {
+    pub name: &'static str,
+    pub common: Common,
+    pub sliced: Sliced,
+}
+
+impl SlicedMethod {
+    pub fn encode(
+        &self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        target: &TargetViews<'_>,
+        mut timer: Option<&mut GpuTimer>,
+    ) -> crate::Result<()> {
+        self.sliced.check_target(target)?;
+        self.common
+            .encode_mesh(encoder, target, None, timer.as_deref_mut());
+        self.sliced.encode(gpu, encoder, target, timer)
+    }
+}
+
+/// Implements [`HairPass`](super::HairPass) for a newtype around [`SlicedMethod`].
+macro_rules! sliced_hair_pass {
+    ($method:ident) => {
+        impl $crate::methods::HairPass for $method {
+            fn name(&self) -> &'static str {
+                self.0.name
+            }
+
+            fn set_frame(
+                &self,
+                queue: &pelage_gpu::wgpu::Queue,
+                camera: &pelage_scene::Camera,
+                light: &pelage_scene::DirectionalLight,
+                width: u32,
+                height: u32,
+            ) -> $crate::Result<()> {
+                self.0.common.set_frame(queue, camera, light, width, height)
+            }
+
+            fn encode(
+                &self,
+                gpu: &pelage_gpu::Gpu,
+                encoder: &mut pelage_gpu::wgpu::CommandEncoder,
+                target: &$crate::TargetViews<'_>,
+                timer: Option<&mut pelage_gpu::GpuTimer>,
+            ) -> $crate::Result<()> {
+                self.0.encode(gpu, encoder, target, timer)
+            }
+
+            fn memory_bytes(&self) -> u64 {
+                self.0.sliced.memory_bytes()
+            }
+
+            fn slices(&self) -> u32 {
+                self.0.sliced.count
+            }
+
+            fn stats(&self, gpu: &pelage_gpu::Gpu) -> $crate::Result<$crate::OitStats> {
+                $crate::methods::a_buffer::list_stats(gpu, &self.0.sliced)
+            }
+        }
+    };
+}
+pub(crate) use sliced_hair_pass;

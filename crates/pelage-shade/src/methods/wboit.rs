@@ -5,7 +5,7 @@ use pelage_scene::{Camera, DirectionalLight, WboitWeight};
 
 use super::HairPass;
 use super::sliced::{OitTile, Sliced};
-use crate::draw::{Common, Draw, HairInputs, TargetViews, depth_state};
+use crate::draw::{Common, Draw, HairInputs, HairPipe, TargetViews, depth_state};
 
 const ACCUMULATION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 const REVEALAGE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R16Float;
@@ -67,11 +67,13 @@ impl Wboit {
         let accum = common.hair_draw(
             gpu,
             inputs,
-            &module,
-            "shade: wboit accumulate",
-            "fs_accum",
-            &targets,
-            depth_state(false, wgpu::CompareFunction::Less),
+            &HairPipe {
+                module: &module,
+                label: "shade: wboit accumulate",
+                fragment: "fs_accum",
+                targets: &targets,
+                depth: depth_state(false, wgpu::CompareFunction::Less),
+            },
         )?;
         let weight_index = match weight {
             WboitWeight::Eq7 => 0,

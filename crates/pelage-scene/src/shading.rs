@@ -1,0 +1,632 @@
+//! Parameters of the hair shading models (stage 3), as plain serde data.
+//!
+//! Three models, selected by [`ShadingModel`]:
+//! - [`KajiyaKayParams`]: Kajiya & Kay 1989 (diffuse `sin(t, l)` plus the specular cone),
+//!   with Scheuermann's two shifted highlights (digest 002/003 §B.1.4);
+//! - [`MarschnerParams`]: Marschner et al. 2003, lobes R, TT and TRT with absorption,
+//!   eccentricity and caustic handling (digest §A.1.5, §B.1.5);
+//! - [`SadeghiParams`]: Sadeghi et al. 2010, the artist-friendly pseudo scattering
+//!   function (digest §B.1.6, digest 000/001 §000.1.6).
+//!
+//! Angles are given in degrees here (they are what a person edits); the stage crate
+//! converts them to radians for the GPU. Every struct has a `validate` method whose
+//! error names the bad field (e.g. `shading.marschner.eta`).
+
+use glam::Vec3;
+use serde::{Deserialize, Serialize};
+
+use crate::params::ParamError;
+
+/// A [`ParamError`] for `name` (built from its public fields: its constructor is private
+/// to `params`).
+fn error(name: &str, value: impl std::fmt::Debug, reason: &str) -> ParamError {
+    ParamError {
+        name: name.to_string(),
+        value: format!("{value:?}"),
+        reason: reason.to_string(),
+    }
+}
+
+/// `v` must be finite and lie in `[lo, hi]`.
+fn in_range(name: &str, v: f32, lo: f32, hi: f32) -> Result<(), ParamError> {
+    if !v.is_finite() {
+        return Err(error(name, v, "must be a finite number"));
+    }
+    if v < lo || v > hi {
+        return Err(error(name, v, &format!("must be in [{lo}, {hi}]")));
+    }
+    Ok(())
+}
+
+/// `v` must be finite and lie in `(lo, hi]`.
+fn in_range_open_low(name: &str, v: f32, lo: f32, hi: f32) -> Result<(), ParamError> {
+    if !v.is_finite() {
+        return Err(error(name, v, "must be a finite number"));
+    }
+    if v <= lo || v > hi {
+        return Err(error(name, v, &format!("must be in ({lo}, {hi}]")));
+    }
+    Ok(())
+}
+
+/// Every component of `v` must be finite and lie in `[lo, hi]`.
+fn vec_in_range(name: &str, v: Vec3, lo: f32, hi: f32) -> Result<(), ParamError> {
+    if !v.is_finite() {
+        return Err(error(name, v, "every component must be finite"));
+    }
+    if v.min_element() < lo || v.max_element() > hi {
+        return Err(error(
+            name,
+            v,
+            &format!("every component must be in [{lo}, {hi}]"),
+        ));
+    }
+    Ok(())
+}
+
+/// Upper bound on colours and intensities: generous, it only keeps HDR values sane.
+const MAX_WEIGHT: f32 = 1.0e4;
+
+/// Kajiya-Kay (1989) with Scheuermann's (2004) two shifted highlights.
+///
+/// Radiance for a light of unit irradiance, `l` and `v` pointing away from the fibre:
+/// ```text
+/// diffuse  · base · sin(t, l)
+/// + specular · specular_color · cone(t₁)^shininess
+/// + secondary_specular · secondary_color · base · cone(t₂)^secondary_shininess
+/// cone(t) = max(0, -(t·l)(t·v) + sin(t, l) sin(t, v))
+/// t₁ = normalize(t + shift_primary · n),  t₂ = normalize(t + shift_secondary · n)
+/// ```
+/// `n` is the normal of the camera-facing ribbon, `normalize(v - (t·v) t)`. With the
+/// defaults (no shift, no secondary highlight) this is exactly the shading of
+/// `wgsl/shade/ribbons.wgsl` today.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct KajiyaKayParams {
+    /// Diffuse weight (>= 0), multiplies the strand colour.
+    pub diffuse: f32,
+    /// Primary specular weight (>= 0).
+    pub specular: f32,
+    /// Primary specular exponent (> 0).
+    pub shininess: f32,
+    /// Colour of the primary highlight, linear RGB (>= 0).
+    pub specular_color: Vec3,
+    /// Tangent shift of the primary highlight along the ribbon normal, in [-1, 1]
+    /// (tan of the tilt; Scheuermann uses about -0.1 to -0.2 toward the root).
+    pub shift_primary: f32,
+    /// Tangent shift of the secondary highlight along the ribbon normal, in [-1, 1].
+    pub shift_secondary: f32,
+    /// Secondary specular weight (>= 0); 0 turns the secondary highlight off.
+    pub secondary_specular: f32,
+    /// Secondary specular exponent (> 0).
+    pub secondary_shininess: f32,
+    /// Colour of the secondary highlight, linear RGB (>= 0), multiplied by the strand
+    /// colour (the secondary highlight has passed through the fibre).
+    pub secondary_color: Vec3,
+}
+
+impl Default for KajiyaKayParams {
+    /// The look of `ribbons.wgsl`: diffuse 0.75, specular 0.3, exponent 40, no shift, no
+    /// secondary highlight.
+    fn default() -> Self {
+        Self {
+            diffuse: 0.75,
+            specular: 0.3,
+            shininess: 40.0,
+            specular_color: Vec3::new(1.0, 0.95, 0.85),
+            shift_primary: 0.0,
+            shift_secondary: 0.0,
+            secondary_specular: 0.0,
+            secondary_shininess: 10.0,
+            secondary_color: Vec3::ONE,
+        }
+    }
+}
+
+impl KajiyaKayParams {
+    /// Checks every field; the error names the first bad one (`shading.kajiya_kay.*`).
+    pub fn validate(&self) -> Result<(), ParamError> {
+        let p = "shading.kajiya_kay";
+        in_range(&format!("{p}.diffuse"), self.diffuse, 0.0, MAX_WEIGHT)?;
+        in_range(&format!("{p}.specular"), self.specular, 0.0, MAX_WEIGHT)?;
+        in_range_open_low(&format!("{p}.shininess"), self.shininess, 0.0, 1.0e4)?;
+        vec_in_range(
+            &format!("{p}.specular_color"),
+            self.specular_color,
+            0.0,
+            MAX_WEIGHT,
+        )?;
+        in_range(&format!("{p}.shift_primary"), self.shift_primary, -1.0, 1.0)?;
+        in_range(
+            &format!("{p}.shift_secondary"),
+            self.shift_secondary,
+            -1.0,
+            1.0,
+        )?;
+        in_range(
+            &format!("{p}.secondary_specular"),
+            self.secondary_specular,
+            0.0,
+            MAX_WEIGHT,
+        )?;
+        in_range_open_low(
+            &format!("{p}.secondary_shininess"),
+            self.secondary_shininess,
+            0.0,
+            1.0e4,
+        )?;
+        vec_in_range(
+            &format!("{p}.secondary_color"),
+            self.secondary_color,
+            0.0,
+            MAX_WEIGHT,
+        )
+    }
+}
+
+/// Marschner et al. 2003: a dielectric fibre with cuticle tilt, absorption and an
+/// elliptical cross-section; lobes R, TT and TRT (digest 002/003 §A.1.5, §B.1.5).
+///
+/// The TT and TRT shifts and widths are derived from R as in Marschner's Table 1:
+/// `α_TT = -α_R/2`, `α_TRT = -3α_R/2`, `β_TT = β_R/2`, `β_TRT = 2β_R`
+/// (see [`MarschnerParams::lobe_shifts_deg`], [`MarschnerParams::lobe_widths_deg`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct MarschnerParams {
+    /// Longitudinal shift of R in degrees (cuticle tilt; negative = toward the root).
+    /// Marschner suggests [-10, -5]; any finite value in [-20, 0] is accepted.
+    pub alpha_r_deg: f32,
+    /// Longitudinal width (standard deviation) of R in degrees, in (0, 30].
+    /// Marschner suggests [5, 10].
+    pub beta_r_deg: f32,
+    /// Index of refraction of the fibre, in (1, 4]; hair is about 1.55.
+    pub eta: f32,
+    /// Absorption coefficient per unit fibre radius, linear RGB, each in [0, 1e4]
+    /// (see [`sigma_a_from_color`]).
+    pub sigma_a: Vec3,
+    /// Ratio of the cross-section's minor to major axis, in [0.85, 1] (1 = circular); the
+    /// TRT lobe uses Marschner's eccentricity-corrected index η*(φ_h) (valid only in this range).
+    pub eccentricity: f32,
+    /// k_G, the scale of the TRT glints that replace the caustics (Algorithm 1 of seed 003),
+    /// in [0, 10]; Marschner suggests [0.5, 5]. At 1 the glints carry about the energy that
+    /// the damping removes from the caustics (within 15% for sin θ_d up to 0.7, measured in
+    /// `pelage-reference`); larger values add energy, smaller ones remove it.
+    pub glint_scale: f32,
+    /// w_c, the azimuthal width (standard deviation) of a caustic glint in degrees, in (0, 60];
+    /// Marschner suggests [10, 25].
+    pub caustic_width_deg: f32,
+    /// Δη', the range of η' over which the merged caustic fades out above η' = 2, in (0, 2];
+    /// Marschner suggests [0.2, 0.4].
+    pub caustic_fade: f32,
+    /// Δh_M, the largest offset range that feeds one glint, in (0, 1]; Marschner uses 0.5.
+    pub caustic_limit: f32,
+    /// Range of the random rotation of each strand's cross-section about its tangent, in
+    /// radians, in [0, 2π]: strand `i` turns by `azimuth_jitter · random_i`. Only visible when
+    /// `eccentricity < 1` (π already covers every orientation of an ellipse).
+    pub azimuth_jitter: f32,
+    /// Weight of a Kajiya-Kay diffuse term `diffuse · base · sin(t, l)` added to the lobes
+    /// (Marschner has no diffuse term; seed 003 adds this one), in [0, 1e4].
+    pub diffuse: f32,
+}
+
+impl Default for MarschnerParams {
+    /// Marschner's Table 1 middle values; σ_a of seed 003's brown hair (Fig. 32),
+    /// eccentricity 0.85 (Dušek's typical value), energy-neutral glints (`k_G = 1`).
+    fn default() -> Self {
+        Self {
+            alpha_r_deg: -7.5,
+            beta_r_deg: 7.5,
+            eta: 1.55,
+            sigma_a: Vec3::new(0.22, 0.3, 0.4),
+            eccentricity: 0.85,
+            glint_scale: 1.0,
+            caustic_width_deg: 15.0,
+            caustic_fade: 0.3,
+            caustic_limit: 0.5,
+            azimuth_jitter: std::f32::consts::PI,
+            diffuse: 0.0,
+        }
+    }
+}
+
+impl MarschnerParams {
+    /// Longitudinal shifts `[α_R, α_TT, α_TRT]` in degrees (Marschner Table 1:
+    /// `α_TT = -α_R/2`, `α_TRT = -3α_R/2`).
+    pub fn lobe_shifts_deg(&self) -> [f32; 3] {
+        [
+            self.alpha_r_deg,
+            -0.5 * self.alpha_r_deg,
+            -1.5 * self.alpha_r_deg,
+        ]
+    }
+
+    /// Longitudinal widths `[β_R, β_TT, β_TRT]` in degrees (Marschner Table 1:
+    /// `β_TT = β_R/2`, `β_TRT = 2β_R`).
+    pub fn lobe_widths_deg(&self) -> [f32; 3] {
+        [
+            self.beta_r_deg,
+            0.5 * self.beta_r_deg,
+            2.0 * self.beta_r_deg,
+        ]
+    }
+
+    /// Checks every field; the error names the first bad one (`shading.marschner.*`).
+    pub fn validate(&self) -> Result<(), ParamError> {
+        let p = "shading.marschner";
+        in_range(&format!("{p}.alpha_r_deg"), self.alpha_r_deg, -20.0, 0.0)?;
+        in_range_open_low(&format!("{p}.beta_r_deg"), self.beta_r_deg, 0.0, 30.0)?;
+        in_range_open_low(&format!("{p}.eta"), self.eta, 1.0, 4.0)?;
+        vec_in_range(&format!("{p}.sigma_a"), self.sigma_a, 0.0, 1.0e4)?;
+        in_range(&format!("{p}.eccentricity"), self.eccentricity, 0.85, 1.0)?;
+        in_range(&format!("{p}.glint_scale"), self.glint_scale, 0.0, 10.0)?;
+        in_range_open_low(
+            &format!("{p}.caustic_width_deg"),
+            self.caustic_width_deg,
+            0.0,
+            60.0,
+        )?;
+        in_range_open_low(&format!("{p}.caustic_fade"), self.caustic_fade, 0.0, 2.0)?;
+        in_range_open_low(&format!("{p}.caustic_limit"), self.caustic_limit, 0.0, 1.0)?;
+        in_range(
+            &format!("{p}.azimuth_jitter"),
+            self.azimuth_jitter,
+            0.0,
+            std::f32::consts::TAU,
+        )?;
+        in_range(&format!("{p}.diffuse"), self.diffuse, 0.0, MAX_WEIGHT)
+    }
+}
+
+/// Absorption coefficient σ_a (per unit fibre radius) that gives a fibre the colour `color`.
+///
+/// Mapping: `σ_a = -ln(c) / 2`, per channel, `c` clamped to `[1e-4, 1]` (NaN counts as
+/// black). It is Dušek's
+/// `σ_a = -k ln(c)` (digest 002/003 §A.1.5 step 5) with `k = 1/2`, chosen so that a ray
+/// crossing the fibre through its axis at normal incidence (path length 2 in a unit-radius
+/// cross-section, the TT path with `h = 0`) keeps exactly the fraction `c` of its energy.
+/// TRT crosses twice and comes out about `c²`: more saturated, as the secondary highlight is.
+/// This is not Chiang et al. 2016's mapping, which targets the multiply scattered albedo of
+/// a different (path-traced) model.
+pub fn sigma_a_from_color(color: Vec3) -> Vec3 {
+    let clamp = |x: f32| {
+        if x.is_nan() {
+            1.0e-4 // NaN counts as black
+        } else {
+            x.clamp(1.0e-4, 1.0)
+        }
+    };
+    let c = Vec3::new(clamp(color.x), clamp(color.y), clamp(color.z));
+    Vec3::new(-c.x.ln(), -c.y.ln(), -c.z.ln()) * 0.5
+}
+
+/// Sadeghi et al. 2010, the artist-friendly pseudo scattering function
+/// (digest 002/003 §B.1.6; digest 000/001 §000.1.6):
+/// ```text
+/// f = Σ_p C_p I_p M'_p(θ_h) N'_p(φ) / cos²θ_d,  M'_p = exp(-(θ_h - α_p)² / (2 β_p²))
+/// N'_R = cos(φ/2),  N'_TT = exp(-(π - φ)² / (2 γ_TT²)),
+/// N'_TRT = cos(φ/2) + I_G exp(-(G_angle - φ)² / (2 γ_G²))
+/// ```
+/// with unit-height Gaussians, φ in [0, π], and `G_angle` drawn per strand from
+/// `[glint_angle_min_deg, glint_angle_max_deg]`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SadeghiParams {
+    /// C_R, colour of the primary highlight (linear RGB, >= 0); not tinted by the strand.
+    pub color_r: Vec3,
+    /// I_R, intensity of the primary highlight (>= 0).
+    pub intensity_r: f32,
+    /// α_R, longitudinal shift of R in degrees, in [-30, 30].
+    pub shift_r_deg: f32,
+    /// β_R, longitudinal width (standard deviation) of R in degrees, in (0, 60].
+    pub width_r_deg: f32,
+    /// C_TT, colour of the transmission (>= 0), multiplied by the strand colour.
+    pub color_tt: Vec3,
+    /// I_TT, intensity of the transmission (>= 0).
+    pub intensity_tt: f32,
+    /// α_TT in degrees, in [-30, 30].
+    pub shift_tt_deg: f32,
+    /// β_TT in degrees, in (0, 60].
+    pub width_tt_deg: f32,
+    /// γ_TT, azimuthal width (standard deviation) of the transmission around φ = π, in
+    /// degrees, in (0, 180].
+    pub azimuthal_width_tt_deg: f32,
+    /// C_TRT, colour of the secondary highlight (>= 0), multiplied by the strand colour.
+    pub color_trt: Vec3,
+    /// I_TRT, intensity of the secondary highlight (>= 0).
+    pub intensity_trt: f32,
+    /// α_TRT in degrees, in [-30, 30].
+    pub shift_trt_deg: f32,
+    /// β_TRT in degrees, in (0, 60].
+    pub width_trt_deg: f32,
+    /// I_G, glint intensity relative to the secondary highlight (>= 0).
+    pub glint_intensity: f32,
+    /// γ_G, azimuthal width of a glint in degrees, in (0, 90].
+    pub glint_width_deg: f32,
+    /// Smallest glint half angle G_angle in degrees, in [0, 90] (Sadeghi: 30).
+    pub glint_angle_min_deg: f32,
+    /// Largest glint half angle in degrees, in [glint_angle_min_deg, 90] (Sadeghi: 45).
+    pub glint_angle_max_deg: f32,
+    /// Weight of a Kajiya-Kay diffuse term `diffuse · base · sin(t, l)` (seed 000's listing
+    /// uses 0.4), in [0, 1e4].
+    pub diffuse: f32,
+}
+
+impl Default for SadeghiParams {
+    /// Intensities of seed 003's Fig. 32 (I_R = 0.45, I_TRT = 0.3), lobe positions and
+    /// widths of Marschner's Table 1 at α_R = -7.5°, β_R = 7.5°, glints between 30° and 45°.
+    fn default() -> Self {
+        Self {
+            color_r: Vec3::ONE,
+            intensity_r: 0.45,
+            shift_r_deg: -7.5,
+            width_r_deg: 7.5,
+            color_tt: Vec3::ONE,
+            intensity_tt: 0.5,
+            shift_tt_deg: 3.75,
+            width_tt_deg: 3.75,
+            azimuthal_width_tt_deg: 20.0,
+            color_trt: Vec3::ONE,
+            intensity_trt: 0.3,
+            shift_trt_deg: 11.25,
+            width_trt_deg: 15.0,
+            glint_intensity: 1.5,
+            glint_width_deg: 5.0,
+            glint_angle_min_deg: 30.0,
+            glint_angle_max_deg: 45.0,
+            diffuse: 0.4,
+        }
+    }
+}
+
+impl SadeghiParams {
+    /// Checks every field; the error names the first bad one (`shading.sadeghi.*`).
+    pub fn validate(&self) -> Result<(), ParamError> {
+        let p = "shading.sadeghi";
+        for (name, color, intensity, shift, width) in [
+            (
+                "r",
+                self.color_r,
+                self.intensity_r,
+                self.shift_r_deg,
+                self.width_r_deg,
+            ),
+            (
+                "tt",
+                self.color_tt,
+                self.intensity_tt,
+                self.shift_tt_deg,
+                self.width_tt_deg,
+            ),
+            (
+                "trt",
+                self.color_trt,
+                self.intensity_trt,
+                self.shift_trt_deg,
+                self.width_trt_deg,
+            ),
+        ] {
+            vec_in_range(&format!("{p}.color_{name}"), color, 0.0, MAX_WEIGHT)?;
+            in_range(&format!("{p}.intensity_{name}"), intensity, 0.0, MAX_WEIGHT)?;
+            in_range(&format!("{p}.shift_{name}_deg"), shift, -30.0, 30.0)?;
+            in_range_open_low(&format!("{p}.width_{name}_deg"), width, 0.0, 60.0)?;
+        }
+        in_range_open_low(
+            &format!("{p}.azimuthal_width_tt_deg"),
+            self.azimuthal_width_tt_deg,
+            0.0,
+            180.0,
+        )?;
+        in_range(
+            &format!("{p}.glint_intensity"),
+            self.glint_intensity,
+            0.0,
+            MAX_WEIGHT,
+        )?;
+        in_range_open_low(
+            &format!("{p}.glint_width_deg"),
+            self.glint_width_deg,
+            0.0,
+            90.0,
+        )?;
+        in_range(
+            &format!("{p}.glint_angle_min_deg"),
+            self.glint_angle_min_deg,
+            0.0,
+            90.0,
+        )?;
+        in_range(
+            &format!("{p}.glint_angle_max_deg"),
+            self.glint_angle_max_deg,
+            self.glint_angle_min_deg,
+            90.0,
+        )?;
+        in_range(&format!("{p}.diffuse"), self.diffuse, 0.0, MAX_WEIGHT)
+    }
+}
+
+/// Which hair shading model stage 3 uses, with its parameters.
+///
+/// In TOML: `model = "kajiya_kay"` (or `"marschner"`, `"sadeghi"`) next to the model's
+/// fields; Marschner's fields sit under `params`, next to `lut`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case", tag = "model")]
+pub enum ShadingModel {
+    /// Kajiya-Kay with optional shifted highlights.
+    KajiyaKay(KajiyaKayParams),
+    /// Marschner et al. 2003.
+    Marschner {
+        /// The model's parameters.
+        #[serde(default)]
+        params: MarschnerParams,
+        /// Evaluate through precomputed lookup tables (seed 003 §3.3.4) instead of
+        /// analytically.
+        #[serde(default)]
+        lut: bool,
+    },
+    /// Sadeghi et al. 2010.
+    Sadeghi(SadeghiParams),
+}
+
+impl Default for ShadingModel {
+    /// Kajiya-Kay with the look of `ribbons.wgsl`.
+    fn default() -> Self {
+        Self::KajiyaKay(KajiyaKayParams::default())
+    }
+}
+
+impl ShadingModel {
+    /// Checks the chosen model's parameters; the error names the bad field.
+    pub fn validate(&self) -> Result<(), ParamError> {
+        match self {
+            Self::KajiyaKay(p) => p.validate(),
+            Self::Marschner { params, .. } => params.validate(),
+            Self::Sadeghi(p) => p.validate(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_validate() {
+        ShadingModel::default().validate().unwrap();
+        KajiyaKayParams::default().validate().unwrap();
+        MarschnerParams::default().validate().unwrap();
+        SadeghiParams::default().validate().unwrap();
+    }
+
+    #[test]
+    fn bad_values_name_the_field() {
+        let p = MarschnerParams {
+            eta: f32::NAN,
+            ..Default::default()
+        };
+        assert_eq!(p.validate().unwrap_err().name, "shading.marschner.eta");
+        let p = MarschnerParams {
+            eta: 1.0,
+            ..Default::default()
+        };
+        assert_eq!(p.validate().unwrap_err().name, "shading.marschner.eta");
+        let p = MarschnerParams {
+            sigma_a: Vec3::new(0.1, -0.1, 0.0),
+            ..Default::default()
+        };
+        assert_eq!(p.validate().unwrap_err().name, "shading.marschner.sigma_a");
+        let p = MarschnerParams {
+            alpha_r_deg: f32::INFINITY,
+            ..Default::default()
+        };
+        assert_eq!(
+            p.validate().unwrap_err().name,
+            "shading.marschner.alpha_r_deg"
+        );
+        let p = MarschnerParams {
+            beta_r_deg: 0.0,
+            ..Default::default()
+        };
+        assert_eq!(
+            p.validate().unwrap_err().name,
+            "shading.marschner.beta_r_deg"
+        );
+        let p = MarschnerParams {
+            eccentricity: 0.5,
+            ..Default::default()
+        };
+        assert_eq!(
+            p.validate().unwrap_err().name,
+            "shading.marschner.eccentricity"
+        );
+        let k = KajiyaKayParams {
+            shininess: 0.0,
+            ..Default::default()
+        };
+        assert_eq!(
+            k.validate().unwrap_err().name,
+            "shading.kajiya_kay.shininess"
+        );
+        let s = SadeghiParams {
+            glint_angle_min_deg: 50.0,
+            glint_angle_max_deg: 40.0,
+            ..Default::default()
+        };
+        assert_eq!(
+            s.validate().unwrap_err().name,
+            "shading.sadeghi.glint_angle_max_deg"
+        );
+        let s = SadeghiParams {
+            color_tt: Vec3::new(f32::NAN, 0.0, 0.0),
+            ..Default::default()
+        };
+        assert_eq!(s.validate().unwrap_err().name, "shading.sadeghi.color_tt");
+        let m = ShadingModel::Sadeghi(SadeghiParams {
+            width_trt_deg: -1.0,
+            ..Default::default()
+        });
+        assert_eq!(
+            m.validate().unwrap_err().name,
+            "shading.sadeghi.width_trt_deg"
+        );
+    }
+
+    #[test]
+    fn derived_lobes_follow_marschner_table_1() {
+        let p = MarschnerParams::default();
+        assert_eq!(p.lobe_shifts_deg(), [-7.5, 3.75, 11.25]);
+        assert_eq!(p.lobe_widths_deg(), [7.5, 3.75, 15.0]);
+    }
+
+    #[test]
+    fn sigma_a_from_color_is_minus_half_log() {
+        let s = sigma_a_from_color(Vec3::new(1.0, 0.5, 0.0));
+        assert_eq!(s.x, 0.0);
+        assert!((s.y - 0.5 * 2.0f32.ln()).abs() < 1e-6);
+        assert!(s.z.is_finite() && s.z > 4.0);
+        let n = sigma_a_from_color(Vec3::new(f32::NAN, 2.0, -1.0));
+        assert!(n.is_finite() && n.min_element() >= 0.0);
+    }
+
+    #[test]
+    fn round_trips_through_toml() {
+        for model in [
+            ShadingModel::default(),
+            ShadingModel::Marschner {
+                params: MarschnerParams::default(),
+                lut: true,
+            },
+            ShadingModel::Sadeghi(SadeghiParams::default()),
+        ] {
+            let text = toml::to_string(&model).unwrap();
+            let back: ShadingModel = toml::from_str(&text).unwrap();
+            assert_eq!(back, model, "{text}");
+        }
+        let m: ShadingModel = toml::from_str("model = \"marschner\"\nlut = true\n").unwrap();
+        assert_eq!(
+            m,
+            ShadingModel::Marschner {
+                params: MarschnerParams::default(),
+                lut: true
+            }
+        );
+        let m: ShadingModel =
+            toml::from_str("model = \"marschner\"\n[params]\neta = 1.6\n").unwrap();
+        let ShadingModel::Marschner { params, lut } = m else {
+            panic!("not marschner");
+        };
+        assert!(!lut);
+        assert_eq!(params.eta, 1.6);
+        let k: ShadingModel = toml::from_str("model = \"kajiya_kay\"\nshininess = 20.0\n").unwrap();
+        assert_eq!(
+            k,
+            ShadingModel::KajiyaKay(KajiyaKayParams {
+                shininess: 20.0,
+                ..Default::default()
+            })
+        );
+        assert!(
+            toml::from_str::<ShadingModel>("model = \"kajiya_kay\"\nshinyness = 2.0\n").is_err()
+        );
+        assert!(toml::from_str::<ShadingModel>("model = \"phong\"\n").is_err());
+    }
+}
