@@ -27,7 +27,7 @@ use pelage_lab::{ScatterChart, ScatterPoint, Table, pareto_front};
 use pelage_reference::flip::{DEFAULT_PIXELS_PER_DEGREE, LinearImage, flip, rmse_linear};
 use pelage_reference::oit::{Fragment, composite_sorted, linear_to_srgb8, srgb8_to_linear};
 use pelage_scene::{
-    Camera, DirectionalLight, HairParams, Mesh, ShadeParams, Transparency, WboitWeight, WindParams,
+    Camera, HairParams, Light, Mesh, ShadeParams, Transparency, WboitWeight, WindParams,
 };
 use pelage_shade::{ABuffer, HairInputs, HairPass, Targets};
 use pelage_strands::{GrowStrands, MeshBuffers};
@@ -205,11 +205,12 @@ fn render_method(
         mesh: &grown.mesh,
         strands: grown.strands.buffers(),
         shadow: None,
+        visibility: None,
     };
     let method = pelage_shade::build(gpu, &inputs, width, height)?;
     let targets = Targets::new(gpu, width, height, shade.samples())?;
     let mut timer = GpuTimer::new(gpu, 64)?;
-    let light = DirectionalLight::default();
+    let light = [Light::default()];
     let mut images = Vec::new();
     let mut times = Vec::new();
     for i in 0..frames {
@@ -267,9 +268,10 @@ fn exact(
         mesh: &grown.mesh,
         strands: grown.strands.buffers(),
         shadow: None,
+        visibility: None,
     };
     let targets = Targets::new(gpu, width, height, 1)?;
-    let light = DirectionalLight::default();
+    let light = [Light::default()];
     // Grow the pool until nothing is dropped.
     let mut nodes_per_pixel = 32.0f32;
     loop {
@@ -485,6 +487,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
                 mesh: &grown.mesh,
                 strands: grown.strands.buffers(),
                 shadow: None,
+                visibility: None,
             };
             let method = pelage_shade::build(&gpu, &inputs, w, h)?;
             memory.push(vec![

@@ -1,9 +1,9 @@
 //! The frame pipeline: strands, shadows, then shading into an offscreen image.
 
 use pelage_gpu::{Gpu, GpuTimer, wgpu};
-use pelage_scene::{Camera, DirectionalLight, HairParams, Mesh, ShadeParams, ShadowParams};
-use pelage_shade::{HairInputs, HairPass, OitStats, Targets};
-use pelage_shadow::ShadowMethod;
+use pelage_scene::{Camera, HairParams, Light, Mesh, ShadeParams, ShadowParams};
+use pelage_shade::{HairInputs, HairPass, OitStats, Targets, Visibility};
+use pelage_shadow::{LightVisibility, ShadowMethod};
 use pelage_strands::{GrowStrands, MeshBuffers};
 
 /// Everything a frame is made of.
@@ -19,8 +19,9 @@ pub struct Scene {
     pub shade: ShadeParams,
     /// The camera.
     pub camera: Camera,
-    /// The light.
-    pub light: DirectionalLight,
+    /// The lights, 1 to 4 (the first is the key light: it also shadows the mesh); each
+    /// gets its own shadow from `shadow`.
+    pub lights: Vec<Light>,
 }
 
 impl Default for Scene {
@@ -32,7 +33,7 @@ impl Default for Scene {
             shadow: ShadowParams::default(),
             shade: ShadeParams::default(),
             camera: Camera::default(),
-            light: DirectionalLight::default(),
+            lights: vec![Light::default()],
         }
     }
 }
@@ -73,11 +74,17 @@ impl FrameStats {
 pub struct Renderer {
     mesh_buffers: MeshBuffers,
     strands: GrowStrands,
-    shadow: Option<Box<dyn ShadowMethod>>,
+    /// One shadow per light, with the pass that hands it to the hair.
+    shadows: Vec<(Box<dyn ShadowMethod>, LightVisibility)>,
     hair: Box<dyn HairPass>,
     targets: Targets,
     timer: Option<GpuTimer>,
-    light: DirectionalLight,
+    lights: Vec<Light>,
+    /// Where point lights aim their shadows (the centre of the hair's reach).
+    shadow_target: glam::Vec3,
+    /// Per-vertex light visibility, `stride` floats per light.
+    visibility: wgpu::Buffer,
+    stride: u32,
 }
 
 impl Renderer {
@@ -85,15 +92,36 @@ impl Renderer {
     pub fn new(gpu: &Gpu, scene: &Scene, width: u32, height: u32) -> crate::Result<Self> {
         let mesh_buffers = MeshBuffers::upload(gpu, &scene.mesh)?;
         let strands = GrowStrands::new(gpu, &scene.mesh, &mesh_buffers, &scene.hair)?;
-        let shadow = pelage_shadow::build(
-            gpu,
-            &scene.shadow,
-            &scene.hair.growth,
-            strands.buffers(),
-            &mesh_buffers,
-            scene.reach(),
-        )?;
-        let binding = shadow.as_ref().map(|s| s.binding());
+        Light::validate_all(&scene.lights).map_err(pelage_shade::ShadeError::from)?;
+        let reach = scene.reach();
+        let vertices =
+            u64::from(strands.buffers().strand_count) * u64::from(strands.buffers().segments + 1);
+        let stride = LightVisibility::stride_for(vertices)?;
+        let visibility = LightVisibility::buffer(gpu, scene.lights.len() as u32, stride)?;
+        let mut shadows = Vec::new();
+        for index in 0..scene.lights.len() as u32 {
+            let Some(shadow) = pelage_shadow::build(
+                gpu,
+                &scene.shadow,
+                &scene.hair.growth,
+                strands.buffers(),
+                &mesh_buffers,
+                reach,
+            )?
+            else {
+                break;
+            };
+            let hand_over = LightVisibility::new(
+                gpu,
+                &shadow.binding(),
+                strands.buffers(),
+                &visibility,
+                index,
+                stride,
+            )?;
+            shadows.push((shadow, hand_over));
+        }
+        let binding = shadows.first().map(|(s, _)| s.binding());
         scene
             .shade
             .validate()
@@ -107,6 +135,10 @@ impl Renderer {
                 mesh: &mesh_buffers,
                 strands: strands.buffers(),
                 shadow: binding.as_ref(),
+                visibility: (!shadows.is_empty()).then_some(Visibility {
+                    buffer: &visibility,
+                    stride,
+                }),
             },
             width,
             height,
@@ -115,23 +147,26 @@ impl Renderer {
         Ok(Self {
             mesh_buffers,
             strands,
-            shadow,
+            shadows,
             hair,
             targets,
             timer,
-            light: scene.light.clone(),
+            lights: scene.lights.clone(),
+            shadow_target: (reach.0 + reach.1) * 0.5,
+            visibility,
+            stride,
         })
     }
 
     /// Writes the per-frame uniforms of every stage for time `t` and `camera`.
     fn prepare(&self, gpu: &Gpu, t: f32, camera: &Camera) -> crate::Result<()> {
         self.strands.set_time(&gpu.queue, t)?;
-        if let Some(shadow) = &self.shadow {
-            shadow.set_light(&gpu.queue, &self.light)?;
+        for ((shadow, _), light) in self.shadows.iter().zip(&self.lights) {
+            shadow.set_light(&gpu.queue, &light.as_directional(self.shadow_target))?;
         }
         let (width, height) = (self.targets.width, self.targets.height);
         self.hair
-            .set_frame(&gpu.queue, camera, &self.light, width, height)?;
+            .set_frame(&gpu.queue, camera, &self.lights, width, height)?;
         Ok(())
     }
 
@@ -140,8 +175,9 @@ impl Renderer {
         self.prepare(gpu, t, camera)?;
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         self.strands.encode(&mut encoder, self.timer.as_mut());
-        if let Some(shadow) = &self.shadow {
+        for (shadow, hand_over) in &self.shadows {
             shadow.encode(&mut encoder, self.timer.as_mut());
+            hand_over.encode(&mut encoder, self.timer.as_mut());
         }
         let (color, resolve) = self.targets.color_views();
         let depth = self.targets.depth_view();
@@ -178,8 +214,13 @@ impl Renderer {
             "strands".to_string(),
             time_alone(gpu, repeats, |e| self.strands.encode(e, None))?,
         )];
-        if let Some(shadow) = &self.shadow {
-            let ms = time_alone(gpu, repeats, |e| shadow.encode(e, None))?;
+        if !self.shadows.is_empty() {
+            let ms = time_alone(gpu, repeats, |e| {
+                for (shadow, hand_over) in &self.shadows {
+                    shadow.encode(e, None);
+                    hand_over.encode(e, None);
+                }
+            })?;
             stages.push(("shadow".to_string(), ms));
         }
         let views = self.targets.views(&color, resolve.as_ref(), &depth);
@@ -201,6 +242,26 @@ impl Renderer {
     /// Stage 1, for binding its buffers or reading its roots.
     pub fn strands(&self) -> &GrowStrands {
         &self.strands
+    }
+
+    /// Light visibility at every strand vertex after the last frame, one `Vec` per light
+    /// (empty without shadows); waits for the GPU.
+    pub fn light_visibility(&self, gpu: &Gpu) -> crate::Result<Vec<Vec<f32>>> {
+        if self.shadows.is_empty() {
+            return Ok(Vec::new());
+        }
+        let bytes = pelage_gpu::read_buffer(gpu, &self.visibility)?;
+        let floats: Vec<f32> = bytes
+            .chunks_exact(4)
+            .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+            .collect();
+        let b = self.strands.buffers();
+        let vertices = (b.strand_count as usize) * (b.segments as usize + 1);
+        Ok(floats
+            .chunks(self.stride as usize)
+            .take(self.shadows.len())
+            .map(|c| c[..vertices.min(c.len())].to_vec())
+            .collect())
     }
 
     /// Stage 3's method.

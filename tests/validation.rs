@@ -4,8 +4,9 @@
 
 use glam::Vec3;
 use pelage::scene::{
-    AdsmParams, DeepOpacityParams, HairType, LayerSpacing, ShadowMapParams, ShadowParams,
-    Transparency, VoxelParams,
+    AdsmParams, DeepOpacityParams, DirectionalLight, HairType, KajiyaKayParams, LayerSpacing,
+    Light, MarschnerParams, PointLight, ShadingModel, ShadowMapParams, ShadowParams, Transparency,
+    VoxelParams,
 };
 use pelage::{Error, Renderer, Scene, gpu::Gpu, gpu::GpuError, strands::StrandsError};
 
@@ -217,8 +218,39 @@ const CASES: &[Case] = &[
     // Shading.
     (
         "shininess zero",
-        |s| s.shade.shininess = 0.0,
-        Kind::Param("shade.shininess"),
+        |s| {
+            s.shade.model = ShadingModel::KajiyaKay(KajiyaKayParams {
+                shininess: 0.0,
+                ..Default::default()
+            })
+        },
+        Kind::Param("shading.kajiya_kay.shininess"),
+    ),
+    (
+        "Marschner eta of 1",
+        |s| {
+            s.shade.model = ShadingModel::Marschner {
+                params: MarschnerParams {
+                    eta: 1.0,
+                    ..Default::default()
+                },
+                lut: true,
+            }
+        },
+        Kind::Param("shading.marschner.eta"),
+    ),
+    (
+        "Marschner absorption negative",
+        |s| {
+            s.shade.model = ShadingModel::Marschner {
+                params: MarschnerParams {
+                    sigma_a: Vec3::new(0.1, -1.0, 0.1),
+                    ..Default::default()
+                },
+                lut: false,
+            }
+        },
+        Kind::Param("shading.marschner.sigma_a"),
     ),
     (
         "two samples per pixel",
@@ -268,8 +300,39 @@ const CASES: &[Case] = &[
     ),
     (
         "light without direction",
-        |s| s.light.direction = Vec3::ZERO,
-        Kind::Param("light.direction"),
+        |s| {
+            s.lights = vec![Light::Directional(DirectionalLight {
+                direction: Vec3::ZERO,
+                ..Default::default()
+            })]
+        },
+        Kind::Param("lights[0].direction"),
+    ),
+    ("no light", |s| s.lights.clear(), Kind::Param("lights")),
+    (
+        "five lights",
+        |s| s.lights = vec![Light::default(); 5],
+        Kind::Param("lights"),
+    ),
+    (
+        "point light at NaN",
+        |s| {
+            s.lights.push(Light::Point(PointLight {
+                position: Vec3::NAN,
+                ..Default::default()
+            }))
+        },
+        Kind::Param("lights[1].position"),
+    ),
+    (
+        "point light of negative intensity",
+        |s| {
+            s.lights.push(Light::Point(PointLight {
+                intensity: -1.0,
+                ..Default::default()
+            }))
+        },
+        Kind::Param("lights[1].intensity"),
     ),
     // Shadows.
     (

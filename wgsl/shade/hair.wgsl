@@ -1,11 +1,13 @@
 // Stage 3, hair: strands expanded into camera-facing ribbons in the vertex shader
-// and shaded (Kajiya-Kay), shadowed through the shadow contract (light_visibility,
-// shadow/none.wgsl or its redirect, evaluated per strand vertex). Shared by every
+// and shaded by the hair model contract (hair_radiance, shade/hair_model.wgsl or its
+// redirect: Kajiya-Kay, Marschner, Sadeghi) for every light, shadowed per strand
+// vertex by stage 2's visibility buffer. Shared by every
 // hair pass: the opaque one (shade/ribbons.wgsl) and each transparency method
 // (shade/oit/*.wgsl) import this file and add their fragment entry points.
 //
 // Reads:  Frame (uniform), the strand vertices (vec4: xyz position, w strand
-//         parameter) and StrandRoot attributes written by stage 1, RibbonStyle (uniform).
+//         parameter) and StrandRoot attributes written by stage 1, RibbonStyle (uniform),
+//         per-vertex light visibility written by stage 2.
 // Writes: nothing itself; vs_main feeds the importing file's fragment shader.
 // Draw:   non-indexed, 6 vertices per segment: strand_count * segments * 6
 //         (two triangles per segment; no vertex buffers, everything is pulled).
@@ -14,7 +16,8 @@
 #import shared/strand.wgsl
 #import shared/ribbon.wgsl
 #import shade/frame.wgsl
-#import shadow/none.wgsl
+#import shade/hair_model.wgsl
+#import shared/noise.wgsl
 
 struct RibbonStyle {
     segments: u32,
@@ -24,12 +27,6 @@ struct RibbonStyle {
     min_pixels: f32,
     // Darkening at the root (0 = none, 1 = black), a stand-in for self-shadowing.
     root_occlusion: f32,
-    diffuse: f32,
-    specular: f32,
-    // Kajiya-Kay specular exponent.
-    shininess: f32,
-    _pad: f32,
-    specular_color: vec3<f32>,
     // Opacity of a strand that covers its whole ribbon (alpha for the OIT methods).
     opacity: f32,
 }
@@ -38,6 +35,9 @@ struct RibbonStyle {
 @group(0) @binding(1) var<storage, read> vertices: array<vec4<f32>>;
 @group(0) @binding(2) var<storage, read> roots: array<StrandRoot>;
 @group(0) @binding(3) var<uniform> style: RibbonStyle;
+// Light reaching each strand vertex, per light: stage 2's shadow methods write light i's
+// values at [i * frame.visibility_stride + vertex] (LightVisibility in pelage-shadow).
+@group(0) @binding(4) var<storage, read> light_visibility_buffer: array<f32>;
 
 struct VertexOut {
     @builtin(position) clip: vec4<f32>,
@@ -45,8 +45,8 @@ struct VertexOut {
     @location(1) tangent: vec3<f32>,
     @location(2) color: vec3<f32>,
     @location(3) v: f32,
-    // Light reaching the strand's centre line here, from the shadow contract.
-    @location(4) visibility: f32,
+    // Light reaching the strand's centre line here, per light (1 where there is no shadow).
+    @location(4) visibility: vec4<f32>,
     // Fraction of the drawn ribbon the strand really covers (< 1 where the ribbon was
     // widened to min_pixels): scales alpha so thin distant strands fade, not thicken.
     @location(5) coverage: f32,
@@ -54,6 +54,8 @@ struct VertexOut {
     // sort key of the transparency methods.
     @location(6) view_depth: f32,
     @location(7) @interpolate(flat) strand: u32,
+    // Per-strand random number in [0, 1) for the shading model (azimuth, glint angle).
+    @location(8) @interpolate(flat) strand_random: f32,
 }
 
 
@@ -81,13 +83,18 @@ fn vs_main(@builtin(vertex_index) vi: u32) -> VertexOut {
     out.tangent = tangent;
     out.color = root.color;
     out.v = here.w;
-    // Shadows are looked up per strand vertex, not per fragment: transmittance varies
-    // slowly along a strand, and this runs 6 times per segment instead of once per
-    // covered sample.
-    out.visibility = light_visibility(here.xyz);
+    // Shadows are looked up per strand vertex by stage 2, not per fragment:
+    // transmittance varies slowly along a strand.
+    out.visibility = vec4<f32>(1.0);
+    if (frame.visibility_stride > 0u) {
+        for (var i = 0u; i < min(frame.light_count, MAX_LIGHTS); i += 1u) {
+            out.visibility[i] = light_visibility_buffer[i * frame.visibility_stride + c.here];
+        }
+    }
     out.coverage = select(1.0, clamp(true_half_width / half_width, 0.0, 1.0), half_width > 0.0);
     out.view_depth = out.clip.w;
     out.strand = strand;
+    out.strand_random = f32(pcg_hash(root.seed ^ 0x68bc21ebu) >> 8u) * (1.0 / 16777216.0);
     return out;
 }
 
@@ -99,28 +106,17 @@ fn perpendicular_any(t: vec3<f32>) -> vec3<f32> {
     return safe_normalize(cross(t, a), vec3<f32>(0.0, 0.0, 1.0));
 }
 
-// Kajiya-Kay (1989) with l and v both pointing away from the surface: the diffuse term
-// is sin(t, l); the specular term is the cosine between v and the cone of mirror
-// directions around the tangent, cos = -(t.l)(t.v) + sin(t, l) sin(t, v). Defined for
-// every direction (no half vector, so no singularity when the camera faces the light).
-fn kajiya_kay(t: vec3<f32>, l: vec3<f32>, v: vec3<f32>) -> vec2<f32> {
-    let tl = clamp(dot(t, l), -1.0, 1.0);
-    let tv = clamp(dot(t, v), -1.0, 1.0);
-    let sin_l = sqrt(max(1.0 - tl * tl, 0.0));
-    let sin_v = sqrt(max(1.0 - tv * tv, 0.0));
-    let cone = max(-tl * tv + sin_l * sin_v, 0.0);
-    return vec2<f32>(sin_l, pow(cone, style.shininess));
-}
-
 // The shaded colour of a hair fragment (linear RGB, not premultiplied) and its alpha
 // (opacity times coverage).
 fn hair_shade(in: VertexOut) -> vec4<f32> {
     let t = safe_normalize(in.tangent, vec3<f32>(0.0, 1.0, 0.0));
     let v = safe_normalize(frame.eye - in.world, vec3<f32>(0.0, 0.0, 1.0));
-    let kk = kajiya_kay(t, frame.to_light, v);
     let occlusion = mix(1.0 - style.root_occlusion, 1.0, in.v);
-    let light = frame.light_color * in.visibility;
-    let lit = in.color * (frame.ambient + style.diffuse * kk.x * light)
-        + style.specular_color * (style.specular * kk.y) * light;
+    var lit = in.color * frame.ambient;
+    for (var i = 0u; i < min(frame.light_count, MAX_LIGHTS); i += 1u) {
+        let l = frame.lights[i];
+        let irradiance = frame_irradiance(l, in.world) * in.visibility[i];
+        lit += hair_radiance(t, frame_to_light(l, in.world), v, in.color, in.strand_random) * irradiance;
+    }
     return vec4<f32>(lit * occlusion, style.opacity * in.coverage);
 }

@@ -1,5 +1,6 @@
-// Stage 3, opaque mesh: the surface the hair grows from, Lambert shaded, shadowed
-// through the shadow contract (light_visibility, shadow/none.wgsl or its redirect).
+// Stage 3, opaque mesh: the surface the hair grows from, Lambert shaded by every light,
+// the key light (light 0) shadowed through the shadow contract (light_visibility,
+// shadow/none.wgsl or its redirect).
 //
 // Reads:  Frame (uniform), mesh positions and normals (f32 x3 storage), the u32
 //         triangle list (storage), MeshStyle (uniform).
@@ -41,7 +42,15 @@ fn vs_main(@builtin(vertex_index) vi: u32) -> VertexOut {
 @fragment
 fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
     let n = normalize(in.normal);
-    let lambert = max(dot(n, frame.to_light), 0.0) * light_visibility(in.world);
-    let c = style.color * (frame.ambient + lambert * frame.light_color);
-    return vec4<f32>(c, 1.0);
+    var lit = vec3<f32>(frame.ambient);
+    for (var i = 0u; i < min(frame.light_count, MAX_LIGHTS); i += 1u) {
+        let l = frame.lights[i];
+        var irradiance = frame_irradiance(l, in.world) * max(dot(n, frame_to_light(l, in.world)), 0.0);
+        // The shadow contract is the key light's (light 0); the others light the mesh unshadowed.
+        if (i == 0u) {
+            irradiance *= light_visibility(in.world);
+        }
+        lit += irradiance;
+    }
+    return vec4<f32>(style.color * lit, 1.0);
 }

@@ -1,5 +1,6 @@
-// Measurement: a shadow method's light_visibility at given points (the strand
-// vertices, for comparison with the ray-traced reference).
+// A shadow method's light_visibility at given points: the strand vertices, for
+// the hair pass (LightVisibility, one light's slice of the visibility buffer) and for
+// comparison with the ray-traced reference (TransmittanceProbe).
 //
 // Reads:  the method's @group(1) resources, through the shadow contract
 //         (shadow/none.wgsl, redirected to the method's lookup); `points` (vec4, xyz).
@@ -15,7 +16,7 @@
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let i = gid.y * groups.x * 64u + gid.x;
-    if i >= arrayLength(&visibility) {
+    if i >= arrayLength(&visibility) || i >= arrayLength(&points) {
         return;
     }
     visibility[i] = light_visibility(points[i].xyz);

@@ -18,10 +18,12 @@ mod error;
 mod font;
 mod fs;
 mod pareto;
+mod sheet;
 mod table;
 
 pub use chart::{ScatterChart, ScatterPoint};
 pub use error::LabError;
 pub use fs::write_file_atomically;
 pub use pareto::pareto_front;
+pub use sheet::contact_sheet;
 pub use table::Table;

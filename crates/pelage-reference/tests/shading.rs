@@ -10,7 +10,7 @@ use pelage_reference::shading::{
     fibre_angles, kajiya_kay, marschner, marschner_albedo, marschner_albedo_lobes, marschner_bsdf,
     marschner_lobes, marschner_radiance, sadeghi, sadeghi_radiance,
 };
-use pelage_scene::{KajiyaKayParams, MarschnerParams, SadeghiParams, ShadeParams};
+use pelage_scene::{KajiyaKayParams, MarschnerParams, SadeghiParams};
 use pelage_strands::{hash_to_unit, pcg_hash};
 
 /// Small deterministic RNG on top of `pcg_hash`.
@@ -287,10 +287,11 @@ fn every_model_is_finite_everywhere() {
 
 #[test]
 fn kajiya_kay_matches_ribbons_wgsl() {
-    // The fragment shader of ribbons.wgsl, transcribed (without the frame's ambient and
-    // the light colour): lit = color * diffuse * sin_l + specular_color * specular * cone^shininess.
+    // The fragment shader ribbons.wgsl had before the models existed, transcribed (without
+    // the frame's ambient and the light colour):
+    // lit = color * diffuse * sin_l + specular_color * specular * cone^shininess.
     // Evaluated in f64 so that only the formula is compared, not f32 rounding.
-    fn ribbons(s: &ShadeParams, t: Vec3, l: Vec3, v: Vec3, color: Vec3) -> Vec3 {
+    fn ribbons(s: &KajiyaKayParams, t: Vec3, l: Vec3, v: Vec3, color: Vec3) -> Vec3 {
         let (t, l, v) = (t.as_dvec3(), l.as_dvec3(), v.as_dvec3());
         let tl = t.dot(l).clamp(-1.0, 1.0);
         let tv = t.dot(v).clamp(-1.0, 1.0);
@@ -302,13 +303,13 @@ fn kajiya_kay_matches_ribbons_wgsl() {
                 * (f64::from(s.specular) * cone.powf(f64::from(s.shininess))))
         .as_vec3()
     }
-    let shade = ShadeParams::default();
     let p = KajiyaKayParams::default();
-    // The defaults are today's look.
-    assert_eq!(p.diffuse, shade.diffuse);
-    assert_eq!(p.specular, shade.specular);
-    assert_eq!(p.shininess, shade.shininess);
-    assert_eq!(p.specular_color, shade.specular_color);
+    // The defaults are the look the golden image was blessed with.
+    assert_eq!(p.diffuse, 0.75);
+    assert_eq!(p.specular, 0.3);
+    assert_eq!(p.shininess, 40.0);
+    assert_eq!(p.specular_color, Vec3::new(1.0, 0.95, 0.85));
+    let shade = p.clone();
     let dirs = sweep_directions();
     let color = Vec3::new(0.36, 0.2, 0.09);
     let mut worst = 0.0f32;

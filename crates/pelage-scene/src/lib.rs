@@ -18,7 +18,7 @@ pub mod transparency;
 pub use camera::Camera;
 pub use groom::{Groom, GroomError, Resampled};
 pub use hair_file::{HairFile, HairFileError};
-pub use light::DirectionalLight;
+pub use light::{DirectionalLight, Light, MAX_LIGHTS, PointLight};
 pub use mesh::{Mesh, MeshError, MeshReport};
 pub use obj::{ObjError, load_obj, parse_obj};
 pub use params::{

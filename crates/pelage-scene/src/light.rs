@@ -46,3 +46,134 @@ impl DirectionalLight {
         Ok(d.normalize())
     }
 }
+
+/// A point light: radiance falls off with the square of the distance.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct PointLight {
+    /// Position in world space.
+    pub position: Vec3,
+    /// Linear RGB colour.
+    pub color: Vec3,
+    /// Multiplier on `color`: the irradiance at distance 1 (it falls off as 1 / distance²).
+    pub intensity: f32,
+}
+
+impl Default for PointLight {
+    fn default() -> Self {
+        Self {
+            position: Vec3::new(-1.5, 1.2, -2.0),
+            color: Vec3::ONE,
+            intensity: 6.0,
+        }
+    }
+}
+
+/// The most lights a scene may have.
+pub const MAX_LIGHTS: usize = 4;
+
+/// One light of a scene.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum Light {
+    /// Parallel light from one direction.
+    Directional(DirectionalLight),
+    /// Light from a point, falling off with the square of the distance.
+    Point(PointLight),
+}
+
+impl Default for Light {
+    fn default() -> Self {
+        Self::Directional(DirectionalLight::default())
+    }
+}
+
+impl Light {
+    /// Checks the light; the error names `lights[index].<field>`.
+    pub fn validate(&self, index: usize) -> Result<(), crate::ParamError> {
+        let rename = |mut e: crate::ParamError| {
+            e.name = format!("lights[{index}].{}", e.name.trim_start_matches("light."));
+            e
+        };
+        match self {
+            Self::Directional(d) => d.to_light().map(|_| ()).map_err(rename),
+            Self::Point(p) => {
+                let bad = |field: &str, value: String, reason: &str| crate::ParamError {
+                    name: format!("lights[{index}].{field}"),
+                    value,
+                    reason: reason.into(),
+                };
+                if !p.position.is_finite() {
+                    return Err(bad(
+                        "position",
+                        format!("{:?}", p.position),
+                        "must be finite",
+                    ));
+                }
+                if !p.color.is_finite() || p.color.min_element() < 0.0 {
+                    return Err(bad(
+                        "color",
+                        format!("{:?}", p.color),
+                        "must be finite and >= 0",
+                    ));
+                }
+                if !p.intensity.is_finite() || p.intensity < 0.0 {
+                    return Err(bad(
+                        "intensity",
+                        p.intensity.to_string(),
+                        "must be finite and >= 0",
+                    ));
+                }
+                Ok(())
+            }
+        }
+    }
+
+    /// Checks a scene's lights: 1 to [`MAX_LIGHTS`] of them, each valid.
+    pub fn validate_all(lights: &[Light]) -> Result<(), crate::ParamError> {
+        if lights.is_empty() || lights.len() > MAX_LIGHTS {
+            return Err(crate::ParamError {
+                name: "lights".into(),
+                value: format!("{} lights", lights.len()),
+                reason: format!("a scene needs 1 to {MAX_LIGHTS} lights"),
+            });
+        }
+        lights
+            .iter()
+            .enumerate()
+            .try_for_each(|(i, l)| l.validate(i))
+    }
+
+    /// The directional light that stands in for this one when fitting a shadow to hair
+    /// around `target`: itself, or for a point light the direction from its position to
+    /// `target` (an orthographic light space: exact for distant point lights, an
+    /// approximation for near ones).
+    pub fn as_directional(&self, target: Vec3) -> DirectionalLight {
+        match self {
+            Self::Directional(d) => d.clone(),
+            Self::Point(p) => DirectionalLight {
+                direction: target - p.position,
+                color: p.color,
+                intensity: p.intensity,
+            },
+        }
+    }
+
+    /// Seed 003's Fig. 31 set-up: a white key light from above and beside the camera, and
+    /// a warm point light behind the hair (seen from the camera) that outlines it.
+    pub fn key_and_back(camera: &crate::Camera) -> Vec<Light> {
+        let view = (camera.target - camera.eye).normalize_or(Vec3::NEG_Z);
+        let side = view.cross(Vec3::Y).normalize_or(Vec3::X);
+        let key = DirectionalLight {
+            direction: (view - 0.6 * side - 0.7 * Vec3::Y).normalize_or(Vec3::NEG_Y),
+            color: Vec3::ONE,
+            intensity: 1.6,
+        };
+        let back = PointLight {
+            position: camera.target + 2.5 * view + 1.2 * Vec3::Y + 0.4 * side,
+            color: Vec3::new(1.0, 0.85, 0.65),
+            intensity: 14.0,
+        };
+        vec![Light::Directional(key), Light::Point(back)]
+    }
+}

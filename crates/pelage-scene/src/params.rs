@@ -453,7 +453,7 @@ impl HairParams {
     }
 }
 
-/// How stage 3 draws and shades (Kajiya-Kay, the opaque baseline).
+/// How stage 3 draws, shades and composites the hair.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct ShadeParams {
@@ -463,14 +463,9 @@ pub struct ShadeParams {
     pub mesh_color: Vec3,
     /// Ambient light, a fraction of the base colour.
     pub ambient: f32,
-    /// Kajiya-Kay diffuse weight.
-    pub diffuse: f32,
-    /// Kajiya-Kay specular weight.
-    pub specular: f32,
-    /// Kajiya-Kay specular exponent (> 0).
-    pub shininess: f32,
-    /// Colour of the specular highlight, linear RGB.
-    pub specular_color: Vec3,
+    /// The hair shading model (Kajiya-Kay, Marschner analytic or from lookup tables,
+    /// Sadeghi) and its parameters.
+    pub model: crate::ShadingModel,
     /// Darkening at the root in [0, 1], a stand-in for self-shadowing until a shadow method is on.
     pub root_occlusion: f32,
     /// Ribbons are at least this many pixels wide (>= 0).
@@ -489,10 +484,7 @@ impl Default for ShadeParams {
             background: Vec3::new(0.04, 0.045, 0.055),
             mesh_color: Vec3::new(0.25, 0.16, 0.11),
             ambient: 0.18,
-            diffuse: 0.75,
-            specular: 0.3,
-            shininess: 40.0,
-            specular_color: Vec3::new(1.0, 0.95, 0.85),
+            model: crate::ShadingModel::default(),
             root_occlusion: 0.65,
             min_pixels: 0.7,
             sample_count: 4,
@@ -506,11 +498,8 @@ impl ShadeParams {
     pub fn validate(&self) -> Result<(), ParamError> {
         finite_vec("shade.background", self.background)?;
         finite_vec("shade.mesh_color", self.mesh_color)?;
-        finite_vec("shade.specular_color", self.specular_color)?;
         non_negative("shade.ambient", self.ambient)?;
-        non_negative("shade.diffuse", self.diffuse)?;
-        non_negative("shade.specular", self.specular)?;
-        positive("shade.shininess", self.shininess)?;
+        self.model.validate()?;
         non_negative("shade.root_occlusion", self.root_occlusion)?;
         if self.root_occlusion > 1.0 {
             return Err(ParamError::new(

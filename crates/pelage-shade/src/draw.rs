@@ -2,9 +2,10 @@
 //! draw, and building hair and full-screen pipelines with their bind groups.
 
 use pelage_gpu::{Gpu, GpuTimer, ShaderBinding, ShaderLibrary, UniformBuffer, bind_buffers, wgpu};
-use pelage_scene::{Camera, DirectionalLight, HairParams, ParamError, ShadeParams};
+use pelage_scene::{Camera, HairParams, Light, ParamError, ShadeParams};
 use pelage_strands::{MeshBuffers, StrandBuffers};
 
+use crate::hair_model::HairModel;
 use crate::ribbons::{FrameUniforms, MeshStyle, RibbonStyle};
 use crate::targets::{COLOR_FORMAT, DEPTH_FORMAT};
 
@@ -19,9 +20,21 @@ pub struct HairInputs<'a> {
     pub mesh: &'a MeshBuffers,
     /// Stage 1's strands.
     pub strands: &'a StrandBuffers,
-    /// Stage 2's implementation of the shadow contract (`shadow/none.wgsl`); `None`
-    /// draws without shadows.
+    /// Stage 2's implementation of the shadow contract (`shadow/none.wgsl`) for the key
+    /// light (light 0), which shadows the mesh; `None` draws the mesh unshadowed.
     pub shadow: Option<&'a ShaderBinding>,
+    /// Stage 2's per-vertex light visibility for the hair; `None` lights every vertex fully.
+    pub visibility: Option<Visibility<'a>>,
+}
+
+/// Light reaching each strand vertex, per light: light i's value for vertex v at float
+/// `i * stride + v` of `buffer` (what `pelage_shadow::LightVisibility` writes).
+#[derive(Clone, Copy, Debug)]
+pub struct Visibility<'a> {
+    /// The `f32` storage buffer.
+    pub buffer: &'a wgpu::Buffer,
+    /// Floats per light, at least the strand vertex count.
+    pub stride: u32,
 }
 
 /// The views a method renders into, owned by the caller.
@@ -73,6 +86,8 @@ pub(crate) struct HairPipe<'a> {
     pub fragment: &'a str,
     pub targets: &'a [Option<wgpu::ColorTargetState>],
     pub depth: wgpu::DepthStencilState,
+    /// Whether `fragment` shades (calls `hair_radiance`), so binds the shading model.
+    pub shades: bool,
 }
 
 /// The uniforms and the mesh draw every method has.
@@ -85,6 +100,11 @@ pub(crate) struct Common {
     pub hair_vertices: u32,
     pub redirects: Vec<(&'static str, &'static str)>,
     pub samples: u32,
+    pub model: HairModel,
+    /// Floats per light in the visibility buffer (0: none).
+    pub visibility_stride: u32,
+    /// The visibility buffer, or a small one that is never read.
+    pub visibility: wgpu::Buffer,
 }
 
 impl Common {
@@ -102,6 +122,7 @@ impl Common {
             mesh,
             strands,
             shadow,
+            visibility,
         } = *inputs;
         params.validate()?;
         hair.growth.validate()?;
@@ -117,13 +138,7 @@ impl Common {
         let frame = UniformBuffer::new(
             gpu,
             "pelage frame",
-            &FrameUniforms::new(
-                &Camera::default(),
-                &DirectionalLight::default(),
-                params,
-                1,
-                1,
-            )?,
+            &FrameUniforms::new(&Camera::default(), &[Light::default()], params, 1, 1, 0)?,
         )?;
         let style = UniformBuffer::new(
             gpu,
@@ -133,11 +148,6 @@ impl Common {
                 tip_width: hair.growth.tip_width,
                 min_pixels,
                 root_occlusion: params.root_occlusion,
-                diffuse: params.diffuse,
-                specular: params.specular,
-                shininess: params.shininess,
-                _pad: 0.0,
-                specular_color: params.specular_color,
                 opacity: hair.growth.opacity,
             },
         )?;
@@ -151,8 +161,38 @@ impl Common {
         )?;
         // The shadow contract: every pass imports shadow/none.wgsl; a shadow method
         // redirects it to its own lookup and hands over the resources for group 1.
-        let redirects: Vec<(&'static str, &'static str)> =
-            shadow.iter().map(|b| b.redirect()).collect();
+        let vertex_count = u64::from(strands.strand_count) * u64::from(strands.segments + 1);
+        let (visibility_stride, visibility_buffer) = match visibility {
+            Some(v) => {
+                if u64::from(v.stride) < vertex_count || v.buffer.size() < u64::from(v.stride) * 4 {
+                    return Err(ParamError {
+                        name: "visibility.stride".into(),
+                        value: v.stride.to_string(),
+                        reason: format!(
+                            "must hold the {vertex_count} strand vertices, in a buffer of at least stride x 4 bytes ({} given)",
+                            v.buffer.size()
+                        ),
+                    }
+                    .into());
+                }
+                (v.stride, v.buffer.clone())
+            }
+            None => (
+                0,
+                pelage_gpu::zeroed_storage(
+                    gpu,
+                    "pelage no visibility",
+                    16,
+                    wgpu::BufferUsages::STORAGE,
+                )?,
+            ),
+        };
+        let model = HairModel::new(gpu, &params.model)?;
+        let redirects: Vec<(&'static str, &'static str)> = shadow
+            .iter()
+            .map(|b| b.redirect())
+            .chain(model.redirect())
+            .collect();
         let mesh_module = ShaderLibrary::module_redirected(gpu, "shade/mesh.wgsl", &redirects)?;
         let mesh_draw = gpu.scoped(|device| {
             let pipeline = raster_pipeline(
@@ -196,11 +236,15 @@ impl Common {
             hair_vertices,
             redirects,
             samples,
+            model,
+            visibility_stride,
+            visibility: visibility_buffer,
         })
     }
 
     /// A pipeline drawing the hair with `fragment` of `module` (a file importing
-    /// `shade/hair.wgsl`), with groups 0 (strands, uniforms) and 1 (shadow) bound.
+    /// `shade/hair.wgsl`), with groups 0 (strands, uniforms, visibility) and 2 (the
+    /// shading model) bound.
     pub fn hair_draw(
         &self,
         gpu: &Gpu,
@@ -213,6 +257,7 @@ impl Common {
             fragment,
             targets,
             ref depth,
+            shades,
         } = *pipe;
         Ok(gpu.scoped(|device| {
             let pipeline = raster_pipeline(
@@ -238,13 +283,17 @@ impl Common {
                     &inputs.strands.vertices,
                     &inputs.strands.roots,
                     &self.style.buffer,
+                    &self.visibility,
                 ],
             );
-            let shadow_group = shadow_group(device, inputs.shadow, &pipeline, label);
+            // Group 1 stays empty: the hair reads its shadows from the visibility buffer.
+            let model_group = shades
+                .then(|| contract_group(device, self.model.binding(), &pipeline, label))
+                .flatten();
             Draw {
                 label,
                 pipeline,
-                groups: vec![Some(group0), shadow_group],
+                groups: vec![Some(group0), None, model_group],
                 vertices: self.hair_vertices,
             }
         })?)
@@ -264,11 +313,18 @@ impl Common {
         &self,
         queue: &wgpu::Queue,
         camera: &Camera,
-        light: &DirectionalLight,
+        lights: &[Light],
         width: u32,
         height: u32,
     ) -> crate::Result<()> {
-        let u = FrameUniforms::new(camera, light, &self.params, width, height)?;
+        let u = FrameUniforms::new(
+            camera,
+            lights,
+            &self.params,
+            width,
+            height,
+            self.visibility_stride,
+        )?;
         Ok(self.frame.write(queue, &u)?)
     }
 
@@ -320,7 +376,17 @@ fn shadow_group(
     pipeline: &wgpu::RenderPipeline,
     label: &str,
 ) -> Option<wgpu::BindGroup> {
-    shadow.and_then(|b| b.bind_group(device, label, &pipeline.get_bind_group_layout(b.group)))
+    shadow.and_then(|b| contract_group(device, b, pipeline, label))
+}
+
+/// The bind group of a contract implementation `b` for `pipeline`, if it binds anything.
+fn contract_group(
+    device: &wgpu::Device,
+    b: &ShaderBinding,
+    pipeline: &wgpu::RenderPipeline,
+    label: &str,
+) -> Option<wgpu::BindGroup> {
+    b.bind_group(device, label, &pipeline.get_bind_group_layout(b.group))
 }
 
 /// Depth state: test with `compare`, write when `write`.

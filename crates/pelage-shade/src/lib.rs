@@ -9,12 +9,14 @@
 //! ones).
 
 mod draw;
+mod hair_model;
 mod methods;
 mod models;
 mod ribbons;
 mod targets;
 
-pub use draw::{HairInputs, TargetViews};
+pub use draw::{HairInputs, TargetViews, Visibility};
+pub use hair_model::{HairModel, LUT_RESOLUTION};
 pub use methods::{
     ABuffer, CapturedFragment, Dbk, FragmentCapture, HairPass, KBuffer, OitStats, OitTile, Opaque,
     RandomSubsets, Wboit, build,
@@ -23,7 +25,7 @@ pub use models::{
     KajiyaKayUniforms, MarschnerLut, MarschnerLutInfo, MarschnerUniforms, SadeghiUniforms,
 };
 pub use pelage_scene::ShadeParams;
-pub use ribbons::{FrameUniforms, MeshStyle, RibbonStyle};
+pub use ribbons::{FrameLight, FrameUniforms, MeshStyle, RibbonStyle};
 pub use targets::{COLOR_FORMAT, DEPTH_FORMAT, Targets};
 
 /// What can go wrong in stage 3.

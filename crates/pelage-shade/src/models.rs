@@ -376,6 +376,11 @@ impl MarschnerLut {
         &self.model.buffer
     }
 
+    /// The uniform describing the tables ([`MarschnerLutInfo`], binding 3 of group 2).
+    pub fn info_buffer(&self) -> &wgpu::Buffer {
+        &self.info_buffer.buffer
+    }
+
     /// The M table (`vec4` per texel, `16 · resolution` texels, see the module docs).
     pub fn m_buffer(&self) -> &wgpu::Buffer {
         &self.m

@@ -1,10 +1,19 @@
 //! The uniforms every stage 3 pass shares (`shade/frame.wgsl`, `shade/hair.wgsl`, `shade/mesh.wgsl`).
 
 use encase::ShaderType;
-use glam::{Mat4, Vec3};
-use pelage_scene::{Camera, DirectionalLight, ShadeParams};
+use glam::{Mat4, Vec3, Vec4};
+use pelage_scene::{Camera, Light, MAX_LIGHTS, ShadeParams};
 
-/// Camera and light for one frame (`Frame` in `wgsl/shade/frame.wgsl`).
+/// One light as the shaders see it (`FrameLight` in `wgsl/shade/frame.wgsl`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, ShaderType)]
+pub struct FrameLight {
+    /// w = 0: directional, xyz the unit vector towards the light; w = 1: a point light at xyz.
+    pub position: Vec4,
+    /// Colour times intensity; w unused.
+    pub color: Vec4,
+}
+
+/// Camera and lights for one frame (`Frame` in `wgsl/shade/frame.wgsl`).
 #[derive(Clone, Copy, Debug, PartialEq, ShaderType)]
 pub struct FrameUniforms {
     /// World to clip.
@@ -13,17 +22,19 @@ pub struct FrameUniforms {
     pub eye: Vec3,
     /// World units per pixel at distance 1: `2 tan(fov_y / 2) / height`.
     pub pixel_scale: f32,
-    /// Unit vector towards the light.
-    pub to_light: Vec3,
     /// Ambient fraction.
     pub ambient: f32,
-    /// Light colour times intensity.
-    pub light_color: Vec3,
+    /// Lights in use, 1 to [`MAX_LIGHTS`].
+    pub light_count: u32,
+    /// Floats per light in the hair's visibility buffer (0: none, every vertex lit).
+    pub visibility_stride: u32,
     /// Padding.
-    pub _pad: f32,
+    pub _pad: u32,
+    /// The lights; entries past `light_count` are ignored.
+    pub lights: [FrameLight; MAX_LIGHTS],
 }
 
-/// Style of the hair ribbons (`RibbonStyle` in `ribbons.wgsl`).
+/// Style of the hair ribbons (`RibbonStyle` in `shade/hair.wgsl`).
 #[derive(Clone, Copy, Debug, PartialEq, ShaderType)]
 pub struct RibbonStyle {
     /// Segments per strand.
@@ -34,16 +45,6 @@ pub struct RibbonStyle {
     pub min_pixels: f32,
     /// Root darkening.
     pub root_occlusion: f32,
-    /// Kajiya-Kay diffuse weight.
-    pub diffuse: f32,
-    /// Kajiya-Kay specular weight.
-    pub specular: f32,
-    /// Kajiya-Kay exponent.
-    pub shininess: f32,
-    /// Padding.
-    pub _pad: f32,
-    /// Specular colour.
-    pub specular_color: Vec3,
     /// Opacity of a strand covering its whole ribbon (the transparency methods' alpha).
     pub opacity: f32,
 }
@@ -58,25 +59,41 @@ pub struct MeshStyle {
 }
 
 impl FrameUniforms {
-    /// Frame uniforms for `camera` and `light` on a `width` x `height` target.
+    /// Frame uniforms for `camera` and `lights` on a `width` x `height` target, with the
+    /// hair's visibility buffer holding `visibility_stride` floats per light (0: none).
     pub fn new(
         camera: &Camera,
-        light: &DirectionalLight,
+        lights: &[Light],
         params: &ShadeParams,
         width: u32,
         height: u32,
+        visibility_stride: u32,
     ) -> crate::Result<Self> {
         camera.validate()?;
-        let to_light = light.to_light()?;
+        Light::validate_all(lights)?;
+        let mut uniforms = [FrameLight::default(); MAX_LIGHTS];
+        for (u, light) in uniforms.iter_mut().zip(lights) {
+            *u = match light {
+                Light::Directional(d) => FrameLight {
+                    position: d.to_light()?.extend(0.0),
+                    color: (d.color * d.intensity).extend(0.0),
+                },
+                Light::Point(p) => FrameLight {
+                    position: p.position.extend(1.0),
+                    color: (p.color * p.intensity).extend(0.0),
+                },
+            };
+        }
         let height = height.max(1) as f32;
         Ok(Self {
             view_proj: camera.view_projection(width.max(1) as f32 / height),
             eye: camera.eye,
             pixel_scale: 2.0 * (camera.fov_y * 0.5).tan() / height,
-            to_light,
             ambient: params.ambient,
-            light_color: light.color * light.intensity,
-            _pad: 0.0,
+            light_count: lights.len().min(MAX_LIGHTS) as u32,
+            visibility_stride,
+            _pad: 0,
+            lights: uniforms,
         })
     }
 }

@@ -7,7 +7,7 @@ use pelage_gpu::Gpu;
 use pelage_reference::flip::{DEFAULT_PIXELS_PER_DEGREE, LinearImage, flip};
 use pelage_reference::oit::{Fragment, composite_sorted, linear_to_srgb8, srgb8_to_linear};
 use pelage_scene::{
-    Camera, DirectionalLight, HairParams, Mesh, ShadeParams, Transparency, WboitWeight, WindParams,
+    Camera, HairParams, Light, Mesh, ShadeParams, Transparency, WboitWeight, WindParams,
 };
 use pelage_shade::{ABuffer, HairInputs, HairPass, OitStats, Targets};
 use pelage_strands::{GrowStrands, MeshBuffers};
@@ -76,6 +76,7 @@ fn inputs<'a>(s: &'a Scene, params: &'a ShadeParams) -> HairInputs<'a> {
         mesh: &s.buffers,
         strands: s.strands.buffers(),
         shadow: None,
+        visibility: None,
     }
 }
 
@@ -90,7 +91,7 @@ fn params(t: Transparency) -> ShadeParams {
 fn render_with(gpu: &Gpu, s: &Scene, method: &dyn HairPass, samples: u32) -> (Vec<u8>, OitStats) {
     let targets = Targets::new(gpu, W, H, samples).unwrap();
     method
-        .set_frame(&gpu.queue, &s.camera, &DirectionalLight::default(), W, H)
+        .set_frame(&gpu.queue, &s.camera, &[Light::default()], W, H)
         .unwrap();
     let (color, resolve) = targets.color_views();
     let depth = targets.depth_view();
@@ -127,7 +128,7 @@ fn exact(gpu: &Gpu, s: &Scene) -> Exact {
     let targets = Targets::new(gpu, W, H, 1).unwrap();
     let abuffer = ABuffer::new(gpu, &inputs(s, &p), 256.0, 64, W, H).unwrap();
     abuffer
-        .set_frame(&gpu.queue, &s.camera, &DirectionalLight::default(), W, H)
+        .set_frame(&gpu.queue, &s.camera, &[Light::default()], W, H)
         .unwrap();
     let capture = abuffer.capture(gpu, &targets).unwrap();
     assert_eq!(

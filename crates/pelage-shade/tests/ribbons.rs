@@ -2,9 +2,7 @@
 
 use glam::Vec3;
 use pelage_gpu::Gpu;
-use pelage_scene::{
-    Camera, DirectionalLight, HairParams, Mesh, RootParams, ShadeParams, WindParams,
-};
+use pelage_scene::{Camera, HairParams, Light, Mesh, RootParams, ShadeParams, WindParams};
 use pelage_shade::{HairInputs, HairPass, Opaque, Targets};
 use pelage_strands::{GrowStrands, MeshBuffers};
 
@@ -68,11 +66,12 @@ fn render(gpu: &Gpu, mesh: &Mesh, hair: &HairParams, camera: &Camera) -> Vec<u8>
         mesh: &mesh_buffers,
         strands: strands.buffers(),
         shadow: None,
+        visibility: None,
     };
     let pass = Opaque::new(gpu, &inputs).unwrap();
     let targets = Targets::new(gpu, SIZE, SIZE, params.sample_count).unwrap();
     strands.set_time(&gpu.queue, 0.0).unwrap();
-    pass.set_frame(&gpu.queue, camera, &DirectionalLight::default(), SIZE, SIZE)
+    pass.set_frame(&gpu.queue, camera, &[Light::default()], SIZE, SIZE)
         .unwrap();
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
     strands.encode(&mut encoder, None);

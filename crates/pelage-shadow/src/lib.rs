@@ -21,6 +21,7 @@ mod light_space;
 mod map;
 mod mesh_shadow;
 mod probe;
+mod visibility;
 mod voxel;
 
 pub use fit::{LightFit, LightGrid, LightGridUniforms};
@@ -28,6 +29,7 @@ pub use light_space::LightSpace;
 pub use map::{Adsm, DeepOpacityMaps, HairShadowMap, MapUniforms};
 pub use mesh_shadow::{MeshShadowMap, MeshShadowUniforms};
 pub use probe::TransmittanceProbe;
+pub use visibility::LightVisibility;
 pub use voxel::VoxelShadow;
 
 use glam::Vec3;

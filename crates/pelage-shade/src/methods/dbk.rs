@@ -56,7 +56,7 @@ impl Dbk {
             &ctx,
             "shade: dbk nearest",
             "fs_nearest",
-            PassKind::Storage,
+            PassKind::DepthOnly,
             &[0, 1, 5],
         )?;
         sliced.add_hair_pass(

@@ -30,7 +30,7 @@ pub use sliced::OitTile;
 pub use wboit::Wboit;
 
 use pelage_gpu::{Gpu, GpuTimer, wgpu};
-use pelage_scene::{Camera, DirectionalLight, Transparency};
+use pelage_scene::{Camera, Light, Transparency};
 
 use crate::draw::{HairInputs, TargetViews};
 
@@ -57,7 +57,7 @@ pub trait HairPass: std::fmt::Debug {
         &self,
         queue: &wgpu::Queue,
         camera: &Camera,
-        light: &DirectionalLight,
+        lights: &[Light],
         width: u32,
         height: u32,
     ) -> crate::Result<()>;

@@ -1,7 +1,7 @@
 //! The opaque method: depth-tested ribbons, alpha ignored (`shade/ribbons.wgsl`).
 
 use pelage_gpu::{Gpu, GpuTimer, wgpu};
-use pelage_scene::{Camera, DirectionalLight};
+use pelage_scene::{Camera, Light};
 
 use super::HairPass;
 use crate::COLOR_FORMAT;
@@ -30,6 +30,7 @@ impl Opaque {
                 fragment: "fs_main",
                 targets: &[Some(COLOR_FORMAT.into())],
                 depth: depth_state(true, wgpu::CompareFunction::Less),
+                shades: true,
             },
         )?;
         Ok(Self { common, hair })
@@ -45,11 +46,11 @@ impl HairPass for Opaque {
         &self,
         queue: &wgpu::Queue,
         camera: &Camera,
-        light: &DirectionalLight,
+        lights: &[Light],
         width: u32,
         height: u32,
     ) -> crate::Result<()> {
-        self.common.set_frame(queue, camera, light, width, height)
+        self.common.set_frame(queue, camera, lights, width, height)
     }
 
     fn encode(

@@ -35,6 +35,9 @@ pub struct OitTile {
 pub(crate) enum PassKind {
     /// Hair into storage only: depth attached read-only, no colour.
     Storage,
+    /// As `Storage`, for a pass that only records depths (does not shade, so does not
+    /// bind the shading model).
+    DepthOnly,
     /// Hair drawn opaque into colour and depth (DBK's fallback).
     OpaqueHair,
     /// The full-screen resolve, blended over the colour.
@@ -190,6 +193,7 @@ impl Sliced {
                 fragment,
                 targets: &targets,
                 depth,
+                shades: kind != PassKind::DepthOnly,
             },
         )?;
         self.passes.push(SlicedPass {
@@ -319,16 +323,18 @@ impl Sliced {
                     },
                 };
                 let color_attachments = match pass.kind {
-                    PassKind::Storage => Vec::new(),
+                    PassKind::Storage | PassKind::DepthOnly => Vec::new(),
                     PassKind::OpaqueHair | PassKind::Resolve => vec![Some(color)],
                 };
                 let depth_stencil_attachment = match pass.kind {
                     // Read-only: the same texture is bound for the shader's own depth test.
-                    PassKind::Storage => Some(wgpu::RenderPassDepthStencilAttachment {
-                        view: target.depth,
-                        depth_ops: None,
-                        stencil_ops: None,
-                    }),
+                    PassKind::Storage | PassKind::DepthOnly => {
+                        Some(wgpu::RenderPassDepthStencilAttachment {
+                            view: target.depth,
+                            depth_ops: None,
+                            stencil_ops: None,
+                        })
+                    }
                     PassKind::OpaqueHair => Some(wgpu::RenderPassDepthStencilAttachment {
                         view: target.depth,
                         depth_ops: Some(wgpu::Operations {
@@ -399,11 +405,13 @@ macro_rules! sliced_hair_pass {
                 &self,
                 queue: &pelage_gpu::wgpu::Queue,
                 camera: &pelage_scene::Camera,
-                light: &pelage_scene::DirectionalLight,
+                lights: &[pelage_scene::Light],
                 width: u32,
                 height: u32,
             ) -> $crate::Result<()> {
-                self.0.common.set_frame(queue, camera, light, width, height)
+                self.0
+                    .common
+                    .set_frame(queue, camera, lights, width, height)
             }
 
             fn encode(

@@ -1,7 +1,7 @@
 //! Weighted blended OIT (McGuire and Bavoil 2013) (`shade/oit/wboit.wgsl`).
 
 use pelage_gpu::{Gpu, GpuTimer, wgpu};
-use pelage_scene::{Camera, DirectionalLight, WboitWeight};
+use pelage_scene::{Camera, Light, WboitWeight};
 
 use super::HairPass;
 use super::sliced::{OitTile, Sliced};
@@ -73,6 +73,7 @@ impl Wboit {
                 fragment: "fs_accum",
                 targets: &targets,
                 depth: depth_state(false, wgpu::CompareFunction::Less),
+                shades: true,
             },
         )?;
         let weight_index = match weight {
@@ -160,11 +161,11 @@ impl HairPass for Wboit {
         &self,
         queue: &wgpu::Queue,
         camera: &Camera,
-        light: &DirectionalLight,
+        lights: &[Light],
         width: u32,
         height: u32,
     ) -> crate::Result<()> {
-        self.common.set_frame(queue, camera, light, width, height)
+        self.common.set_frame(queue, camera, lights, width, height)
     }
 
     fn encode(

@@ -1,0 +1,122 @@
+//! Stage 2's hand-over to the hair pass: one light's shadow evaluated at every strand
+//! vertex (`wgsl/shadow/probe.wgsl`), into that light's slice of a visibility buffer.
+
+use pelage_gpu::{
+    Gpu, GpuTimer, ShaderBinding, ShaderLibrary, compute_pipeline, dispatch_size, wgpu,
+    zeroed_storage,
+};
+use pelage_strands::StrandBuffers;
+
+/// Light `index`'s visibility at every strand vertex, written each frame at floats
+/// `index * stride ..` of a buffer the hair pass reads (`pelage_shade::Visibility`).
+#[derive(Debug)]
+pub struct LightVisibility {
+    pipeline: wgpu::ComputePipeline,
+    own: wgpu::BindGroup,
+    shadow: Option<wgpu::BindGroup>,
+    groups: (u32, u32),
+    label: String,
+}
+
+impl LightVisibility {
+    /// Floats per light for `vertices` strand vertices: rounded up to 64, so every
+    /// light's slice starts on a 256-byte boundary (the storage offset alignment).
+    pub fn stride_for(vertices: u64) -> crate::Result<u32> {
+        u32::try_from(vertices.max(1).next_multiple_of(64)).map_err(|_| {
+            pelage_scene::ParamError {
+                name: "roots.count".into(),
+                value: format!("{vertices} strand vertices"),
+                reason: "too many strand vertices for one visibility buffer".into(),
+            }
+            .into()
+        })
+    }
+
+    /// A zeroed visibility buffer for `lights` lights of `stride` floats.
+    pub fn buffer(gpu: &Gpu, lights: u32, stride: u32) -> crate::Result<wgpu::Buffer> {
+        Ok(zeroed_storage(
+            gpu,
+            "pelage light visibility",
+            u64::from(lights) * u64::from(stride) * 4,
+            wgpu::BufferUsages::STORAGE,
+        )?)
+    }
+
+    /// Evaluates the shadow method behind `binding` at every vertex of `strands` into
+    /// slice `index` of `out` (`stride` floats per light, from [`LightVisibility::stride_for`]).
+    pub fn new(
+        gpu: &Gpu,
+        binding: &ShaderBinding,
+        strands: &StrandBuffers,
+        out: &wgpu::Buffer,
+        index: u32,
+        stride: u32,
+    ) -> crate::Result<Self> {
+        let vertices = strands.vertices.size() / 16;
+        let bytes = u64::from(stride) * 4;
+        let offset = u64::from(index) * bytes;
+        if u64::from(stride) < vertices || !stride.is_multiple_of(64) || offset + bytes > out.size() {
+            return Err(pelage_scene::ParamError {
+                name: "visibility.stride".into(),
+                value: stride.to_string(),
+                reason: format!(
+                    "must be a multiple of 64 holding the {vertices} strand vertices, with light \
+                     {index}'s slice inside the {}-byte buffer",
+                    out.size()
+                ),
+            }
+            .into());
+        }
+        let module =
+            ShaderLibrary::module_redirected(gpu, "shadow/probe.wgsl", &[binding.redirect()])?;
+        let label = format!("shadow: light {index} visibility");
+        let (pipeline, own, shadow) = gpu.scoped(|device| {
+            let pipeline = compute_pipeline(device, &label, &module, "main");
+            let own = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some(&label),
+                layout: &pipeline.get_bind_group_layout(0),
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: strands.vertices.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                            buffer: out,
+                            offset,
+                            size: wgpu::BufferSize::new(bytes),
+                        }),
+                    },
+                ],
+            });
+            let shadow = binding.bind_group(
+                device,
+                &label,
+                &pipeline.get_bind_group_layout(binding.group),
+            );
+            (pipeline, own, shadow)
+        })?;
+        Ok(Self {
+            pipeline,
+            own,
+            shadow,
+            groups: dispatch_size(gpu.limits(), vertices, 64),
+            label,
+        })
+    }
+
+    /// Records the evaluation (after the shadow method's own passes).
+    pub fn encode(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&mut GpuTimer>) {
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some(&self.label),
+            timestamp_writes: timer.and_then(|t| t.compute_pass(&self.label)),
+        });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &self.own, &[]);
+        if let Some(group) = &self.shadow {
+            pass.set_bind_group(1, group, &[]);
+        }
+        pass.dispatch_workgroups(self.groups.0, self.groups.1, 1);
+    }
+}

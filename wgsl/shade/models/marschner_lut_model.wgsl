@@ -1,0 +1,14 @@
+// The hair model contract (shade/hair_model.wgsl) implemented by Marschner et al. 2003
+// read from the lookup tables MarschnerLut builds (shade/models/marschner_lut_lookup.wgsl).
+//
+// Reads: @group(2) @binding(0..3) the tables and their info (marschner_lut_lookup.wgsl),
+//        @group(2) @binding(4) the parameters the tables were built from (uniform MarschnerModel).
+// Writes: nothing; no entry point.
+
+#import shade/models/marschner_lut_lookup.wgsl
+
+@group(2) @binding(4) var<uniform> hair_model: MarschnerModel;
+
+fn hair_radiance(t: vec3<f32>, l: vec3<f32>, v: vec3<f32>, base_color: vec3<f32>, strand_random: f32) -> vec3<f32> {
+    return marschner_radiance_lut(hair_model, t, l, v, base_color, strand_random);
+}

@@ -1,0 +1,13 @@
+// The hair model contract (shade/hair_model.wgsl) implemented by Marschner et al. 2003,
+// evaluated analytically (shade/models/marschner.wgsl).
+//
+// Reads: @group(2) @binding(0) the model's parameters (uniform MarschnerModel).
+// Writes: nothing; no entry point.
+
+#import shade/models/marschner.wgsl
+
+@group(2) @binding(0) var<uniform> hair_model: MarschnerModel;
+
+fn hair_radiance(t: vec3<f32>, l: vec3<f32>, v: vec3<f32>, base_color: vec3<f32>, strand_random: f32) -> vec3<f32> {
+    return marschner_radiance(hair_model, t, l, v, base_color, strand_random);
+}
