@@ -7,12 +7,13 @@
 //! cargo run --release --example wind -- [--frames N] [--size WxH] [--strands N] [--fps N]
 //!     [--out DIR] [--shadow none|voxel|dom|map|adsm] [--shadow-res N]
 //!     [--oit opaque|wboit|k_buffer|a_buffer|dbk|random_subsets]
+//!     [--model kajiya_kay|marschner|marschner_lut|sadeghi] [--lights key|key_back]
 //! ```
 
 use std::path::PathBuf;
 use std::time::Instant;
 
-use pelage::scene::{ShadowParams, Transparency};
+use pelage::scene::{Light, ShadingModel, ShadowParams, Transparency};
 use pelage::{Renderer, Scene, gpu::Gpu, save_png, write_atomically};
 
 struct Args {
@@ -24,6 +25,8 @@ struct Args {
     out: PathBuf,
     shadow: ShadowParams,
     transparency: Transparency,
+    key_and_back: bool,
+    model: ShadingModel,
 }
 
 fn parse_args() -> Result<Args, String> {
@@ -36,6 +39,8 @@ fn parse_args() -> Result<Args, String> {
         out: PathBuf::from("out/wind"),
         shadow: ShadowParams::default(),
         transparency: Transparency::Opaque,
+        key_and_back: false,
+        model: ShadingModel::default(),
     };
     let mut it = std::env::args().skip(1);
     while let Some(flag) = it.next() {
@@ -56,6 +61,32 @@ fn parse_args() -> Result<Args, String> {
                     other => {
                         return Err(format!(
                             "--shadow {other}: expected none, voxel, dom, map or adsm"
+                        ));
+                    }
+                }
+            }
+            "--lights" => {
+                args.key_and_back = match value()?.as_str() {
+                    "key" => false,
+                    "key_back" => true,
+                    other => return Err(format!("--lights {other}: expected key or key_back")),
+                }
+            }
+            "--model" => {
+                args.model = match value()?.as_str() {
+                    "kajiya_kay" => ShadingModel::default(),
+                    "marschner" => ShadingModel::Marschner {
+                        params: Default::default(),
+                        lut: false,
+                    },
+                    "marschner_lut" => ShadingModel::Marschner {
+                        params: Default::default(),
+                        lut: true,
+                    },
+                    "sadeghi" => ShadingModel::Sadeghi(Default::default()),
+                    other => {
+                        return Err(format!(
+                            "--model {other}: expected kajiya_kay, marschner, marschner_lut or sadeghi"
                         ));
                     }
                 }
@@ -107,7 +138,11 @@ fn parse_args() -> Result<Args, String> {
                      \x20              map (shadow map with PCF) or adsm; default voxel\n\
                      --shadow-res N voxels per axis, or map side in texels (128 / 1024)\n\
                      --oit M        transparency: opaque (4x MSAA, the default), wboit,\n\
-                     \x20              k_buffer (k = 8), a_buffer, dbk or random_subsets (k = 8)"
+                     \x20              k_buffer (k = 8), a_buffer, dbk or random_subsets (k = 8)\n\
+                     --model M      shading: kajiya_kay (default), marschner, marschner_lut\n\
+                     \x20              (from lookup tables) or sadeghi\n\
+                     --lights L     key (one directional light, default) or key_back (a key\n\
+                     \x20              light and a warm back light, each with its own shadow)"
                 );
                 std::process::exit(0);
             }
@@ -138,6 +173,10 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         ..Scene::default()
     };
     scene.shade.transparency = args.transparency.clone();
+    scene.shade.model = args.model.clone();
+    if args.key_and_back {
+        scene.lights = Light::key_and_back(&scene.camera);
+    }
     if let Some(n) = args.strands {
         scene.hair.roots.count = n;
     }
