@@ -55,7 +55,8 @@ impl LightVisibility {
         let vertices = strands.vertices.size() / 16;
         let bytes = u64::from(stride) * 4;
         let offset = u64::from(index) * bytes;
-        if u64::from(stride) < vertices || !stride.is_multiple_of(64) || offset + bytes > out.size() {
+        if u64::from(stride) < vertices || !stride.is_multiple_of(64) || offset + bytes > out.size()
+        {
             return Err(pelage_scene::ParamError {
                 name: "visibility.stride".into(),
                 value: stride.to_string(),
