@@ -138,10 +138,16 @@ fn perpendicular(n: vec3<f32>, hint: vec3<f32>) -> vec3<f32> {
     return safe_normalize(hint - dot(hint, n) * n, f);
 }
 
-// The force field at point p for time t (already offset by the strand's phase).
-fn force(p: vec3<f32>, t: f32) -> vec3<f32> {
+// The part of the force field that is the same along a strand: gravity and the gusting
+// wind at time t (already offset by the strand's phase).
+fn uniform_force(t: f32) -> vec3<f32> {
     let gust = 1.0 + u.gust_strength * value_noise_1d(t * u.gust_frequency, u.seed ^ 0x9e3779b9u);
-    var f = u.gravity + u.wind_direction * (u.wind_strength * gust);
+    return u.gravity + u.wind_direction * (u.wind_strength * gust);
+}
+
+// The force field at point p for time t, given uniform_force(t) as `base`.
+fn force(p: vec3<f32>, t: f32, base: vec3<f32>) -> vec3<f32> {
+    var f = base;
     if u.turbulence > 0.0 {
         let q = p * u.turbulence_scale - u.wind_direction * (t * u.turbulence_speed);
         let turb = vec3<f32>(
@@ -191,6 +197,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     let seg_len = root.length / f32(segments);
     let t = u.time + root.phase * u.phase_spread;
     let base = strand * (segments + 1u);
+    // Evaluated once per strand: it does not depend on the position.
+    let base_force = uniform_force(t);
     var p = surf.position;
     vertices[base] = vec4<f32>(p, 0.0);
     for (var i = 0u; i < segments; i++) {
@@ -199,7 +207,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
         p = p + tangent * seg_len;
         vertices[base + i + 1u] = vec4<f32>(p, f32(i + 1u) / f32(segments));
         // Bend the growth direction for the next segment, then carry the frame along.
-        let d_next = safe_normalize(d + force(p, t) * u.force_weight, d);
+        let d_next = safe_normalize(d + force(p, t, base_force) * u.force_weight, d);
         e1 = perpendicular(d_next, e1);
         e2 = cross(d_next, e1);
         d = d_next;
