@@ -1,7 +1,7 @@
 //! Soak: thousands of frames of the animated default scene, watching memory.
 //!
 //! ```text
-//! cargo run --release --example soak -- [--frames N] [--size WxH] [--out DIR]
+//! cargo run --release --example soak -- [--frames N] [--size WxH] [--strands N] [--out DIR]
 //! ```
 //!
 //! Renders `N` frames (10 000 by default) of the built-in creature in gusting wind,
@@ -41,18 +41,23 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let mut frames = 10_000u32;
     let (mut width, mut height) = (160u32, 120u32);
     let mut out = PathBuf::from("out/soak");
+    let mut strands = None;
     let mut args = std::env::args().skip(1);
     while let Some(flag) = args.next() {
         let value = args.next().ok_or(format!("{flag} needs a value"))?;
         match flag.as_str() {
             "--frames" => frames = value.parse()?,
             "--out" => out = PathBuf::from(value),
+            "--strands" => strands = Some(value.parse::<u32>()?),
             "--size" => {
                 let (w, h) = value.split_once('x').ok_or("--size takes WxH")?;
                 (width, height) = (w.parse()?, h.parse()?);
             }
             other => {
-                return Err(format!("unknown argument {other} (--frames, --size, --out)").into());
+                return Err(format!(
+                    "unknown argument {other} (--frames, --size, --strands, --out)"
+                )
+                .into());
             }
         }
     }
@@ -60,7 +65,10 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         return Err("--frames must be at least 1".into());
     }
     let gpu = Gpu::headless()?;
-    let scene = Scene::default();
+    let mut scene = Scene::default();
+    if let Some(n) = strands {
+        scene.hair.roots.count = n;
+    }
     let fps = 24.0;
     let mut renderer = Renderer::new(&gpu, &scene, width, height)?;
     let mut table = Table::new(&["frame", "t_s", "resident_mb", "frame_ms", "gpu_ms"]);

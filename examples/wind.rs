@@ -8,6 +8,7 @@
 //!     [--out DIR] [--shadow none|voxel|dom|map|adsm] [--shadow-res N]
 //!     [--oit opaque|wboit|k_buffer|a_buffer|dbk|random_subsets]
 //!     [--model kajiya_kay|marschner|marschner_lut|sadeghi] [--lights key|key_back]
+//!     [--scene FILE]
 //! ```
 
 use std::path::PathBuf;
@@ -23,10 +24,12 @@ struct Args {
     strands: Option<u32>,
     fps: u32,
     out: PathBuf,
-    shadow: ShadowParams,
-    transparency: Transparency,
-    key_and_back: bool,
-    model: ShadingModel,
+    scene: Option<PathBuf>,
+    // Scene settings given on the command line (they override the scene file's).
+    shadow: Option<ShadowParams>,
+    transparency: Option<Transparency>,
+    key_and_back: Option<bool>,
+    model: Option<ShadingModel>,
 }
 
 fn parse_args() -> Result<Args, String> {
@@ -37,10 +40,11 @@ fn parse_args() -> Result<Args, String> {
         strands: None,
         fps: 24,
         out: PathBuf::from("out/wind"),
-        shadow: ShadowParams::default(),
-        transparency: Transparency::Opaque,
-        key_and_back: false,
-        model: ShadingModel::default(),
+        scene: None,
+        shadow: None,
+        transparency: None,
+        key_and_back: None,
+        model: None,
     };
     let mut it = std::env::args().skip(1);
     while let Some(flag) = it.next() {
@@ -52,7 +56,7 @@ fn parse_args() -> Result<Args, String> {
             "--fps" => args.fps = number(value()?)?.max(1),
             "--out" => args.out = PathBuf::from(value()?),
             "--shadow" => {
-                args.shadow = match value()?.as_str() {
+                args.shadow = Some(match value()?.as_str() {
                     "none" => ShadowParams::None,
                     "voxel" => ShadowParams::Voxel(Default::default()),
                     "dom" => ShadowParams::DeepOpacity(Default::default()),
@@ -63,17 +67,18 @@ fn parse_args() -> Result<Args, String> {
                             "--shadow {other}: expected none, voxel, dom, map or adsm"
                         ));
                     }
-                }
+                })
             }
+            "--scene" => args.scene = Some(PathBuf::from(value()?)),
             "--lights" => {
-                args.key_and_back = match value()?.as_str() {
+                args.key_and_back = Some(match value()?.as_str() {
                     "key" => false,
                     "key_back" => true,
                     other => return Err(format!("--lights {other}: expected key or key_back")),
-                }
+                })
             }
             "--model" => {
-                args.model = match value()?.as_str() {
+                args.model = Some(match value()?.as_str() {
                     "kajiya_kay" => ShadingModel::default(),
                     "marschner" => ShadingModel::Marschner {
                         params: Default::default(),
@@ -89,10 +94,10 @@ fn parse_args() -> Result<Args, String> {
                             "--model {other}: expected kajiya_kay, marschner, marschner_lut or sadeghi"
                         ));
                     }
-                }
+                })
             }
             "--oit" => {
-                args.transparency = match value()?.as_str() {
+                args.transparency = Some(match value()?.as_str() {
                     "opaque" => Transparency::Opaque,
                     "wboit" => Transparency::wboit(),
                     "k_buffer" => Transparency::k_buffer(8),
@@ -104,11 +109,11 @@ fn parse_args() -> Result<Args, String> {
                             "--oit {other}: expected opaque, wboit, k_buffer, a_buffer, dbk or random_subsets"
                         ));
                     }
-                }
+                })
             }
             "--shadow-res" => {
                 let n = number(value()?)?;
-                match &mut args.shadow {
+                match args.shadow.get_or_insert_with(ShadowParams::default) {
                     ShadowParams::Voxel(v) => v.resolution = [n; 3],
                     ShadowParams::DeepOpacity(d) => d.map.size = n,
                     ShadowParams::ShadowMap(m) => m.map.size = n,
@@ -129,6 +134,8 @@ fn parse_args() -> Result<Args, String> {
             "-h" | "--help" => {
                 println!(
                     "wind: render the built-in creature in gusting wind.\n\n\
+                     --scene FILE   a scene file (TOML; scenes/default.toml lists every key);\n\
+                     \x20              the options below override it\n\
                      --frames N     frames to render (48)\n\
                      --size WxH     image size (480x360)\n\
                      --strands N    strand count (the scene's default, 20000)\n\
@@ -168,13 +175,20 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let gpu = Gpu::headless()?;
     println!("adapter: {}", gpu.describe());
 
-    let mut scene = Scene {
-        shadow: args.shadow.clone(),
-        ..Scene::default()
+    let mut scene = match &args.scene {
+        Some(path) => Scene::from_file(path)?,
+        None => Scene::default(),
     };
-    scene.shade.transparency = args.transparency.clone();
-    scene.shade.model = args.model.clone();
-    if args.key_and_back {
+    if let Some(shadow) = &args.shadow {
+        scene.shadow = shadow.clone();
+    }
+    if let Some(transparency) = &args.transparency {
+        scene.shade.transparency = transparency.clone();
+    }
+    if let Some(model) = &args.model {
+        scene.shade.model = model.clone();
+    }
+    if args.key_and_back == Some(true) {
         scene.lights = Light::key_and_back(&scene.camera);
     }
     if let Some(n) = args.strands {

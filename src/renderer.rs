@@ -39,6 +39,26 @@ impl Default for Scene {
 }
 
 impl Scene {
+    /// Reads a scene file (TOML, see [`pelage_scene::SceneFile`]) and builds or loads its mesh.
+    pub fn from_file(path: &std::path::Path) -> Result<Self, pelage_scene::SceneFileError> {
+        Self::from_scene_file(&pelage_scene::SceneFile::load(path)?, path)
+    }
+
+    /// The scene a parsed scene file describes (`path` names it in errors).
+    pub fn from_scene_file(
+        file: &pelage_scene::SceneFile,
+        path: &std::path::Path,
+    ) -> Result<Self, pelage_scene::SceneFileError> {
+        Ok(Self {
+            mesh: file.mesh(path)?,
+            hair: file.hair.clone(),
+            shadow: file.shadow.clone(),
+            shade: file.shade.clone(),
+            camera: file.camera.clone(),
+            lights: file.lights.clone(),
+        })
+    }
+
     /// A world box holding the mesh and everything that can grow on it: the mesh's
     /// bounds grown by the longest strand (length, jitter and length map) and its width.
     pub fn reach(&self) -> (glam::Vec3, glam::Vec3) {

@@ -11,6 +11,7 @@ pub mod light;
 pub mod mesh;
 pub mod obj;
 pub mod params;
+pub mod scene_file;
 pub mod shading;
 pub mod tfx_file;
 pub mod transparency;
@@ -26,6 +27,7 @@ pub use params::{
     MAX_SEGMENTS, MapParams, OpacityFormat, ParamError, RootParams, ShadeParams, ShadowMapParams,
     ShadowParams, Splat, SurfaceInterpolation, VoxelParams, WindParams,
 };
+pub use scene_file::{MeshSource, SceneFile, SceneFileError};
 pub use shading::{
     KajiyaKayParams, MarschnerParams, SadeghiParams, ShadingModel, sigma_a_from_color,
 };

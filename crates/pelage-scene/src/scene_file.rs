@@ -1,0 +1,245 @@
+//! Scene files: a whole scene (mesh, hair, shadows, shading, camera, lights) in TOML.
+//!
+//! Every table and key is optional; what is left out takes its default, and
+//! `scenes/default.toml` in the repository lists every key with its default value
+//! (it is [`SceneFile::default`] written out, and a test keeps the two equal). An
+//! unknown key, a value of the wrong type or a missing file is an error that names the
+//! key (with its line) or the path.
+//!
+//! ```toml
+//! [mesh]
+//! kind = "obj"            # or "creature", "icosphere", "torus", "plane"
+//! path = "head.obj"       # relative to the scene file
+//!
+//! [hair.roots]
+//! count = 40000
+//!
+//! [shade.transparency]
+//! method = "k_buffer"
+//! k = 8
+//!
+//! [[lights]]
+//! kind = "directional"
+//! direction = [-0.85, -0.6, 0.1]
+//! ```
+
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use crate::{Camera, HairParams, Light, Mesh, MeshError, ObjError, ShadeParams, ShadowParams};
+
+/// The surface the hair grows from.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum MeshSource {
+    /// The built-in creature ([`Mesh::creature`]).
+    #[default]
+    Creature,
+    /// A sphere ([`Mesh::icosphere`]).
+    Icosphere {
+        /// Radius (> 0).
+        radius: f32,
+        /// Subdivisions of the icosahedron (0..=7).
+        subdivisions: u32,
+    },
+    /// A torus ([`Mesh::torus`]).
+    Torus {
+        /// Distance from the centre to the tube's centre (> minor_radius).
+        major_radius: f32,
+        /// Radius of the tube (> 0).
+        minor_radius: f32,
+        /// Segments around the ring.
+        major_segments: u32,
+        /// Segments around the tube.
+        minor_segments: u32,
+    },
+    /// A flat square in the xz plane ([`Mesh::plane`]).
+    Plane {
+        /// Size along x.
+        size_x: f32,
+        /// Size along z.
+        size_z: f32,
+        /// Subdivisions along x.
+        subdivisions_x: u32,
+        /// Subdivisions along z.
+        subdivisions_z: u32,
+    },
+    /// A Wavefront OBJ file, relative to the scene file's folder.
+    Obj {
+        /// The file.
+        path: PathBuf,
+    },
+}
+
+/// A scene as a TOML file describes it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SceneFile {
+    /// The surface.
+    pub mesh: MeshSource,
+    /// Roots, growth and wind.
+    pub hair: HairParams,
+    /// Stage 2's method.
+    pub shadow: ShadowParams,
+    /// Stage 3: shading model, transparency, look.
+    pub shade: ShadeParams,
+    /// The camera.
+    pub camera: Camera,
+    /// 1 to 4 lights; the first is the key light.
+    pub lights: Vec<Light>,
+}
+
+impl Default for SceneFile {
+    fn default() -> Self {
+        Self {
+            mesh: MeshSource::default(),
+            hair: HairParams::default(),
+            shadow: ShadowParams::default(),
+            shade: ShadeParams::default(),
+            camera: Camera::default(),
+            lights: vec![Light::default()],
+        }
+    }
+}
+
+/// What can go wrong reading a scene file.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneFileError {
+    /// The file could not be read.
+    #[error("cannot read scene file {}: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// The TOML is malformed, has an unknown key or a value of the wrong type.
+    #[error("scene file {}: {message}", path.display())]
+    Toml {
+        /// The file (`<text>` when parsed from a string).
+        path: PathBuf,
+        /// toml's report: the key, its line and column, and what was expected.
+        message: String,
+    },
+    /// A value is out of range.
+    #[error("scene file {}: {source}", path.display())]
+    Param {
+        /// The file.
+        path: PathBuf,
+        /// The parameter and its valid range.
+        source: crate::ParamError,
+    },
+    /// The mesh could not be built or loaded.
+    #[error("scene file {}: mesh: {source}", path.display())]
+    Mesh {
+        /// The file.
+        path: PathBuf,
+        /// The mesh error.
+        source: MeshError,
+    },
+    /// The OBJ file could not be loaded (its path is in the message).
+    #[error("scene file {}: {source}", path.display())]
+    Obj {
+        /// The scene file.
+        path: PathBuf,
+        /// The OBJ error, naming the OBJ file.
+        source: ObjError,
+    },
+}
+
+impl SceneFile {
+    /// Parses TOML text; relative OBJ paths stay relative to the current folder.
+    pub fn parse(text: &str) -> Result<Self, SceneFileError> {
+        Self::parse_named(text, Path::new("<text>"))
+    }
+
+    fn parse_named(text: &str, path: &Path) -> Result<Self, SceneFileError> {
+        let file: SceneFile = toml::from_str(text).map_err(|e| SceneFileError::Toml {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        })?;
+        file.validate().map_err(|source| SceneFileError::Param {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Ok(file)
+    }
+
+    /// Reads and parses `path`; a relative OBJ path is made relative to the file's folder.
+    pub fn load(path: &Path) -> Result<Self, SceneFileError> {
+        let text = std::fs::read_to_string(path).map_err(|source| SceneFileError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let mut file = Self::parse_named(&text, path)?;
+        if let MeshSource::Obj { path: obj } = &mut file.mesh {
+            if obj.is_relative() {
+                if let Some(folder) = path.parent() {
+                    *obj = folder.join(&*obj);
+                }
+            }
+        }
+        Ok(file)
+    }
+
+    /// Checks every parameter; the error names the first bad one.
+    pub fn validate(&self) -> Result<(), crate::ParamError> {
+        // The roots are checked against the mesh when the renderer is built.
+        self.hair.growth.validate()?;
+        self.hair.wind.validate()?;
+        self.shadow.validate()?;
+        self.shade.validate()?;
+        self.camera.validate()?;
+        Light::validate_all(&self.lights)
+    }
+
+    /// Builds or loads the mesh (`path` names the scene file in errors).
+    pub fn mesh(&self, path: &Path) -> Result<Mesh, SceneFileError> {
+        let mesh_error = |source| SceneFileError::Mesh {
+            path: path.to_path_buf(),
+            source,
+        };
+        match &self.mesh {
+            MeshSource::Creature => Ok(Mesh::creature()),
+            MeshSource::Icosphere {
+                radius,
+                subdivisions,
+            } => Mesh::icosphere(*radius, *subdivisions).map_err(mesh_error),
+            MeshSource::Torus {
+                major_radius,
+                minor_radius,
+                major_segments,
+                minor_segments,
+            } => Mesh::torus(
+                *major_radius,
+                *minor_radius,
+                *major_segments,
+                *minor_segments,
+            )
+            .map_err(mesh_error),
+            MeshSource::Plane {
+                size_x,
+                size_z,
+                subdivisions_x,
+                subdivisions_z,
+            } => {
+                Mesh::plane(*size_x, *size_z, *subdivisions_x, *subdivisions_z).map_err(mesh_error)
+            }
+            MeshSource::Obj { path: obj } => {
+                crate::load_obj(obj).map_err(|source| SceneFileError::Obj {
+                    path: path.to_path_buf(),
+                    source,
+                })
+            }
+        }
+    }
+
+    /// The scene as TOML (every key, defaults included).
+    pub fn to_toml(&self) -> Result<String, SceneFileError> {
+        toml::to_string(self).map_err(|e| SceneFileError::Toml {
+            path: PathBuf::from("<output>"),
+            message: e.to_string(),
+        })
+    }
+}

@@ -1,0 +1,117 @@
+//! Scene files: defaults written out, errors that name the key or the path.
+
+use std::path::Path;
+
+use pelage_scene::{MeshSource, SceneFile, SceneFileError, Transparency};
+
+const DEFAULT: &str = "../../scenes/default.toml";
+
+#[test]
+fn the_committed_default_scene_lists_every_default() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(DEFAULT);
+    let generated = SceneFile::default().to_toml().unwrap();
+    let header = "# Every key of a pelage scene file with its default value (SceneFile::default()).\n\
+                  # Every key is optional. Regenerate with PELAGE_BLESS=1 cargo test -p pelage-scene --test scene_file.\n\n";
+    let expected = format!("{header}{generated}");
+    if std::env::var_os("PELAGE_BLESS").is_some() {
+        std::fs::write(&path, &expected).unwrap();
+        return;
+    }
+    let committed = std::fs::read_to_string(&path)
+        .unwrap_or_else(|e| panic!("{}: {e}; bless it with PELAGE_BLESS=1", path.display()));
+    assert_eq!(
+        committed, expected,
+        "scenes/default.toml is stale: bless it with PELAGE_BLESS=1"
+    );
+    assert_eq!(SceneFile::parse(&committed).unwrap(), SceneFile::default());
+}
+
+#[test]
+fn an_empty_file_is_the_default_scene_and_keys_override_it() {
+    assert_eq!(SceneFile::parse("").unwrap(), SceneFile::default());
+    let file = SceneFile::parse(
+        "[hair.roots]\ncount = 1234\n[shade.transparency]\nmethod = \"k_buffer\"\nk = 4\n[mesh]\nkind = \"icosphere\"\nradius = 0.5\nsubdivisions = 2\n",
+    )
+    .unwrap();
+    assert_eq!(file.hair.roots.count, 1234);
+    assert_eq!(file.shade.transparency, Transparency::k_buffer(4));
+    assert_eq!(
+        file.mesh,
+        MeshSource::Icosphere {
+            radius: 0.5,
+            subdivisions: 2
+        }
+    );
+    assert!(file.mesh(Path::new("x")).is_ok());
+}
+
+#[test]
+fn an_unknown_key_is_named_with_its_line() {
+    let e = SceneFile::parse("[shade]\nambient = 0.2\nshinyness = 3.0\n").unwrap_err();
+    let m = e.to_string();
+    println!("{m}");
+    assert!(matches!(e, SceneFileError::Toml { .. }));
+    assert!(m.contains("shinyness"), "{m}");
+    assert!(m.contains("line 3"), "{m}");
+}
+
+#[test]
+fn a_wrong_type_is_named_with_its_line() {
+    let e = SceneFile::parse("[hair.roots]\ncount = \"many\"\n").unwrap_err();
+    let m = e.to_string();
+    println!("{m}");
+    assert!(m.contains("count"), "{m}");
+    assert!(m.contains("line 2"), "{m}");
+}
+
+#[test]
+fn a_bad_value_is_named() {
+    let e = SceneFile::parse("[shade]\nambient = -1.0\n").unwrap_err();
+    let m = e.to_string();
+    println!("{m}");
+    assert!(m.contains("shade.ambient"), "{m}");
+}
+
+#[test]
+fn a_missing_file_and_a_missing_obj_are_named() {
+    let dir = std::env::temp_dir().join(format!("pelage-scene-file-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let missing = dir.join("nope.toml");
+    let m = SceneFile::load(&missing).unwrap_err().to_string();
+    assert!(m.contains("nope.toml"), "{m}");
+
+    let scene = dir.join("scene.toml");
+    std::fs::write(&scene, "[mesh]\nkind = \"obj\"\npath = \"head.obj\"\n").unwrap();
+    let file = SceneFile::load(&scene).unwrap();
+    let m = file.mesh(&scene).unwrap_err().to_string();
+    println!("{m}");
+    assert!(m.contains("head.obj") && m.contains("scene.toml"), "{m}");
+
+    // Relative to the scene file, not to the current folder.
+    std::fs::write(
+        dir.join("head.obj"),
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//1 3//1\n",
+    )
+    .unwrap();
+    let mesh = file.mesh(&scene).unwrap();
+    assert_eq!(mesh.indices.len(), 3);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn garbage_never_panics() {
+    let mut state = 0x9e3779b9u32;
+    let base = SceneFile::default().to_toml().unwrap().into_bytes();
+    for _ in 0..2000 {
+        let mut bytes = base.clone();
+        for _ in 0..4 {
+            state ^= state << 13;
+            state ^= state >> 17;
+            state ^= state << 5;
+            let i = state as usize % bytes.len();
+            bytes[i] = (state >> 24) as u8;
+        }
+        let text = String::from_utf8_lossy(&bytes);
+        let _ = SceneFile::parse(&text);
+    }
+}
