@@ -52,6 +52,10 @@ pub struct TargetViews<'a> {
     pub width: u32,
     /// Size of the targets in pixels.
     pub height: u32,
+    /// Keep what the targets hold and draw over it, depth tested against it (an engine
+    /// that drew its own content first); `false` clears colour to the background and
+    /// depth to 1.
+    pub load: bool,
 }
 
 /// One render pipeline with its bind groups (index = group; `None` = unused).
@@ -328,7 +332,8 @@ impl Common {
         Ok(self.frame.write(queue, &u)?)
     }
 
-    /// Records the mesh pass: clears colour (to the background) and depth, draws the mesh.
+    /// Records the mesh pass: clears colour (to the background) and depth unless
+    /// `target.load`, then draws the mesh.
     pub fn encode_mesh(
         &self,
         encoder: &mut wgpu::CommandEncoder,
@@ -344,19 +349,27 @@ impl Common {
                 depth_slice: None,
                 resolve_target: resolve,
                 ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color {
-                        r: f64::from(bg.x),
-                        g: f64::from(bg.y),
-                        b: f64::from(bg.z),
-                        a: 1.0,
-                    }),
+                    load: if target.load {
+                        wgpu::LoadOp::Load
+                    } else {
+                        wgpu::LoadOp::Clear(wgpu::Color {
+                            r: f64::from(bg.x),
+                            g: f64::from(bg.y),
+                            b: f64::from(bg.z),
+                            a: 1.0,
+                        })
+                    },
                     store: wgpu::StoreOp::Store,
                 },
             })],
             depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                 view: target.depth,
                 depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(1.0),
+                    load: if target.load {
+                        wgpu::LoadOp::Load
+                    } else {
+                        wgpu::LoadOp::Clear(1.0)
+                    },
                     store: wgpu::StoreOp::Store,
                 }),
                 stencil_ops: None,

@@ -105,6 +105,7 @@ impl Targets {
             depth,
             width: self.width,
             height: self.height,
+            load: false,
         }
     }
 

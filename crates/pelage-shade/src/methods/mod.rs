@@ -62,8 +62,9 @@ pub trait HairPass: std::fmt::Debug {
         height: u32,
     ) -> crate::Result<()>;
 
-    /// Records the method's passes into `encoder`: the mesh (clearing colour and depth),
-    /// then the hair. The targets must have the size the method was built for.
+    /// Records the method's passes into `encoder`: the mesh (clearing colour and depth
+    /// unless `target.load`), then the hair. The targets must have the size the method
+    /// was built for.
     fn encode(
         &self,
         gpu: &Gpu,
