@@ -21,7 +21,6 @@
 //! - whole stages that mix both (each shadow method, whole frames) use the wall clock
 //!   of the stage submitted alone and waited for (`Renderer::stage_wall_times`).
 
-use std::path::PathBuf;
 use std::time::Instant;
 
 use pelage::gpu::{Gpu, GpuTimer, ShaderLibrary, compute_pipeline, dispatch_size, wgpu};
@@ -30,33 +29,6 @@ use pelage_lab::{ScatterChart, ScatterPoint, Table};
 use pelage_scene::{DirectionalLight, ShadowParams, Transparency, VoxelParams, WindParams};
 use pelage_shadow::{ShadowMethod, VoxelShadow};
 use pelage_strands::{GrowStrands, MeshBuffers};
-
-struct Args {
-    quick: bool,
-    out: PathBuf,
-}
-
-fn parse_args() -> Result<Args, String> {
-    let mut args = Args {
-        quick: false,
-        out: PathBuf::from("out/bench"),
-    };
-    let mut it = std::env::args().skip(1);
-    while let Some(a) = it.next() {
-        match a.as_str() {
-            "--quick" => args.quick = true,
-            "--out" => args.out = it.next().ok_or("--out needs a directory")?.into(),
-            "-h" | "--help" => {
-                return Err("usage: bench [--quick] [--out DIR]\n  \
-                     --quick     small scenes, few frames (a CI smoke run)\n  \
-                     --out DIR   where bench.csv and scaling.png|svg go (default out/bench)"
-                    .into());
-            }
-            other => return Err(format!("unknown argument `{other}`; try --help")),
-        }
-    }
-    Ok(args)
-}
 
 fn main() {
     if let Err(e) = run() {
@@ -232,7 +204,11 @@ struct Row {
 }
 
 fn run() -> Result<(), Error> {
-    let args = parse_args()?;
+    let args = pelage_lab::LabArgs::from_env(
+        "bench",
+        "GPU time per stage, bandwidth against a copy kernel, scaling",
+        "out/bench",
+    );
     let started = Instant::now();
     let counts: &[u32] = if args.quick {
         &[2_000, 8_000]

@@ -18,7 +18,6 @@
 //! turns 0.25 degrees a frame around the scene, per method; the exact composite's
 //! own flicker is the A-buffer row with the largest resolve depth.
 
-use std::path::PathBuf;
 use std::time::Instant;
 
 use glam::{Quat, Vec3};
@@ -113,33 +112,6 @@ fn configurations(quick: bool) -> Vec<Transparency> {
         resolve_k,
     }));
     out
-}
-
-struct Args {
-    quick: bool,
-    out: PathBuf,
-}
-
-fn parse_args() -> Result<Args, String> {
-    let mut args = Args {
-        quick: false,
-        out: PathBuf::from("out/lab"),
-    };
-    let mut it = std::env::args().skip(1);
-    while let Some(a) = it.next() {
-        match a.as_str() {
-            "--quick" => args.quick = true,
-            "--out" => args.out = it.next().ok_or("--out needs a directory")?.into(),
-            "-h" | "--help" => {
-                return Err("usage: oit_lab [--quick] [--out DIR]\n  \
-                     --quick     one small scene, few configurations (a CI smoke run)\n  \
-                     --out DIR   where oit.csv, oit_memory.csv and the charts go (default out/lab)"
-                    .into());
-            }
-            other => return Err(format!("unknown argument `{other}`; try --help")),
-        }
-    }
-    Ok(args)
 }
 
 fn main() {
@@ -336,7 +308,11 @@ fn mean_abs_change(frames: &[Vec<u8>]) -> f64 {
 }
 
 fn run() -> Result<(), Box<dyn std::error::Error>> {
-    let args = parse_args()?;
+    let args = pelage_lab::LabArgs::from_env(
+        "oit_lab",
+        "every transparency method against the exact sorted composite",
+        "out/lab",
+    );
     let started = Instant::now();
     let size = if args.quick { (160, 120) } else { (320, 240) };
     let frames = if args.quick { 3 } else { 5 };

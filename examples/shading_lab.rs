@@ -14,7 +14,6 @@
 //! nanoseconds per fragment, also as the extra over plain Kajiya-Kay (what the model
 //! itself costs). `--quick` renders smaller images, fewer frames.
 
-use std::path::PathBuf;
 use std::time::Instant;
 
 use glam::Vec3;
@@ -25,33 +24,6 @@ use pelage_scene::{
     Camera, KajiyaKayParams, Light, MarschnerParams, Mesh, SadeghiParams, ShadingModel,
     Transparency, WindParams, sigma_a_from_color,
 };
-
-struct Args {
-    quick: bool,
-    out: PathBuf,
-}
-
-fn parse_args() -> Result<Args, String> {
-    let mut args = Args {
-        quick: false,
-        out: PathBuf::from("out/lab"),
-    };
-    let mut it = std::env::args().skip(1);
-    while let Some(a) = it.next() {
-        match a.as_str() {
-            "--quick" => args.quick = true,
-            "--out" => args.out = it.next().ok_or("--out needs a directory")?.into(),
-            "-h" | "--help" => {
-                return Err("usage: shading_lab [--quick] [--out DIR]\n  \
-                     --quick     smaller images, fewer frames (a CI smoke run)\n  \
-                     --out DIR   where shading.csv and shading_sheet.png go (default out/lab)"
-                    .into());
-            }
-            other => return Err(format!("unknown argument `{other}`; try --help")),
-        }
-    }
-    Ok(args)
-}
 
 fn main() {
     if let Err(e) = run() {
@@ -126,7 +98,11 @@ fn median(mut v: Vec<f64>) -> f64 {
 }
 
 fn run() -> Result<(), Box<dyn std::error::Error>> {
-    let args = parse_args()?;
+    let args = pelage_lab::LabArgs::from_env(
+        "shading_lab",
+        "the shading models side by side and their cost per fragment",
+        "out/lab",
+    );
     let started = Instant::now();
     let (size, strands, frames) = if args.quick {
         (160, 1500, 2)

@@ -12,7 +12,6 @@
 //! marker area = memory) and prints a table and the best method for each time budget.
 //! `--quick` runs small grooms and a few configurations (for CI).
 
-use std::path::PathBuf;
 use std::time::Instant;
 
 use glam::{Vec3, Vec4};
@@ -169,35 +168,6 @@ fn configurations(quick: bool) -> Vec<(&'static str, String, Option<u32>, Shadow
     out
 }
 
-struct Args {
-    quick: bool,
-    out: PathBuf,
-}
-
-fn parse_args() -> Result<Args, String> {
-    let mut args = Args {
-        quick: false,
-        out: PathBuf::from("out/lab"),
-    };
-    let mut it = std::env::args().skip(1);
-    while let Some(flag) = it.next() {
-        match flag.as_str() {
-            "--quick" => args.quick = true,
-            "--out" => args.out = PathBuf::from(it.next().ok_or("--out needs a folder")?),
-            "-h" | "--help" => {
-                println!(
-                    "shadow_lab: every shadow method against ray-traced transmittance.\n\n\
-                     --quick     small grooms, few configurations (a CI smoke run)\n\
-                     --out DIR   output folder (out/lab)"
-                );
-                std::process::exit(0);
-            }
-            other => return Err(format!("unknown argument {other}; try --help")),
-        }
-    }
-    Ok(args)
-}
-
 fn main() {
     if let Err(e) = run() {
         eprintln!("error: {e}");
@@ -294,7 +264,11 @@ fn measure(
 }
 
 fn run() -> Result<(), Box<dyn std::error::Error>> {
-    let args = parse_args()?;
+    let args = pelage_lab::LabArgs::from_env(
+        "shadow_lab",
+        "every shadow method against ray-traced transmittance",
+        "out/lab",
+    );
     let started = Instant::now();
     let light = DirectionalLight::default();
     let to_light = light.to_light()?;

@@ -13,6 +13,7 @@
 
 #![deny(missing_docs)]
 
+mod args;
 mod chart;
 mod error;
 mod font;
@@ -21,6 +22,7 @@ mod pareto;
 mod sheet;
 mod table;
 
+pub use args::{LabArgs, LabArgsError};
 pub use chart::{ScatterChart, ScatterPoint};
 pub use error::LabError;
 pub use fs::write_file_atomically;
