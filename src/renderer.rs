@@ -102,8 +102,8 @@ pub struct Renderer {
     lights: Vec<Light>,
     /// Where point lights aim their shadows (the centre of the hair's reach).
     shadow_target: glam::Vec3,
-    /// Per-vertex light visibility, `stride` floats per light.
-    visibility: wgpu::Buffer,
+    /// Per-vertex light visibility, `stride` floats per light (none without shadows).
+    visibility: Option<wgpu::Buffer>,
     stride: u32,
 }
 
@@ -117,9 +117,20 @@ impl Renderer {
         let vertices =
             u64::from(strands.buffers().strand_count) * u64::from(strands.buffers().segments + 1);
         let stride = LightVisibility::stride_for(vertices)?;
-        let visibility = LightVisibility::buffer(gpu, scene.lights.len() as u32, stride)?;
+        // Without a shadow method every vertex is lit: no visibility buffer at all.
+        let visibility = match scene.shadow {
+            ShadowParams::None => None,
+            _ => Some(LightVisibility::buffer(
+                gpu,
+                scene.lights.len() as u32,
+                stride,
+            )?),
+        };
         let mut shadows = Vec::new();
         for index in 0..scene.lights.len() as u32 {
+            let Some(buffer) = &visibility else {
+                break;
+            };
             let Some(shadow) = pelage_shadow::build(
                 gpu,
                 &scene.shadow,
@@ -135,7 +146,7 @@ impl Renderer {
                 gpu,
                 &shadow.binding(),
                 strands.buffers(),
-                &visibility,
+                buffer,
                 index,
                 stride,
             )?;
@@ -155,10 +166,9 @@ impl Renderer {
                 mesh: &mesh_buffers,
                 strands: strands.buffers(),
                 shadow: binding.as_ref(),
-                visibility: (!shadows.is_empty()).then_some(Visibility {
-                    buffer: &visibility,
-                    stride,
-                }),
+                visibility: visibility
+                    .as_ref()
+                    .map(|buffer| Visibility { buffer, stride }),
             },
             width,
             height,
@@ -267,10 +277,10 @@ impl Renderer {
     /// Light visibility at every strand vertex after the last frame, one `Vec` per light
     /// (empty without shadows); waits for the GPU.
     pub fn light_visibility(&self, gpu: &Gpu) -> crate::Result<Vec<Vec<f32>>> {
-        if self.shadows.is_empty() {
+        let Some(buffer) = &self.visibility else {
             return Ok(Vec::new());
-        }
-        let bytes = pelage_gpu::read_buffer(gpu, &self.visibility)?;
+        };
+        let bytes = pelage_gpu::read_buffer(gpu, buffer)?;
         let floats: Vec<f32> = bytes
             .chunks_exact(4)
             .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))

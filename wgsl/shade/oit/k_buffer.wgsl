@@ -1,8 +1,9 @@
 // Stage 3, transparency: the k-buffer. Each pixel keeps its k nearest hair fragments
 // in k 64-bit words (fragment_key in shade/oit/common.wgsl: nearer is larger, an empty
 // word, 0, is the farthest), inserted without locks by a cascade of atomicMax: each
-// step keeps the larger value and carries the smaller one on. What falls off the end is behind all k kept ones; it goes to the
-// approximate tail (shade/oit/tail.wgsl) instead of being dropped.
+// step keeps the larger value and carries the smaller one on. What falls off the end is
+// behind all k kept ones; it goes to the approximate tail (shade/oit/tail.wgsl) instead
+// of being dropped. The resolve is shade/oit/slots.wgsl's, plus the tail.
 //
 // Reads:  shade/hair.wgsl's inputs, the opaque depth, OitTile.
 // Writes: fs_fill: `slots` (k words per pixel of the slice) and the tail.
@@ -13,11 +14,8 @@
 
 #import shade/hair.wgsl
 #import shade/oit/bindings.wgsl
+#import shade/oit/slots.wgsl
 #import shade/oit/tail.wgsl
-
-const K_MAX: u32 = 64u;
-
-@group(3) @binding(2) var<storage, read_write> slots: array<atomic<u64>>;
 
 @fragment
 fn fs_fill(in: VertexOut) {
@@ -42,28 +40,6 @@ fn fs_fill(in: VertexOut) {
 @fragment
 fn fs_resolve(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
     let pixel = tile_pixel(frag, tile);
-    let base = pixel * tile.k;
-    // Sort the kept fragments by depth (insertion sort; the cascade leaves them nearly
-    // sorted already).
-    var keys: array<u64, K_MAX>;
-    var n = 0u;
-    for (var i = 0u; i < tile.k; i += 1u) {
-        let key = atomicExchange(&slots[base + i], u64(0u));
-        if (key == u64(0u)) {
-            continue;
-        }
-        var j = n;
-        while (j > 0u && keys[j - 1u] < key) {
-            keys[j] = keys[j - 1u];
-            j -= 1u;
-        }
-        keys[j] = key;
-        n += 1u;
-    }
-    var s = composite_start();
-    for (var i = 0u; i < n; i += 1u) {
-        s = composite_under(s, key_fragment(keys[i]));
-    }
-    s = composite_under(s, tail_take(pixel));
-    return composite_output(s);
+    let s = slots_composite(pixel * tile.k);
+    return composite_output(composite_under(s, tail_take(pixel)));
 }

@@ -11,11 +11,8 @@
 
 #import shade/hair.wgsl
 #import shade/oit/bindings.wgsl
+#import shade/oit/slots.wgsl
 #import shared/noise.wgsl
-
-const K_MAX: u32 = 64u;
-
-@group(3) @binding(2) var<storage, read_write> slots: array<atomic<u64>>;
 
 @fragment
 fn fs_fill(in: VertexOut) {
@@ -29,26 +26,5 @@ fn fs_fill(in: VertexOut) {
 
 @fragment
 fn fs_resolve(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
-    let base = tile_pixel(frag, tile) * tile.k;
-    var keys: array<u64, K_MAX>;
-    var n = 0u;
-    for (var i = 0u; i < tile.k; i += 1u) {
-        let key = atomicLoad(&slots[base + i]);
-        atomicStore(&slots[base + i], u64(0u));
-        if (key == u64(0u)) {
-            continue;
-        }
-        var j = n;
-        while (j > 0u && keys[j - 1u] < key) {
-            keys[j] = keys[j - 1u];
-            j -= 1u;
-        }
-        keys[j] = key;
-        n += 1u;
-    }
-    var s = composite_start();
-    for (var i = 0u; i < n; i += 1u) {
-        s = composite_under(s, key_fragment(keys[i]));
-    }
-    return composite_output(s);
+    return composite_output(slots_composite(tile_pixel(frag, tile) * tile.k));
 }
