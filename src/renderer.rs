@@ -4,7 +4,7 @@ use pelage_gpu::{Gpu, GpuTimer, wgpu};
 use pelage_scene::{Camera, HairParams, Light, Mesh, ShadeParams, ShadowParams};
 use pelage_shade::{HairInputs, HairPass, OitStats, Targets, Visibility};
 use pelage_shadow::{LightVisibility, ShadowMethod};
-use pelage_strands::{GrowStrands, MeshBuffers};
+use pelage_strands::{GrowStrands, LodLevel, MeshBuffers};
 
 /// Everything a frame is made of.
 #[derive(Clone, Debug)]
@@ -59,6 +59,19 @@ impl Scene {
         })
     }
 
+    /// This scene with its shadow grid or maps sized to the hair's size on screen from
+    /// `camera` on a `width` x `height` target ([`ShadowParams::sized_for`]): nothing
+    /// finer than the picture can show. Unchanged when the hair's box reaches behind the
+    /// camera.
+    pub fn sized_for_view(&self, camera: &Camera, width: u32, height: u32) -> Self {
+        let level = LodLevel::for_view(&self.hair, self.reach(), camera, width, height);
+        let mut out = self.clone();
+        if level.extent_pixels.is_finite() {
+            out.shadow = self.shadow.sized_for(level.extent_pixels);
+        }
+        out
+    }
+
     /// A world box holding the mesh and everything that can grow on it: the mesh's
     /// bounds grown by the longest strand (length, jitter and length map) and its width.
     pub fn reach(&self) -> (glam::Vec3, glam::Vec3) {
@@ -102,6 +115,8 @@ pub struct Renderer {
     lights: Vec<Light>,
     /// Where point lights aim their shadows (the centre of the hair's reach).
     shadow_target: glam::Vec3,
+    /// The world box the hair can reach: its size on screen sets the level of detail.
+    reach: (glam::Vec3, glam::Vec3),
     /// Per-vertex light visibility, `stride` floats per light (none without shadows).
     visibility: Option<wgpu::Buffer>,
     stride: u32,
@@ -183,18 +198,23 @@ impl Renderer {
             timer,
             lights: scene.lights.clone(),
             shadow_target: (reach.0 + reach.1) * 0.5,
+            reach,
             visibility,
             stride,
         })
     }
 
-    /// Writes the per-frame uniforms of every stage for time `t` and `camera`.
-    fn prepare(&self, gpu: &Gpu, t: f32, camera: &Camera) -> crate::Result<()> {
+    /// Picks the level of detail for `camera` (see [`LodLevel::for_view`]) and writes the
+    /// per-frame uniforms of every stage for time `t` and `camera`.
+    fn prepare(&mut self, gpu: &Gpu, t: f32, camera: &Camera) -> crate::Result<()> {
+        let (width, height) = (self.targets.width, self.targets.height);
+        let level = LodLevel::for_view(self.strands.params(), self.reach, camera, width, height);
+        self.strands.set_lod(level)?;
+        // Stage 1 first: it publishes the strand layout the later stages draw.
         self.strands.set_time(&gpu.queue, t)?;
         for ((shadow, _), light) in self.shadows.iter().zip(&self.lights) {
             shadow.set_light(&gpu.queue, &light.as_directional(self.shadow_target))?;
         }
-        let (width, height) = (self.targets.width, self.targets.height);
         self.hair
             .set_frame(&gpu.queue, camera, &self.lights, width, height)?;
         Ok(())
@@ -231,7 +251,7 @@ impl Renderer {
     /// for a compute pass once any render pass has run on the device, whatever the pass
     /// costs; this is the cross-check.)
     pub fn stage_wall_times(
-        &self,
+        &mut self,
         gpu: &Gpu,
         t: f32,
         camera: &Camera,
@@ -285,13 +305,17 @@ impl Renderer {
             .chunks_exact(4)
             .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
             .collect();
-        let b = self.strands.buffers();
-        let vertices = (b.strand_count as usize) * (b.segments as usize + 1);
+        let vertices = self.strands.buffers().layout.get().vertices() as usize;
         Ok(floats
             .chunks(self.stride as usize)
             .take(self.shadows.len())
             .map(|c| c[..vertices.min(c.len())].to_vec())
             .collect())
+    }
+
+    /// The level of detail of the last frame: strands and segments grown, and why.
+    pub fn lod(&self) -> &LodLevel {
+        self.strands.lod()
     }
 
     /// Stage 3's method.
@@ -307,6 +331,13 @@ impl Renderer {
     /// The mesh buffers every stage reads.
     pub fn mesh_buffers(&self) -> &MeshBuffers {
         &self.mesh_buffers
+    }
+
+    /// The final single-sample colour target ([`pelage_shade::COLOR_FORMAT`], the
+    /// renderer's width x height, usable as `TEXTURE_BINDING` and `COPY_SRC`): bind it to
+    /// draw the last frame on screen without reading it back.
+    pub fn color_texture(&self) -> &wgpu::Texture {
+        &self.targets.color
     }
 }
 

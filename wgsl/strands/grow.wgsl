@@ -3,22 +3,37 @@
 // Reads:  the mesh (positions and normals as tightly packed f32 x3, a u32 triangle
 //         list) and one StrandRoot per strand (triangle, barycentrics, seed, length,
 //         jitter), plus the frame's GrowUniforms (growth shape, gravity, wind, time).
-// Writes: `vertices`, (segments + 1) vec4 per strand: xyz = position, w = strand
-//         parameter in [0, 1] (0 at the root, 1 at the tip).
-// Dispatch: one invocation per strand, workgroup_size(64); x = min(groups, limit),
+// Writes: `vertices`, (segments / step + 1) vec4 per strand, one strand after the other:
+//         xyz = position, w = strand parameter in [0, 1] (0 at the root, 1 at the tip);
+//         and `drawn[strand].width`, the rest width times the level of detail's width
+//         scale s(x) for x = (strand + 1/2) / strand_total.
+// Dispatch: one invocation per grown strand (strand_count, a prefix of the groom: the
+//         strands are in random order), workgroup_size(64); x = min(groups, limit),
 //         y = ceil(groups / x).
 //
 // Every segment has the exact length `length / segments`: the tangent of each segment
 // is a unit vector, so no force, wind or time can stretch a strand or make it NaN.
+// Segment reduction grows every strand at full resolution and keeps every step-th vertex,
+// so the kept vertices lie exactly on the full strand.
 // The CPU mirror of this file is pelage-reference/src/strands.rs: change both together.
 
 #import shared/math.wgsl
 #import shared/strand.wgsl
 #import shared/noise.wgsl
+#import strands/lod.wgsl
 
 struct GrowUniforms {
+    // Strands grown this frame, and in the groom.
     strand_count: u32,
     segments: u32,
+    strand_total: u32,
+    // Every step-th vertex is written.
+    step: u32,
+    // Stochastic simplification: lambda, t_e, s_max, s_min.
+    lod_lambda: f32,
+    lod_t_e: f32,
+    lod_s_max: f32,
+    lod_s_min: f32,
     // 0 = flat, 1 = PN triangle.
     surface: u32,
     // 0 = straight, 1 = wavy, 2 = curly.
@@ -48,6 +63,7 @@ struct GrowUniforms {
 @group(0) @binding(3) var<storage, read> indices: array<u32>;
 @group(0) @binding(4) var<storage, read> roots: array<StrandRoot>;
 @group(0) @binding(5) var<storage, read_write> vertices: array<vec4<f32>>;
+@group(0) @binding(6) var<storage, read_write> drawn: array<StrandRoot>;
 
 fn load_position(i: u32) -> vec3<f32> {
     return vec3<f32>(positions[3u * i], positions[3u * i + 1u], positions[3u * i + 2u]);
@@ -185,6 +201,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
         return;
     }
     let root = roots[strand];
+    let x = (f32(strand) + 0.5) / f32(u.strand_total);
+    drawn[strand].width = root.width * lod_scale(x, u.lod_lambda, u.lod_t_e, u.lod_s_max, u.lod_s_min);
     let surf = eval_surface(root.triangle, root.bary);
 
     // Root direction: the normal tilted by the strand's jitter.
@@ -196,7 +214,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     let segments = u.segments;
     let seg_len = root.length / f32(segments);
     let t = u.time + root.phase * u.phase_spread;
-    let base = strand * (segments + 1u);
+    let step = max(u.step, 1u);
+    let base = strand * (segments / step + 1u);
     // Evaluated once per strand: it does not depend on the position.
     let base_force = uniform_force(t);
     var p = surf.position;
@@ -205,7 +224,9 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
         let s = (f32(i) + 0.5) * seg_len;
         let tangent = shaped_tangent(d, e1, e2, s);
         p = p + tangent * seg_len;
-        vertices[base + i + 1u] = vec4<f32>(p, f32(i + 1u) / f32(segments));
+        if (i + 1u) % step == 0u {
+            vertices[base + (i + 1u) / step] = vec4<f32>(p, f32(i + 1u) / f32(segments));
+        }
         // Bend the growth direction for the next segment, then carry the frame along.
         let d_next = safe_normalize(d + force(p, t, base_force) * u.force_weight, d);
         e1 = perpendicular(d_next, e1);

@@ -143,7 +143,8 @@ fn shaped_tangent(u: &GrowUniforms, d: Vec3, e1: Vec3, e2: Vec3, s: f32) -> Vec3
     }
 }
 
-/// Grows one strand: `segments + 1` vertices (xyz position, w strand parameter).
+/// Grows one strand: `segments / step + 1` vertices (xyz position, w strand parameter),
+/// every `step`-th vertex of the strand grown at full resolution.
 pub fn grow_strand(mesh: &Mesh, root: &StrandRoot, u: &GrowUniforms) -> Vec<Vec4> {
     let surf = eval_surface(mesh, root.triangle, root.bary, u.surface == 1);
     let side =
@@ -159,13 +160,16 @@ pub fn grow_strand(mesh: &Mesh, root: &StrandRoot, u: &GrowUniforms) -> Vec<Vec4
     let seg_len = root.length / segments as f32;
     let t = u.time + root.phase * u.phase_spread;
     let mut p = surf.position;
-    let mut out = Vec::with_capacity(segments as usize + 1);
+    let step = u.step.max(1);
+    let mut out = Vec::with_capacity((segments / step) as usize + 1);
     out.push(p.extend(0.0));
     for i in 0..segments {
         let s = (i as f32 + 0.5) * seg_len;
         let tangent = shaped_tangent(u, d, e1, e2, s);
         p += tangent * seg_len;
-        out.push(p.extend((i + 1) as f32 / segments as f32));
+        if (i + 1) % step == 0 {
+            out.push(p.extend((i + 1) as f32 / segments as f32));
+        }
         let d_next = safe_normalize(d + force(u, p, t) * u.force_weight, d);
         e1 = perpendicular(d_next, e1);
         e2 = d_next.cross(e1);
@@ -174,7 +178,24 @@ pub fn grow_strand(mesh: &Mesh, root: &StrandRoot, u: &GrowUniforms) -> Vec<Vec4
     out
 }
 
-/// Grows every strand, in the layout of `StrandBuffers::vertices`.
+/// Grows the strands `u` grows (the first `u.strand_count`), in the layout of
+/// `StrandBuffers::vertices`.
 pub fn grow_strands(mesh: &Mesh, roots: &[StrandRoot], u: &GrowUniforms) -> Vec<Vec4> {
-    roots.iter().flat_map(|r| grow_strand(mesh, r, u)).collect()
+    roots
+        .iter()
+        .take(u.strand_count as usize)
+        .flat_map(|r| grow_strand(mesh, r, u))
+        .collect()
+}
+
+/// The width stage 1 gives strand `index` (its rest width times the level of detail's
+/// width scale), as `GrowStrands` writes it into the roots buffer.
+pub fn drawn_width(root: &StrandRoot, index: u32, u: &GrowUniforms) -> f32 {
+    let zone = pelage_scene::Transition {
+        lambda: u.lod_lambda,
+        t_e: u.lod_t_e,
+        s_max: u.lod_s_max,
+        s_min: u.lod_s_min,
+    };
+    root.width * zone.scale((index as f32 + 0.5) / u.strand_total.max(1) as f32)
 }

@@ -8,6 +8,7 @@ pub mod camera;
 pub mod groom;
 pub mod hair_file;
 pub mod light;
+pub mod lod;
 pub mod mesh;
 pub mod obj;
 pub mod params;
@@ -20,6 +21,7 @@ pub use camera::Camera;
 pub use groom::{Groom, GroomError, Resampled};
 pub use hair_file::{HairFile, HairFileError};
 pub use light::{DirectionalLight, Light, MAX_LIGHTS, PointLight};
+pub use lod::{LodParams, Transition};
 pub use mesh::{Mesh, MeshError, MeshReport};
 pub use obj::{ObjError, load_obj, parse_obj};
 pub use params::{

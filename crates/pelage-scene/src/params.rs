@@ -442,14 +442,17 @@ pub struct HairParams {
     pub growth: GrowthParams,
     /// Wind.
     pub wind: WindParams,
+    /// Level of detail: how many strands and segments the hair's size on screen needs.
+    pub lod: crate::LodParams,
 }
 
 impl HairParams {
-    /// Validates all three parts against a mesh with `vertex_count` vertices.
+    /// Validates every part against a mesh with `vertex_count` vertices.
     pub fn validate(&self, vertex_count: usize) -> Result<(), ParamError> {
         self.roots.validate(vertex_count)?;
         self.growth.validate()?;
-        self.wind.validate()
+        self.wind.validate()?;
+        self.lod.validate()
     }
 }
 
@@ -811,7 +814,49 @@ impl Default for ShadowParams {
     }
 }
 
+/// A power of two at least `v`, within `[lo, hi]` (`hi` for anything not finite).
+fn power_of_two_in(v: f32, lo: u32, hi: u32) -> u32 {
+    if !v.is_finite() {
+        return hi;
+    }
+    (v.ceil().max(1.0).min(hi as f32) as u32)
+        .next_power_of_two()
+        .clamp(lo, hi)
+}
+
 impl ShadowParams {
+    /// This method sized down to hair whose bounding box spans `extent_pixels` on
+    /// screen: shadow detail finer than the picture can show is not modelled, and the
+    /// configured resolution stays the most that is used. The voxel grid gets one cell
+    /// per 4 pixels of the hair's extent (a voxel shadow is a smooth, trilinearly read
+    /// volume: its detail is the hair volume's, not a strand's), a power of two of at
+    /// least 16 per axis; the hair maps one texel per pixel (at least 128), the mesh's
+    /// shadow map two (at least 256). The light-space grid and maps are fitted to the
+    /// hair every frame, so these counts span the hair in the light's view too. A voxel
+    /// grid given by `voxel_size` is left alone.
+    pub fn sized_for(&self, extent_pixels: f32) -> Self {
+        let down = |configured: u32, wanted: f32, lo: u32| {
+            power_of_two_in(wanted, lo, configured.max(lo)).min(configured)
+        };
+        let mut out = self.clone();
+        match &mut out {
+            Self::None => {}
+            Self::Voxel(v) => {
+                if v.voxel_size.is_none() {
+                    v.resolution = v.resolution.map(|r| down(r, extent_pixels / 4.0, 16));
+                }
+                v.mesh_map_size = down(v.mesh_map_size, extent_pixels * 2.0, 256);
+            }
+            Self::DeepOpacity(DeepOpacityParams { map, .. })
+            | Self::ShadowMap(ShadowMapParams { map, .. })
+            | Self::Adsm(AdsmParams { map, .. }) => {
+                map.size = down(map.size, extent_pixels, 128);
+                map.mesh_map_size = down(map.mesh_map_size, extent_pixels * 2.0, 256);
+            }
+        }
+        out
+    }
+
     /// Checks the chosen method's parameters.
     pub fn validate(&self) -> Result<(), ParamError> {
         match self {

@@ -108,6 +108,32 @@ fn default_dbk_nodes() -> f32 {
 }
 
 impl Transparency {
+    /// This method sized down to a measured depth complexity, `mean_fragments` hair
+    /// fragments per covered pixel: the k-buffer and random subsets get `k` = the mean
+    /// rounded up to a power of two, at least 1 and at most their configured `k` (the
+    /// k-buffer's tail blends what lies past k, so k near the mean keeps the nearest,
+    /// most visible layers exact). The linked-list
+    /// methods are returned as they are: their pools are averaged over the whole screen
+    /// and report their own overflow ([`crate::Transparency::ABuffer`]).
+    pub fn sized_for_depth(&self, mean_fragments: f64) -> Self {
+        let wanted = |configured: u32| {
+            if mean_fragments.is_finite() && mean_fragments > 1.0 {
+                (mean_fragments.ceil().min(f64::from(MAX_OIT_K)) as u32)
+                    .next_power_of_two()
+                    .min(configured)
+            } else if mean_fragments.is_finite() {
+                1
+            } else {
+                configured
+            }
+        };
+        match self {
+            Self::KBuffer { k } => Self::KBuffer { k: wanted(*k) },
+            Self::RandomSubsets { k } => Self::RandomSubsets { k: wanted(*k) },
+            other => other.clone(),
+        }
+    }
+
     /// Weighted blended OIT with the paper's eq. 7.
     pub fn wboit() -> Self {
         Self::Wboit {

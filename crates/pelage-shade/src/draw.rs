@@ -1,9 +1,12 @@
 //! What every stage 3 method shares: the frame and style uniforms, the opaque mesh
 //! draw, and building hair and full-screen pipelines with their bind groups.
 
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU32, Ordering};
+
 use pelage_gpu::{Gpu, GpuTimer, ShaderBinding, ShaderLibrary, UniformBuffer, bind_buffers, wgpu};
 use pelage_scene::{Camera, HairParams, Light, ParamError, ShadeParams};
-use pelage_strands::{MeshBuffers, StrandBuffers};
+use pelage_strands::{LayoutCell, MeshBuffers, StrandBuffers, StrandLayout};
 
 use crate::hair_model::HairModel;
 use crate::ribbons::{FrameUniforms, MeshStyle, RibbonStyle};
@@ -64,7 +67,26 @@ pub(crate) struct Draw {
     pub label: &'static str,
     pub pipeline: wgpu::RenderPipeline,
     pub groups: Vec<Option<wgpu::BindGroup>>,
-    pub vertices: u32,
+    pub vertices: Vertices,
+}
+
+/// How many vertices a [`Draw`] draws.
+#[derive(Clone, Debug)]
+pub(crate) enum Vertices {
+    /// Always this many.
+    Fixed(u32),
+    /// As many as the hair ribbons of the strands stage 1 grew this frame, as
+    /// [`Common::set_frame`] last saw them.
+    Hair(Arc<AtomicU32>),
+}
+
+impl Vertices {
+    fn get(&self) -> u32 {
+        match self {
+            Self::Fixed(n) => *n,
+            Self::Hair(n) => n.load(Ordering::Acquire),
+        }
+    }
 }
 
 impl Draw {
@@ -79,7 +101,7 @@ impl Draw {
         if let Some((group, bind_group)) = extra {
             pass.set_bind_group(group, bind_group, &[]);
         }
-        pass.draw(0..self.vertices, 0..1);
+        pass.draw(0..self.vertices.get(), 0..1);
     }
 }
 
@@ -101,7 +123,12 @@ pub(crate) struct Common {
     pub frame: UniformBuffer<FrameUniforms>,
     pub style: UniformBuffer<RibbonStyle>,
     pub mesh_draw: Draw,
-    pub hair_vertices: u32,
+    /// Ribbon vertices of this frame's strands (written by `set_frame`).
+    pub hair_vertices: Arc<AtomicU32>,
+    /// Stage 1's layout, read by `set_frame`.
+    pub layout: LayoutCell,
+    /// The ribbon style as created; `set_frame` rewrites its segment count.
+    pub style_value: RibbonStyle,
     pub redirects: Vec<(&'static str, &'static str)>,
     pub samples: u32,
     pub model: HairModel,
@@ -130,8 +157,9 @@ impl Common {
         } = *inputs;
         params.validate()?;
         hair.growth.validate()?;
+        // Every segment at full detail must fit one draw.
         let hair_vertices = u64::from(strands.strand_count) * u64::from(strands.segments) * 6;
-        let hair_vertices = u32::try_from(hair_vertices).map_err(|_| ParamError {
+        u32::try_from(hair_vertices).map_err(|_| ParamError {
             name: "roots.count".into(),
             value: strands.strand_count.to_string(),
             reason: format!(
@@ -144,17 +172,14 @@ impl Common {
             "pelage frame",
             &FrameUniforms::new(&Camera::default(), &[Light::default()], params, 1, 1, 0)?,
         )?;
-        let style = UniformBuffer::new(
-            gpu,
-            "pelage ribbon style",
-            &RibbonStyle {
-                segments: strands.segments,
-                tip_width: hair.growth.tip_width,
-                min_pixels,
-                root_occlusion: params.root_occlusion,
-                opacity: hair.growth.opacity,
-            },
-        )?;
+        let style_value = RibbonStyle {
+            segments: strands.layout.get().segments,
+            tip_width: hair.growth.tip_width,
+            min_pixels,
+            root_occlusion: params.root_occlusion,
+            opacity: hair.growth.opacity,
+        };
+        let style = UniformBuffer::new(gpu, "pelage ribbon style", &style_value)?;
         let mesh_style = UniformBuffer::new(
             gpu,
             "pelage mesh style",
@@ -229,7 +254,7 @@ impl Common {
                 label: "shade: mesh",
                 pipeline,
                 groups: vec![Some(group0), shadow_group],
-                vertices: mesh.triangle_count.saturating_mul(3),
+                vertices: Vertices::Fixed(mesh.triangle_count.saturating_mul(3)),
             }
         })?;
         Ok(Self {
@@ -237,7 +262,9 @@ impl Common {
             frame,
             style,
             mesh_draw,
-            hair_vertices,
+            hair_vertices: Arc::new(AtomicU32::new(ribbon_vertices(strands.layout.get()))),
+            layout: strands.layout.clone(),
+            style_value,
             redirects,
             samples,
             model,
@@ -298,7 +325,7 @@ impl Common {
                 label,
                 pipeline,
                 groups: vec![Some(group0), None, model_group],
-                vertices: self.hair_vertices,
+                vertices: Vertices::Hair(self.hair_vertices.clone()),
             }
         })?)
     }
@@ -312,7 +339,8 @@ impl Common {
         )?)
     }
 
-    /// Writes the frame uniforms.
+    /// Writes the frame uniforms, and takes stage 1's current layout (the strands and
+    /// segments grown this frame) for the ribbon style and the hair draws.
     pub fn set_frame(
         &self,
         queue: &wgpu::Queue,
@@ -329,7 +357,18 @@ impl Common {
             height,
             self.visibility_stride,
         )?;
-        Ok(self.frame.write(queue, &u)?)
+        self.frame.write(queue, &u)?;
+        let layout = self.layout.get();
+        self.style.write(
+            queue,
+            &RibbonStyle {
+                segments: layout.segments,
+                ..self.style_value
+            },
+        )?;
+        self.hair_vertices
+            .store(ribbon_vertices(layout), Ordering::Release);
+        Ok(())
     }
 
     /// Records the mesh pass: clears colour (to the background) and depth unless
@@ -462,4 +501,10 @@ pub(crate) fn raster_pipeline(device: &wgpu::Device, d: &RasterDesc<'_>) -> wgpu
         multiview_mask: None,
         cache: None,
     })
+}
+
+/// Ribbon vertices of `layout`'s strands: 6 per segment (checked to fit a `u32` at full
+/// detail by `Common::new`).
+fn ribbon_vertices(layout: StrandLayout) -> u32 {
+    u32::try_from(layout.segment_count() * 6).unwrap_or(u32::MAX)
 }

@@ -8,7 +8,7 @@ use pelage_gpu::{
     zeroed_storage,
 };
 use pelage_scene::{DirectionalLight, GrowthParams};
-use pelage_strands::StrandBuffers;
+use pelage_strands::{StrandBuffers, StrandLayout};
 
 use crate::LightSpace;
 
@@ -122,6 +122,10 @@ impl LightGridUniforms {
 #[derive(Debug)]
 pub struct LightFit {
     base: LightGridUniforms,
+    /// Stage 1's layout, read at every `set_light`.
+    layout: pelage_strands::LayoutCell,
+    /// The layout the uniforms were last written for (packed strands << 32 | segments).
+    drawn: std::sync::atomic::AtomicU64,
     uniforms: UniformBuffer<LightGridUniforms>,
     bounds: wgpu::Buffer,
     grid: wgpu::Buffer,
@@ -159,8 +163,11 @@ impl LightFit {
             ];
             (pipelines, groups)
         })?;
+        let drawn = strands.layout.get();
         Ok(Self {
             base,
+            layout: strands.layout.clone(),
+            drawn: std::sync::atomic::AtomicU64::new(drawn.to_bits()),
             uniforms,
             bounds,
             grid,
@@ -169,9 +176,26 @@ impl LightFit {
         })
     }
 
-    /// Aims the grid along `light`; takes effect at the next `encode`.
+    /// Aims the grid along `light` and takes stage 1's current [`StrandLayout`] (the
+    /// strands and segments grown this frame); both take effect at the next `encode`.
     pub fn set_light(&self, queue: &wgpu::Queue, light: &DirectionalLight) -> crate::Result<()> {
-        Ok(self.uniforms.write(queue, &self.base.aimed(light)?)?)
+        let layout = self.layout.get();
+        let uniforms = LightGridUniforms {
+            vertex_count: u32::try_from(layout.vertices()).unwrap_or(u32::MAX),
+            segments: layout.segments,
+            strand_count: layout.strands,
+            ..self.base.aimed(light)?
+        };
+        self.uniforms.write(queue, &uniforms)?;
+        self.drawn
+            .store(layout.to_bits(), std::sync::atomic::Ordering::Release);
+        Ok(())
+    }
+
+    /// The strands and segments the last `set_light` took: what every pass of this
+    /// light draws or splats.
+    pub fn drawn(&self) -> StrandLayout {
+        StrandLayout::from_bits(self.drawn.load(std::sync::atomic::Ordering::Acquire))
     }
 
     /// Records the fit (clears the bounds first), timed as `label`.

@@ -77,11 +77,15 @@ struct LightMap {
     depth_pipeline: wgpu::RenderPipeline,
     depth_group: wgpu::BindGroup,
     layers: Option<Layers>,
-    vertices: u32,
     mesh_map: MeshShadowMap,
 }
 
 impl LightMap {
+    /// Ribbon vertices of the strands stage 1 grew this frame (see `LightFit::drawn`).
+    fn drawn_vertices(&self) -> u32 {
+        u32::try_from(self.fit.drawn().segment_count() * 6).unwrap_or(u32::MAX)
+    }
+
     #[allow(clippy::too_many_arguments)]
     fn new(
         gpu: &Gpu,
@@ -104,7 +108,8 @@ impl LightMap {
             .into());
         }
         let vertices = u64::from(strands.strand_count) * u64::from(strands.segments) * 6;
-        let vertices = u32::try_from(vertices).map_err(|_| pelage_scene::ParamError {
+        // Every segment drawn at once must fit one draw (checked at full detail).
+        u32::try_from(vertices).map_err(|_| pelage_scene::ParamError {
             name: "roots.count".into(),
             value: strands.strand_count.to_string(),
             reason: "too many strand segments for one draw from the light; use fewer strands or segments".into(),
@@ -262,7 +267,6 @@ impl LightMap {
             depth_pipeline,
             depth_group,
             layers,
-            vertices,
             mesh_map,
         })
     }
@@ -295,7 +299,7 @@ impl LightMap {
             });
             pass.set_pipeline(&self.depth_pipeline);
             pass.set_bind_group(0, &self.depth_group, &[]);
-            pass.draw(0..self.vertices, 0..1);
+            pass.draw(0..self.drawn_vertices(), 0..1);
         }
         if let Some(layers) = &self.layers {
             let attachment = |view| {
@@ -329,7 +333,7 @@ impl LightMap {
             });
             pass.set_pipeline(&layers.pipeline);
             pass.set_bind_group(0, &layers.group, &[]);
-            pass.draw(0..self.vertices, 0..1);
+            pass.draw(0..self.drawn_vertices(), 0..1);
         }
         self.mesh_map.encode(encoder, timer);
     }

@@ -14,7 +14,9 @@ pub struct LightVisibility {
     pipeline: wgpu::ComputePipeline,
     own: wgpu::BindGroup,
     shadow: Option<wgpu::BindGroup>,
-    groups: (u32, u32),
+    /// Stage 1's layout: how many vertices this frame holds.
+    layout: pelage_strands::LayoutCell,
+    limits: wgpu::Limits,
     label: String,
 }
 
@@ -102,7 +104,8 @@ impl LightVisibility {
             pipeline,
             own,
             shadow,
-            groups: dispatch_size(gpu.limits(), vertices, 64),
+            layout: strands.layout.clone(),
+            limits: gpu.limits().clone(),
             label,
         })
     }
@@ -118,6 +121,8 @@ impl LightVisibility {
         if let Some(group) = &self.shadow {
             pass.set_bind_group(1, group, &[]);
         }
-        pass.dispatch_workgroups(self.groups.0, self.groups.1, 1);
+        // Only the vertices stage 1 grew this frame.
+        let groups = dispatch_size(&self.limits, self.layout.get().vertices(), 64);
+        pass.dispatch_workgroups(groups.0, groups.1, 1);
     }
 }

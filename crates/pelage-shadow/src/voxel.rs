@@ -24,7 +24,7 @@ pub struct VoxelShadow {
     volume: wgpu::Buffer,
     splat: wgpu::ComputePipeline,
     splat_group: wgpu::BindGroup,
-    splat_groups: (u32, u32),
+    limits: wgpu::Limits,
     scan: wgpu::ComputePipeline,
     scan_group: wgpu::BindGroup,
     mesh_map: MeshShadowMap,
@@ -80,11 +80,6 @@ impl VoxelShadow {
 
         let splat_module = ShaderLibrary::module(gpu, "shadow/voxel_splat.wgsl")?;
         let scan_module = ShaderLibrary::module(gpu, "shadow/voxel_scan.wgsl")?;
-        let splat_groups = dispatch_size(
-            gpu.limits(),
-            u64::from(strands.strand_count) * u64::from(strands.segments),
-            64,
-        );
         let (splat, splat_group, scan, scan_group) = gpu.scoped(|device| {
             let splat = compute_pipeline(device, "pelage voxel splat", &splat_module, "main");
             let splat_group = bind_buffers(
@@ -114,7 +109,7 @@ impl VoxelShadow {
             volume,
             splat,
             splat_group,
-            splat_groups,
+            limits: gpu.limits().clone(),
             scan,
             scan_group,
             mesh_map,
@@ -137,7 +132,9 @@ impl VoxelShadow {
         });
         pass.set_pipeline(&self.splat);
         pass.set_bind_group(0, &self.splat_group, &[]);
-        pass.dispatch_workgroups(self.splat_groups.0, self.splat_groups.1, 1);
+        // The segments stage 1 grew this frame (see LightFit::drawn).
+        let groups = dispatch_size(&self.limits, self.fit.drawn().segment_count(), 64);
+        pass.dispatch_workgroups(groups.0, groups.1, 1);
     }
 
     /// Records the scan alone: turns the u32 densities in [`VoxelShadow::volume`] into

@@ -8,7 +8,9 @@ use pelage_gpu::{
 };
 use pelage_scene::{HairParams, HairType, Mesh, SurfaceInterpolation, WindParams};
 
-use crate::{MeshBuffers, StrandRoot, StrandsError, sample_roots};
+use crate::{
+    LayoutCell, LodLevel, MeshBuffers, StrandLayout, StrandRoot, StrandsError, sample_roots,
+};
 
 /// Workgroup size of `grow.wgsl`.
 const WORKGROUP: u32 = 64;
@@ -16,10 +18,23 @@ const WORKGROUP: u32 = 64;
 /// The uniforms of `grow.wgsl` (`GrowUniforms` there), rewritten every frame.
 #[derive(Clone, Copy, Debug, PartialEq, ShaderType)]
 pub struct GrowUniforms {
-    /// Number of strands.
+    /// Strands grown this frame (a prefix of the groom: see [`LodLevel`]).
     pub strand_count: u32,
-    /// Segments per strand.
+    /// Segments per strand of the groom (each strand is grown at this resolution).
     pub segments: u32,
+    /// Strands in the groom (`x = (i + ½) / strand_total` is strand `i`'s priority).
+    pub strand_total: u32,
+    /// Every `step`-th vertex is written: `segments / step` segments per strand, stored
+    /// one strand after the other.
+    pub step: u32,
+    /// Stochastic simplification's `λ`.
+    pub lod_lambda: f32,
+    /// Its effective transition half width `t_e`.
+    pub lod_t_e: f32,
+    /// Its width scale at `x = 0`.
+    pub lod_s_max: f32,
+    /// Its width scale at `x = 1`.
+    pub lod_s_min: f32,
     /// 0 = flat, 1 = PN triangle.
     pub surface: u32,
     /// 0 = straight, 1 = wavy, 2 = curly.
@@ -55,8 +70,13 @@ pub struct GrowUniforms {
 }
 
 impl GrowUniforms {
-    /// The uniforms for `params` at time `t`.
+    /// The uniforms for `params` at time `t`, every strand and segment at full width.
     pub fn new(params: &HairParams, time: f32) -> Self {
+        Self::at_level(params, time, &LodLevel::full(params))
+    }
+
+    /// The uniforms for `params` at time `t` and level of detail `level`.
+    pub fn at_level(params: &HairParams, time: f32, level: &LodLevel) -> Self {
         let g = &params.growth;
         let w = &params.wind;
         let (hair_type, shape_a, shape_b) = match g.hair_type {
@@ -67,9 +87,20 @@ impl GrowUniforms {
             } => (1, amplitude, frequency),
             HairType::Curly { radius, pitch } => (2, radius, pitch),
         };
+        let step = if level.segments > 0 && g.segments.is_multiple_of(level.segments) {
+            g.segments / level.segments
+        } else {
+            1
+        };
         Self {
-            strand_count: params.roots.count,
+            strand_count: level.strands.min(params.roots.count),
             segments: g.segments,
+            strand_total: params.roots.count,
+            step,
+            lod_lambda: level.zone.lambda,
+            lod_t_e: level.zone.t_e,
+            lod_s_max: level.zone.s_max,
+            lod_s_min: level.zone.s_min,
             surface: match g.surface {
                 SurfaceInterpolation::Flat => 0,
                 SurfaceInterpolation::PnTriangle => 1,
@@ -99,16 +130,39 @@ pub struct StrandBuffers {
     /// `strand_count * (segments + 1)` `vec4<f32>`: xyz = position, w = strand parameter in [0, 1].
     /// Strand `i`'s vertices start at `i * (segments + 1)`; tangents come from neighbours.
     pub vertices: wgpu::Buffer,
-    /// One `StrandRoot` per strand: width, colour, seed and the root itself.
+    /// One `StrandRoot` per strand: width, colour, seed and the root itself. Stage 1
+    /// rewrites `width` every frame with the level of detail's width scale.
     pub roots: wgpu::Buffer,
-    /// Number of strands.
+    /// Number of strands (the capacity; `layout` says how many this frame holds).
     pub strand_count: u32,
-    /// Segments per strand (every strand has the same count).
+    /// Segments per strand at full detail (every strand has the same count).
     pub segments: u32,
+    /// This frame's strands and segments per strand: every consumer draws
+    /// `layout.get()`, read when it writes its per-frame uniforms.
+    pub layout: LayoutCell,
 }
 
 impl StrandBuffers {
-    /// Vertices per strand.
+    /// Buffers holding `strand_count` strands of `segments` segments, all of them drawn.
+    pub fn new(
+        vertices: wgpu::Buffer,
+        roots: wgpu::Buffer,
+        strand_count: u32,
+        segments: u32,
+    ) -> Self {
+        Self {
+            vertices,
+            roots,
+            strand_count,
+            segments,
+            layout: LayoutCell::new(StrandLayout {
+                strands: strand_count,
+                segments,
+            }),
+        }
+    }
+
+    /// Vertices per strand at full detail.
     pub fn vertices_per_strand(&self) -> u32 {
         self.segments + 1
     }
@@ -142,7 +196,9 @@ pub struct GrowStrands {
     bind_group: wgpu::BindGroup,
     uniforms: UniformBuffer<GrowUniforms>,
     buffers: StrandBuffers,
-    groups: (u32, u32),
+    /// The level of detail the next `set_time` grows.
+    level: LodLevel,
+    limits: wgpu::Limits,
 }
 
 impl GrowStrands {
@@ -176,10 +232,11 @@ impl GrowStrands {
         gpu.check_storage_size("strand vertices", vertex_bytes)?;
         let roots = sample_roots(mesh, &params.roots, &params.growth)?;
 
-        let groups = dispatch_size(gpu.limits(), u64::from(count), WORKGROUP);
         let uniforms =
             UniformBuffer::new(gpu, "pelage grow uniforms", &GrowUniforms::new(params, 0.0))?;
         let storage = wgpu::BufferUsages::STORAGE;
+        let rest_roots = storage_buffer(gpu, "pelage strand rest roots", &roots, storage)?;
+        // What later stages read: the roots with this frame's LOD width.
         let roots_buffer = storage_buffer(gpu, "pelage strand roots", &roots, storage)?;
         let vertices = zeroed_storage(gpu, "pelage strand vertices", vertex_bytes, storage)?;
 
@@ -195,8 +252,9 @@ impl GrowStrands {
                     &mesh_buffers.positions,
                     &mesh_buffers.normals,
                     &mesh_buffers.indices,
-                    &roots_buffer,
+                    &rest_roots,
                     &vertices,
+                    &roots_buffer,
                 ],
             );
             (pipeline, bind_group)
@@ -208,17 +266,16 @@ impl GrowStrands {
             pipeline,
             bind_group,
             uniforms,
-            buffers: StrandBuffers {
-                vertices,
-                roots: roots_buffer,
-                strand_count: count,
-                segments: params.growth.segments,
-            },
-            groups,
+            buffers: StrandBuffers::new(vertices, roots_buffer, count, params.growth.segments),
+            level: LodLevel::full(params),
+            limits: gpu.limits().clone(),
         })
     }
 
-    /// Sets the time the next `encode` grows the strands for.
+    /// Sets the time the next `encode` grows the strands for, at the level of detail
+    /// last given to [`GrowStrands::set_lod`], and publishes that level's
+    /// [`StrandLayout`] to every pass reading the strand buffer: call it before their
+    /// per-frame uniforms are written.
     pub fn set_time(&self, queue: &wgpu::Queue, time: f32) -> crate::Result<()> {
         if !time.is_finite() {
             return Err(pelage_scene::ParamError {
@@ -228,7 +285,39 @@ impl GrowStrands {
             }
             .into());
         }
-        Ok(self.uniforms.write(queue, &self.uniforms_at(time))?)
+        self.uniforms.write(queue, &self.uniforms_at(time))?;
+        self.buffers.layout.set(self.level.layout());
+        Ok(())
+    }
+
+    /// Sets the level of detail the next [`GrowStrands::set_time`] grows; see
+    /// [`LodLevel::for_view`]. A level asking for more strands than the groom has, or
+    /// for a segment count that does not divide the groom's, is an error.
+    pub fn set_lod(&mut self, level: LodLevel) -> crate::Result<()> {
+        let segments = self.params.growth.segments;
+        if level.strands == 0 || level.strands > self.params.roots.count {
+            return Err(pelage_scene::ParamError::new(
+                "lod.strands",
+                level.strands,
+                &format!("must be in 1..={}", self.params.roots.count),
+            )
+            .into());
+        }
+        if level.segments == 0 || !segments.is_multiple_of(level.segments) {
+            return Err(pelage_scene::ParamError::new(
+                "lod.segments",
+                level.segments,
+                &format!("must divide the groom's {segments} segments"),
+            )
+            .into());
+        }
+        self.level = level;
+        Ok(())
+    }
+
+    /// The level of detail in use.
+    pub fn lod(&self) -> &LodLevel {
+        &self.level
     }
 
     /// Replaces the wind (validated); takes effect at the next `set_time`.
@@ -240,7 +329,7 @@ impl GrowStrands {
 
     /// The uniforms the pass uses at `time` (what the CPU mirror needs to reproduce a frame).
     pub fn uniforms_at(&self, time: f32) -> GrowUniforms {
-        GrowUniforms::new(&self.params, time)
+        GrowUniforms::at_level(&self.params, time, &self.level)
     }
 
     /// Records the growth pass.
@@ -252,7 +341,8 @@ impl GrowStrands {
         });
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, &self.bind_group, &[]);
-        pass.dispatch_workgroups(self.groups.0, self.groups.1, 1);
+        let groups = dispatch_size(&self.limits, u64::from(self.level.strands), WORKGROUP);
+        pass.dispatch_workgroups(groups.0, groups.1, 1);
     }
 
     /// The buffers this stage writes.

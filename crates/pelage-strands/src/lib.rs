@@ -8,12 +8,21 @@
 //! The mesh lives in [`MeshBuffers`]: tightly packed `f32 x3` positions and
 //! normals and a `u32` triangle list in storage buffers, which an engine may own
 //! and rewrite every frame (a skinned mesh, say).
+//!
+//! Level of detail ([`LodLevel`], from `HairParams::lod`): stochastic simplification
+//! grows only a prefix of the (randomly ordered) strands, widened by seed 002's
+//! area-preserving scale with a transition zone, and segment reduction keeps every
+//! `step`-th vertex where the curvature bound says the picture cannot tell. The
+//! [`StrandLayout`] of each frame is published through [`StrandBuffers::layout`], which
+//! every later pass reads when it writes its per-frame uniforms.
 
 mod grow;
+mod lod;
 mod mesh_buffers;
 mod roots;
 
 pub use grow::{GrowStrands, GrowUniforms, StrandBuffers};
+pub use lod::{LayoutCell, LodLevel, StrandLayout, reduced_segments};
 pub use mesh_buffers::MeshBuffers;
 pub use roots::{StrandRoot, hash_to_unit, pcg_hash, sample_roots};
 

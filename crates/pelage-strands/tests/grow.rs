@@ -1,33 +1,15 @@
 //! Stage 1 on a real adapter (lavapipe in CI), against the CPU mirror in pelage-reference.
 
 use glam::{Vec3, Vec4};
-use pelage_gpu::{Gpu, read_buffer, wgpu};
+use pelage_gpu::Gpu;
 use pelage_reference::strands::{eval_surface, grow_strands};
 use pelage_scene::{
     HairParams, HairType, MAX_FORCE, Mesh, RootParams, SurfaceInterpolation, WindParams,
 };
 use pelage_strands::{GrowStrands, MeshBuffers};
 
-fn gpu() -> Gpu {
-    Gpu::headless().unwrap_or_else(|e| panic!("these tests need a GPU adapter: {e}"))
-}
-
-fn read_vertices(gpu: &Gpu, buffer: &wgpu::Buffer) -> Vec<Vec4> {
-    let bytes = read_buffer(gpu, buffer).expect("read back strand vertices");
-    bytemuck::cast_slice::<u8, [f32; 4]>(&bytes)
-        .iter()
-        .map(|v| Vec4::from_array(*v))
-        .collect()
-}
-
-/// Grows the strands for time `t` on the GPU and returns the vertices.
-fn grow_on_gpu(gpu: &Gpu, strands: &GrowStrands, t: f32) -> Vec<Vec4> {
-    strands.set_time(&gpu.queue, t).unwrap();
-    let mut encoder = gpu.device.create_command_encoder(&Default::default());
-    strands.encode(&mut encoder, None);
-    gpu.submit_and_wait([encoder.finish()]).unwrap();
-    read_vertices(gpu, &strands.buffers().vertices)
-}
+mod common;
+use common::{gpu, grow_on_gpu, read_vertices};
 
 fn scene_size(mesh: &Mesh) -> f32 {
     let (lo, hi) = mesh.bounds();

@@ -5,8 +5,8 @@ use encase::ShaderType;
 use pelage_gpu::{Gpu, GpuError, GpuTimer, wgpu};
 
 use crate::draw::{
-    Common, Draw, HairInputs, HairPipe, RasterDesc, TargetViews, depth_state, over_target,
-    raster_pipeline,
+    Common, Draw, HairInputs, HairPipe, RasterDesc, TargetViews, Vertices, depth_state,
+    over_target, raster_pipeline,
 };
 
 /// One slice of the screen and the method's constants (`OitTile` in `shade/oit/common.wgsl`).
@@ -241,7 +241,7 @@ impl Sliced {
                 label,
                 pipeline,
                 groups,
-                vertices: 3,
+                vertices: Vertices::Fixed(3),
             }
         })?;
         self.passes.push(SlicedPass {

@@ -46,12 +46,12 @@ pub fn strand_buffers(gpu: &Gpu, strands: &[Vec<Vec3>], width: f32) -> StrandBuf
         })
         .collect();
     let usage = wgpu::BufferUsages::STORAGE;
-    StrandBuffers {
-        vertices: storage_buffer(gpu, "test vertices", &vertices, usage).unwrap(),
-        roots: storage_buffer(gpu, "test roots", &roots, usage).unwrap(),
-        strand_count: strands.len() as u32,
+    StrandBuffers::new(
+        storage_buffer(gpu, "test vertices", &vertices, usage).unwrap(),
+        storage_buffer(gpu, "test roots", &roots, usage).unwrap(),
+        strands.len() as u32,
         segments,
-    }
+    )
 }
 
 /// A one-triangle mesh out of the way (every method needs a mesh for its mesh map).

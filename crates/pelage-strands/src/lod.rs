@@ -1,0 +1,269 @@
+//! Level of detail for stage 1: how many strands (stochastic simplification) and how
+//! many segments per strand (segment reduction) the hair's size on screen needs.
+//!
+//! Roots are sampled independently per strand index (`sample_roots`), so the strand
+//! order is already random and independent of position: the strands kept at level `λ`
+//! are a prefix of the buffer, and every later pass simply draws fewer of them.
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use glam::{Vec3, Vec4Swizzles};
+use pelage_scene::{Camera, GrowthParams, HairParams, HairType, Transition, WindParams};
+
+/// What part of the strand buffer holds this frame's strands: the first `strands`
+/// strands, each `segments + 1` vertices stored one after the other (strand `i` starts
+/// at vertex `i * (segments + 1)`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct StrandLayout {
+    /// Strands grown this frame.
+    pub strands: u32,
+    /// Segments per strand this frame.
+    pub segments: u32,
+}
+
+impl StrandLayout {
+    /// Vertices grown this frame.
+    pub fn vertices(&self) -> u64 {
+        u64::from(self.strands) * u64::from(self.segments + 1)
+    }
+
+    /// Segments grown this frame.
+    pub fn segment_count(&self) -> u64 {
+        u64::from(self.strands) * u64::from(self.segments)
+    }
+
+    /// The layout in one `u64` (for an atomic): strands in the high half.
+    pub fn to_bits(self) -> u64 {
+        (u64::from(self.strands) << 32) | u64::from(self.segments)
+    }
+
+    /// The layout [`StrandLayout::to_bits`] packed.
+    pub fn from_bits(v: u64) -> Self {
+        Self {
+            strands: (v >> 32) as u32,
+            segments: v as u32,
+        }
+    }
+}
+
+/// The current [`StrandLayout`], shared by stage 1 (which sets it in
+/// `GrowStrands::set_time`) and every pass that reads the strand buffer (which reads it
+/// when it writes its own per-frame uniforms). Cloning shares it.
+#[derive(Clone, Debug)]
+pub struct LayoutCell(Arc<AtomicU64>);
+
+impl LayoutCell {
+    /// A cell holding `layout`.
+    pub fn new(layout: StrandLayout) -> Self {
+        Self(Arc::new(AtomicU64::new(layout.to_bits())))
+    }
+
+    /// The layout now.
+    pub fn get(&self) -> StrandLayout {
+        StrandLayout::from_bits(self.0.load(Ordering::Acquire))
+    }
+
+    /// Replaces the layout.
+    pub fn set(&self, layout: StrandLayout) {
+        self.0.store(layout.to_bits(), Ordering::Release);
+    }
+}
+
+/// One frame's level of detail.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LodLevel {
+    /// Screen pixels covered by the hair's bounding box (`B`; infinite when not measured).
+    pub pixels: f32,
+    /// The larger side of that box on screen, pixels (infinite when not measured).
+    pub extent_pixels: f32,
+    /// The width scale over the priority order.
+    pub zone: Transition,
+    /// Strands grown and drawn (those with a width).
+    pub strands: u32,
+    /// Segments per strand (a divisor of the groom's segment count).
+    pub segments: u32,
+    /// The largest distance, in pixels, between a strand and its reduced polyline
+    /// predicted by the curvature bound (0 at full segments).
+    pub segment_error_pixels: f32,
+}
+
+impl LodLevel {
+    /// Every strand and segment at full width.
+    pub fn full(hair: &HairParams) -> Self {
+        Self {
+            pixels: f32::INFINITY,
+            extent_pixels: f32::INFINITY,
+            zone: Transition::full(),
+            strands: hair.roots.count,
+            segments: hair.growth.segments,
+            segment_error_pixels: 0.0,
+        }
+    }
+
+    /// The level `hair.lod` asks for when the hair, inside the world box `bounds`, is seen
+    /// by `camera` on a `width` x `height` target. Full detail when LOD is disabled, when
+    /// the box reaches behind the camera, or when anything is not finite (the box's size
+    /// on screen is measured either way, unless it reaches behind the camera).
+    pub fn for_view(
+        hair: &HairParams,
+        bounds: (Vec3, Vec3),
+        camera: &Camera,
+        width: u32,
+        height: u32,
+    ) -> Self {
+        let full = Self::full(hair);
+        if width == 0 || height == 0 {
+            return full;
+        }
+        let Some(view) = ScreenBox::new(bounds, camera, width, height) else {
+            return full;
+        };
+        if !hair.lod.enabled {
+            return Self {
+                pixels: view.pixels,
+                extent_pixels: view.extent,
+                ..full
+            };
+        }
+        let lambda = hair.lod.lambda(view.pixels);
+        let zone = Transition::new(lambda, hair.lod.transition);
+        let (segments, error) = reduced_segments(
+            &hair.growth,
+            &hair.wind,
+            hair.lod.segment_error_pixels,
+            view.pixels_per_unit,
+            max_length_scale(hair),
+        );
+        Self {
+            pixels: view.pixels,
+            extent_pixels: view.extent,
+            zone,
+            strands: zone.drawn(hair.roots.count),
+            segments,
+            segment_error_pixels: error,
+        }
+    }
+
+    /// The layout this level grows.
+    pub fn layout(&self) -> StrandLayout {
+        StrandLayout {
+            strands: self.strands,
+            segments: self.segments,
+        }
+    }
+}
+
+/// The largest value of the length map (1 without one).
+fn max_length_scale(hair: &HairParams) -> f32 {
+    hair.roots
+        .length_scale
+        .as_ref()
+        .map_or(1.0, |m| m.iter().copied().fold(0.0f32, f32::max))
+}
+
+/// A world box as seen on screen.
+struct ScreenBox {
+    /// Pixels its screen rectangle covers, clipped to the target.
+    pixels: f32,
+    /// The larger side of its screen rectangle, pixels.
+    extent: f32,
+    /// Pixels per world unit at its nearest corner.
+    pixels_per_unit: f32,
+}
+
+impl ScreenBox {
+    fn new(bounds: (Vec3, Vec3), camera: &Camera, width: u32, height: u32) -> Option<Self> {
+        let (lo, hi) = bounds;
+        if !lo.is_finite() || !hi.is_finite() {
+            return None;
+        }
+        let aspect = width as f32 / height as f32;
+        let view = camera.view();
+        let clip = camera.view_projection(aspect);
+        let (mut min, mut max) = (glam::Vec2::splat(f32::MAX), glam::Vec2::splat(f32::MIN));
+        let mut nearest = f32::MAX;
+        for corner in 0..8 {
+            let p = Vec3::new(
+                if corner & 1 == 0 { lo.x } else { hi.x },
+                if corner & 2 == 0 { lo.y } else { hi.y },
+                if corner & 4 == 0 { lo.z } else { hi.z },
+            );
+            let depth = -(view * p.extend(1.0)).z;
+            if depth <= camera.near {
+                return None;
+            }
+            nearest = nearest.min(depth);
+            let c = clip * p.extend(1.0);
+            let ndc = c.xy() / c.w;
+            min = min.min(ndc);
+            max = max.max(ndc);
+        }
+        let min = min.clamp(glam::Vec2::splat(-1.0), glam::Vec2::splat(1.0));
+        let max = max.clamp(glam::Vec2::splat(-1.0), glam::Vec2::splat(1.0));
+        let size = (max - min) * 0.5 * glam::Vec2::new(width as f32, height as f32);
+        let focal = height as f32 / (2.0 * (camera.fov_y * 0.5).tan());
+        let out = Self {
+            pixels: size.x * size.y,
+            extent: size.max_element(),
+            pixels_per_unit: focal / nearest,
+        };
+        (out.pixels.is_finite() && out.pixels_per_unit.is_finite()).then_some(out)
+    }
+}
+
+/// The fewest segments (a divisor of `growth.segments`) whose polyline stays within
+/// `max_error_pixels` of the full strand, by a curvature bound: a chord spanning arc
+/// length `L` of a curve of curvature `κ` is at most `κL²/8` from it. The curvature is
+/// that of the hair type plus the bend the force field puts in every segment. Returns
+/// the count and its predicted error in pixels.
+pub fn reduced_segments(
+    growth: &GrowthParams,
+    wind: &WindParams,
+    max_error_pixels: f32,
+    pixels_per_unit: f32,
+    length_scale: f32,
+) -> (u32, f32) {
+    let full = growth.segments;
+    if max_error_pixels <= 0.0 || !pixels_per_unit.is_finite() {
+        return (full, 0.0);
+    }
+    // The longest segment any strand has.
+    let seg = growth.length * (1.0 + growth.length_jitter) * length_scale.max(0.0) / full as f32;
+    let shape_curvature = match growth.hair_type {
+        HairType::Straight => 0.0,
+        HairType::Wavy {
+            amplitude,
+            frequency,
+        } => {
+            let k = std::f32::consts::TAU * frequency;
+            k * k * amplitude.abs()
+        }
+        HairType::Curly { radius, pitch } => {
+            let rise = pitch / std::f32::consts::TAU;
+            radius.abs() / (radius * radius + rise * rise).max(1e-12)
+        }
+    };
+    let force = growth.gravity.length()
+        + wind.strength * (1.0 + wind.gust_strength.abs())
+        + wind.turbulence * 3f32.sqrt();
+    // Seed 001's bend: every segment turns by about force_weight · |F| radians.
+    let turn = (growth.force_weight * force).min(std::f32::consts::FRAC_PI_2);
+    let error = |k: u32| {
+        let span = k as f32 * seg;
+        let world = shape_curvature * span * span / 8.0 + (k * k) as f32 * seg * turn / 8.0;
+        world * pixels_per_unit
+    };
+    let mut best = (full, 0.0);
+    for segments in (1..full).rev() {
+        if !full.is_multiple_of(segments) {
+            continue;
+        }
+        let e = error(full / segments);
+        if !e.is_finite() || e > max_error_pixels {
+            break;
+        }
+        best = (segments, e);
+    }
+    best
+}

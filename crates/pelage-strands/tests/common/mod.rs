@@ -1,0 +1,28 @@
+//! What the stage 1 tests share: an adapter, and growing on it with a readback.
+
+use glam::Vec4;
+use pelage_gpu::{Gpu, read_buffer, wgpu};
+use pelage_strands::GrowStrands;
+
+/// The adapter, or a failure saying what to install.
+pub fn gpu() -> Gpu {
+    Gpu::headless().unwrap_or_else(|e| panic!("these tests need a GPU adapter: {e}"))
+}
+
+/// The strand vertices in `buffer`.
+pub fn read_vertices(gpu: &Gpu, buffer: &wgpu::Buffer) -> Vec<Vec4> {
+    let bytes = read_buffer(gpu, buffer).expect("read back strand vertices");
+    bytemuck::cast_slice::<u8, [f32; 4]>(&bytes)
+        .iter()
+        .map(|v| Vec4::from_array(*v))
+        .collect()
+}
+
+/// Grows the strands for time `t` on the GPU and returns the vertices.
+pub fn grow_on_gpu(gpu: &Gpu, strands: &GrowStrands, t: f32) -> Vec<Vec4> {
+    strands.set_time(&gpu.queue, t).unwrap();
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    strands.encode(&mut encoder, None);
+    gpu.submit_and_wait([encoder.finish()]).unwrap();
+    read_vertices(gpu, &strands.buffers().vertices)
+}
