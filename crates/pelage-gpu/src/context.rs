@@ -5,9 +5,12 @@ use std::sync::{Arc, Mutex, MutexGuard};
 
 use crate::error::{GpuError, Result};
 
-/// Optional features pelage uses when the adapter has them: timing, and blending
-/// into 32-bit float targets (deep opacity maps in float32).
-const WANTED_FEATURES: wgpu::Features = wgpu::Features::TIMESTAMP_QUERY
+/// Optional features pelage uses when the adapter has them: timestamps, blending into
+/// 32-bit float targets (deep opacity maps in float32) and 64-bit atomics (the k-buffer
+/// and random subsets). [`Gpu::headless`] requests those its adapter offers; an engine
+/// creating its own device for pelage should request
+/// `adapter.features() & WANTED_FEATURES`.
+pub const WANTED_FEATURES: wgpu::Features = wgpu::Features::TIMESTAMP_QUERY
     .union(wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS)
     .union(wgpu::Features::TIMESTAMP_QUERY_INSIDE_PASSES)
     .union(wgpu::Features::FLOAT32_BLENDABLE)

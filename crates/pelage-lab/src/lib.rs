@@ -1,5 +1,5 @@
-//! Measurement output for the pelage lab programs (shadow lab, OIT lab,
-//! benchmarks).
+//! Measurement output for the pelage lab programs (`pelage lab ...` and
+//! `pelage bench`, in `crates/pelage-cli`).
 //!
 //! - [`Table`]: CSV (RFC 4180 quoting) and an aligned plain-text table for
 //!   the terminal.
@@ -13,7 +13,6 @@
 
 #![deny(missing_docs)]
 
-mod args;
 mod chart;
 mod error;
 mod font;
@@ -22,7 +21,6 @@ mod pareto;
 mod sheet;
 mod table;
 
-pub use args::{LabArgs, LabArgsError};
 pub use chart::{ScatterChart, ScatterPoint};
 pub use error::LabError;
 pub use fs::write_file_atomically;

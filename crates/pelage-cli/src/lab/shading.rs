@@ -2,7 +2,7 @@
 //! each per shaded fragment.
 //!
 //! ```text
-//! cargo run --release --example shading_lab -- [--quick] [--out DIR]
+//! pelage lab shading [--quick] [--out DIR]
 //! ```
 //!
 //! Writes `DIR/shading_sheet.png` (default `out/lab`): Kajiya-Kay (plain and with
@@ -18,19 +18,15 @@ use std::time::Instant;
 
 use glam::Vec3;
 use pelage::gpu::Gpu;
-use pelage::{Renderer, Scene};
-use pelage_lab::{Table, contact_sheet};
-use pelage_scene::{
+use pelage::scene::{
     Camera, KajiyaKayParams, Light, MarschnerParams, Mesh, SadeghiParams, ShadingModel,
     Transparency, WindParams, sigma_a_from_color,
 };
+use pelage::{Renderer, Scene};
+use pelage_lab::{Table, contact_sheet};
 
-fn main() {
-    if let Err(e) = run() {
-        eprintln!("shading_lab: {e}");
-        std::process::exit(1);
-    }
-}
+use super::LabOpts;
+use crate::progress;
 
 /// Long hair on a head, lit by a key light and a back light.
 fn scene(color: Vec3, strands: u32) -> Result<Scene, Box<dyn std::error::Error>> {
@@ -97,14 +93,10 @@ fn median(mut v: Vec<f64>) -> f64 {
     v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
 }
 
-fn run() -> Result<(), Box<dyn std::error::Error>> {
-    let args = pelage_lab::LabArgs::from_env(
-        "shading_lab",
-        "the shading models side by side and their cost per fragment",
-        "out/lab",
-    );
+/// Runs the shading lab: writes `shading.csv` and `shading_sheet.png` under `opts.out`.
+pub fn run(opts: &LabOpts) -> Result<(), Box<dyn std::error::Error>> {
     let started = Instant::now();
-    let (size, strands, frames) = if args.quick {
+    let (size, strands, frames) = if opts.quick {
         (160, 1500, 2)
     } else {
         (320, 6000, 10)
@@ -122,6 +114,8 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     counter.render(&gpu, 0.0, &counting.camera)?;
     let fragments = counter.oit_stats(&gpu)?.stored.max(1);
     println!("{fragments} hair fragments per frame at {size}x{size}");
+    let models = models();
+    let bar = progress::bar(models.len() as u64, "models")?;
 
     let mut table = Table::new(&[
         "model",
@@ -133,7 +127,8 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     ]);
     let mut cells = Vec::new();
     let mut base_ns = None;
-    for (name, color, model) in models() {
+    for (name, color, model) in models {
+        bar.set_message(name);
         // Timing: one sample per pixel, so every covered pixel shades once per strand.
         let mut timed = scene(color, strands)?;
         timed.shade.model = model.clone();
@@ -161,7 +156,9 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
             format!("{:.1}", ns - base),
             format!("{lut_mb:.2}"),
         ])?;
-        println!("{name:<22} stage 3 {ms:8.2} ms  {ns:7.1} ns per fragment");
+        bar.println(format!(
+            "{name:<22} stage 3 {ms:8.2} ms  {ns:7.1} ns per fragment"
+        ));
 
         // The sheet: 4x MSAA, the default look.
         let mut pretty = timed.clone();
@@ -169,14 +166,16 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         let mut renderer = Renderer::new(&gpu, &pretty, size, size)?;
         renderer.render(&gpu, 0.0, &pretty.camera)?;
         cells.push((name.to_string(), renderer.image(&gpu)?));
+        bar.inc(1);
     }
+    bar.finish_and_clear();
     let sheet = contact_sheet(&cells, 4)?;
-    pelage::save_png(&sheet, &args.out.join("shading_sheet.png"))?;
-    table.write_csv(&args.out.join("shading.csv"))?;
+    pelage::save_png(&sheet, &opts.out.join("shading_sheet.png"))?;
+    table.write_csv(&opts.out.join("shading.csv"))?;
     println!("{}", table.to_text());
     println!(
         "wrote {}/shading.csv and shading_sheet.png in {:.0} s",
-        args.out.display(),
+        opts.out.display(),
         started.elapsed().as_secs_f64()
     );
     Ok(())

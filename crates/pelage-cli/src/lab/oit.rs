@@ -4,7 +4,7 @@
 //! blended on the CPU by `pelage_reference::oit`).
 //!
 //! ```text
-//! cargo run --release --example oit_lab -- [--quick] [--out DIR]
+//! pelage lab oit [--quick] [--out DIR]
 //! ```
 //!
 //! Writes `DIR/oit.csv` (default `out/lab`), one chart per scene and opacity
@@ -22,14 +22,17 @@ use std::time::Instant;
 
 use glam::{Quat, Vec3};
 use pelage::gpu::{Gpu, GpuTimer};
+use pelage::scene::{
+    Camera, HairParams, Light, Mesh, ShadeParams, Transparency, WboitWeight, WindParams,
+};
+use pelage::shade::{ABuffer, HairInputs, HairPass, Targets};
+use pelage::strands::{GrowStrands, MeshBuffers};
 use pelage_lab::{ScatterChart, ScatterPoint, Table, pareto_front};
 use pelage_reference::flip::{DEFAULT_PIXELS_PER_DEGREE, LinearImage, flip, rmse_linear};
 use pelage_reference::oit::{Fragment, composite_sorted, linear_to_srgb8, srgb8_to_linear};
-use pelage_scene::{
-    Camera, HairParams, Light, Mesh, ShadeParams, Transparency, WboitWeight, WindParams,
-};
-use pelage_shade::{ABuffer, HairInputs, HairPass, Targets};
-use pelage_strands::{GrowStrands, MeshBuffers};
+
+use super::LabOpts;
+use crate::progress;
 
 struct Case {
     name: &'static str,
@@ -114,13 +117,6 @@ fn configurations(quick: bool) -> Vec<Transparency> {
     out
 }
 
-fn main() {
-    if let Err(e) = run() {
-        eprintln!("oit_lab: {e}");
-        std::process::exit(1);
-    }
-}
-
 /// Stage 1 for one case, grown once at t = 0.
 struct Grown {
     mesh: MeshBuffers,
@@ -179,7 +175,7 @@ fn render_method(
         shadow: None,
         visibility: None,
     };
-    let method = pelage_shade::build(gpu, &inputs, width, height)?;
+    let method = pelage::shade::build(gpu, &inputs, width, height)?;
     let targets = Targets::new(gpu, width, height, shade.samples())?;
     let mut timer = GpuTimer::new(gpu, 64)?;
     let light = [Light::default()];
@@ -307,17 +303,14 @@ fn mean_abs_change(frames: &[Vec<u8>]) -> f64 {
     }
 }
 
-fn run() -> Result<(), Box<dyn std::error::Error>> {
-    let args = pelage_lab::LabArgs::from_env(
-        "oit_lab",
-        "every transparency method against the exact sorted composite",
-        "out/lab",
-    );
+/// Runs the transparency lab: writes `oit.csv`, `oit_memory.csv` and a chart per scene
+/// and opacity under `opts.out`.
+pub fn run(opts: &LabOpts) -> Result<(), Box<dyn std::error::Error>> {
     let started = Instant::now();
-    let size = if args.quick { (160, 120) } else { (320, 240) };
-    let frames = if args.quick { 3 } else { 5 };
-    let opacities: &[f32] = if args.quick { &[0.8] } else { &[0.3, 0.8] };
-    let configs = configurations(args.quick);
+    let size = if opts.quick { (160, 120) } else { (320, 240) };
+    let frames = if opts.quick { 3 } else { 5 };
+    let opacities: &[f32] = if opts.quick { &[0.8] } else { &[0.3, 0.8] };
+    let configs = configurations(opts.quick);
     let mut table = Table::new(&[
         "scene",
         "opacity",
@@ -333,7 +326,12 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         "dropped",
     ]);
     let mut notes = String::new();
-    for case in cases(args.quick) {
+    let all_cases = cases(opts.quick);
+    let bar = progress::bar(
+        (all_cases.len() * opacities.len() * configs.len()) as u64,
+        "methods",
+    )?;
+    for case in all_cases {
         for &opacity in opacities {
             let mut case_hair = case.hair.clone();
             case_hair.growth.opacity = opacity;
@@ -355,11 +353,12 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
                 fragments as f64 / pixels as f64,
                 (fragments * 16 + pixels as u64 * 4) as f64 / 1e6
             );
-            print!("{line}");
+            bar.println(line.trim_end());
             notes.push_str(&line);
             let reference_image = linear(&reference, size.0, size.1)?;
             let mut points = Vec::new();
             for config in &configs {
+                bar.set_message(format!("{} {opacity} {}", case.name, config.label()));
                 let params = ShadeParams {
                     transparency: config.clone(),
                     ..ShadeParams::default()
@@ -385,12 +384,12 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
                     format!("{flicker:.5}"),
                     m.dropped.to_string(),
                 ])?;
-                println!(
+                bar.println(format!(
                     "  {:<40} {:8.2} ms {:7.2} MB  FLIP {mean:.4} (p99 {p99:.3})  flicker {flicker:.5}",
                     config.label(),
                     m.gpu_ms,
                     m.memory_mb
-                );
+                ));
                 points.push(ScatterPoint {
                     series: config.name().into(),
                     label: config.label(),
@@ -399,17 +398,18 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
                     size: Some(m.memory_mb.max(0.01)),
                 });
                 if case.name == "creature" && (opacity - 0.8).abs() < 1e-6 {
-                    let path = args.out.join(format!("oit_{}.png", config.name()));
+                    let path = opts.out.join(format!("oit_{}.png", config.name()));
                     if let Some(img) =
                         image::RgbaImage::from_raw(size.0, size.1, m.frames[0].clone())
                     {
                         pelage::save_png(&img, &path)?;
                     }
                 }
+                bar.inc(1);
             }
             if case.name == "creature" && (opacity - 0.8).abs() < 1e-6 {
                 if let Some(img) = image::RgbaImage::from_raw(size.0, size.1, reference.clone()) {
-                    pelage::save_png(&img, &args.out.join("oit_exact.png"))?;
+                    pelage::save_png(&img, &opts.out.join("oit_exact.png"))?;
                 }
             }
             let xy: Vec<(f64, f64)> = points.iter().map(|p| (p.x, p.y)).collect();
@@ -438,18 +438,20 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
                 size_label: Some("memory, MB".into()),
             };
             let stem = format!("oit_{}_{}", case.name, (opacity * 10.0).round() as u32);
-            chart.write_svg(&args.out.join(format!("{stem}.svg")), 900, 600)?;
-            chart.write_png(&args.out.join(format!("{stem}.png")), 900, 600)?;
+            chart.write_svg(&opts.out.join(format!("{stem}.svg")), 900, 600)?;
+            chart.write_png(&opts.out.join(format!("{stem}.png")), 900, 600)?;
         }
     }
-    table.write_csv(&args.out.join("oit.csv"))?;
+    bar.finish_and_clear();
+    table.write_csv(&opts.out.join("oit.csv"))?;
     println!("{}", table.to_text());
     print!("{notes}");
 
     // Memory at the seed's viewport and at 1080p: every method built, nothing drawn.
     let mut memory = Table::new(&["method", "config", "width", "height", "memory_mb", "slices"]);
     let gpu = Gpu::headless()?;
-    let case = &cases(true)[0];
+    let quick_cases = cases(true);
+    let case = quick_cases.first().ok_or("no scene for the memory table")?;
     let grown = grow(&gpu, case)?;
     for (w, h) in [(656, 861), (1920, 1080)] {
         for config in &configs {
@@ -465,7 +467,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
                 shadow: None,
                 visibility: None,
             };
-            let method = pelage_shade::build(&gpu, &inputs, w, h)?;
+            let method = pelage::shade::build(&gpu, &inputs, w, h)?;
             memory.push(vec![
                 config.name().into(),
                 config.label(),
@@ -476,11 +478,11 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
             ])?;
         }
     }
-    memory.write_csv(&args.out.join("oit_memory.csv"))?;
+    memory.write_csv(&opts.out.join("oit_memory.csv"))?;
     println!("{}", memory.to_text());
     println!(
         "wrote {}/oit.csv, oit_memory.csv and oit_<scene>_<opacity>.png|svg in {:.0} s",
-        args.out.display(),
+        opts.out.display(),
         started.elapsed().as_secs_f64()
     );
     Ok(())

@@ -3,7 +3,7 @@
 //! the bare lit strand pass.
 //!
 //! ```text
-//! cargo run --release --example bench -- [--quick] [--out DIR]
+//! pelage bench [--quick] [--out DIR]
 //! ```
 //!
 //! Writes `DIR/bench.csv` (default `out/bench`), `DIR/scaling.png|svg` (stage time
@@ -24,18 +24,14 @@
 use std::time::Instant;
 
 use pelage::gpu::{Gpu, GpuTimer, ShaderLibrary, compute_pipeline, dispatch_size, wgpu};
+use pelage::scene::{DirectionalLight, ShadowParams, Transparency, VoxelParams, WindParams};
+use pelage::shadow::{ShadowMethod, VoxelShadow};
+use pelage::strands::{GrowStrands, MeshBuffers};
 use pelage::{Renderer, Scene};
 use pelage_lab::{ScatterChart, ScatterPoint, Table};
-use pelage_scene::{DirectionalLight, ShadowParams, Transparency, VoxelParams, WindParams};
-use pelage_shadow::{ShadowMethod, VoxelShadow};
-use pelage_strands::{GrowStrands, MeshBuffers};
 
-fn main() {
-    if let Err(e) = run() {
-        eprintln!("bench: {e}");
-        std::process::exit(1);
-    }
-}
+use crate::lab::LabOpts;
+use crate::progress;
 
 type Error = Box<dyn std::error::Error>;
 
@@ -203,25 +199,35 @@ struct Row {
     note: String,
 }
 
-fn run() -> Result<(), Error> {
-    let args = pelage_lab::LabArgs::from_env(
-        "bench",
-        "GPU time per stage, bandwidth against a copy kernel, scaling",
-        "out/bench",
-    );
+/// Runs the benchmark: writes `bench.csv` and `scaling.png|svg` under `opts.out` and
+/// prints the tables.
+pub fn run(opts: &LabOpts) -> Result<(), Error> {
     let started = Instant::now();
-    let counts: &[u32] = if args.quick {
+    let counts: &[u32] = if opts.quick {
         &[2_000, 8_000]
     } else {
         &[10_000, 50_000, 200_000]
     };
-    let frames = if args.quick { 3 } else { 20 };
-    let (width, height) = if args.quick { (160, 120) } else { (480, 360) };
+    let frames = if opts.quick { 3 } else { 20 };
+    let (width, height) = if opts.quick { (160, 120) } else { (480, 360) };
     let mut rows: Vec<Row> = Vec::new();
     let light = DirectionalLight::default();
+    let methods = [
+        Transparency::Opaque,
+        Transparency::wboit(),
+        Transparency::k_buffer(8),
+        Transparency::a_buffer(),
+        Transparency::dbk(0.05),
+        Transparency::random_subsets(8),
+    ];
+    // Steps: each strand count's compute stages and each of its transparency methods,
+    // then the bare lit pass and the three combinations of section 4.
+    let bar = progress::bar((counts.len() * (1 + methods.len()) + 4) as u64, "steps")?;
 
     // 1. Compute stages and the copy kernel, on a device that never draws.
-    println!("compute stages (timestamps, median of {frames} frames):");
+    bar.println(format!(
+        "compute stages (timestamps, median of {frames} frames):"
+    ));
     let mut scan_ms = Vec::new();
     let mut grow_points = Vec::new();
     for &strands in counts {
@@ -283,12 +289,12 @@ fn run() -> Result<(), Error> {
         for (label, bytes, note) in stages {
             let ms = get(&times, label);
             let ratio = (bytes as f64 / ms) / copy_rate;
-            println!(
+            bar.println(format!(
                 "  {strands:>7} strands  {label:<15} {ms:9.3} ms  {:8.2} MB  {:6.2} GB/s  {:5.0}% of copy",
                 bytes as f64 / 1e6,
                 bytes as f64 / ms / 1e6,
                 100.0 * ratio
-            );
+            ));
             rows.push(Row {
                 section: "compute",
                 stage: label.into(),
@@ -312,13 +318,13 @@ fn run() -> Result<(), Error> {
         let still_ms = get(&still_times, "strands: grow");
         let bytes = roots + mesh_bytes + vertices;
         let ratio = (bytes as f64 / still_ms) / copy_rate;
-        println!(
+        bar.println(format!(
             "  {strands:>7} strands  {:<15} {still_ms:9.3} ms  {:8.2} MB  {:6.2} GB/s  {:5.0}% of copy",
             "grow, no wind",
             bytes as f64 / 1e6,
             bytes as f64 / still_ms / 1e6,
             100.0 * ratio
-        );
+        ));
         rows.push(Row {
             section: "compute",
             stage: "strands: grow, no wind".into(),
@@ -329,22 +335,15 @@ fn run() -> Result<(), Error> {
             copy_ratio: ratio,
             note: "gravity and wind off: the surface evaluation and growth alone".into(),
         });
+        bar.inc(1);
         scan_ms.push(get(&times, "shadow: scan"));
         grow_points.push((f64::from(strands), get(&times, "strands: grow")));
     }
 
     // 2. Raster stages and whole frames, per strand count, on devices of their own.
-    println!("raster stages (timestamps) and whole stages (wall clock, submitted alone):");
+    bar.println("raster stages (timestamps) and whole stages (wall clock, submitted alone):");
     let mut frame_points = Vec::new();
     let mut raster_points = Vec::new();
-    let methods = [
-        Transparency::Opaque,
-        Transparency::wboit(),
-        Transparency::k_buffer(8),
-        Transparency::a_buffer(),
-        Transparency::dbk(0.05),
-        Transparency::random_subsets(8),
-    ];
     for &strands in counts {
         for method in &methods {
             let gpu = Gpu::headless()?;
@@ -373,7 +372,7 @@ fn run() -> Result<(), Error> {
             let memory = renderer.hair_pass().memory_bytes();
             for (label, v) in per_label {
                 let ms = median(v);
-                println!("  {strands:>7} strands  {label:<26} {ms:9.3} ms");
+                bar.println(format!("  {strands:>7} strands  {label:<26} {ms:9.3} ms"));
                 if *method == Transparency::Opaque {
                     raster_points.push((f64::from(strands), ms));
                 }
@@ -409,11 +408,12 @@ fn run() -> Result<(), Error> {
                         note: "submitted alone, median".into(),
                     });
                 }
-                println!(
+                bar.println(format!(
                     "  {strands:>7} strands  frame (wall, voxel shadows, opaque) {total:9.3} ms"
-                );
+                ));
                 frame_points.push((f64::from(strands), total));
             }
+            bar.inc(1);
         }
     }
 
@@ -426,7 +426,7 @@ fn run() -> Result<(), Error> {
 
     // 4. Shadows and transparency over the bare lit strand pass, at seed 000's sizes:
     //    10 000 hairs of 16 vertices, 800x800 (quick: 2 000 at 200x200).
-    let (seed_strands, seed_size) = if args.quick {
+    let (seed_strands, seed_size) = if opts.quick {
         (2_000, 200)
     } else {
         (10_000, 800)
@@ -450,6 +450,7 @@ fn run() -> Result<(), Error> {
             Ok((of("shadow"), of("shade")))
         };
     let (_, bare) = overhead(ShadowParams::None, Transparency::Opaque)?;
+    bar.inc(1);
     let combos = [
         (
             "voxel 128^3 + k-buffer k=8",
@@ -471,9 +472,10 @@ fn run() -> Result<(), Error> {
     for (name, shadow, transparency) in combos {
         let (shadow_ms, shade_ms) = overhead(shadow, transparency)?;
         let ratio = (shadow_ms + shade_ms) / bare;
-        println!(
+        bar.println(format!(
             "  {seed_strands} hairs x 16 vertices at {seed_size}x{seed_size}: {name}: shadow {shadow_ms:.1} ms + shade {shade_ms:.1} ms = {ratio:.2}x the bare lit pass ({bare:.1} ms)"
-        );
+        ));
+        bar.inc(1);
         overheads.push((name, ratio));
         rows.push(Row {
             section: "overhead",
@@ -488,6 +490,8 @@ fn run() -> Result<(), Error> {
             ),
         });
     }
+
+    bar.finish_and_clear();
 
     // 5. Memory.
     let s = scene(10_000, 8);
@@ -557,8 +561,8 @@ fn run() -> Result<(), Error> {
             note.into(),
         ])?;
     }
-    std::fs::create_dir_all(&args.out)?;
-    table.write_csv(&args.out.join("bench.csv"))?;
+    std::fs::create_dir_all(&opts.out)?;
+    table.write_csv(&opts.out.join("bench.csv"))?;
 
     let mut points = Vec::new();
     for r in rows.iter().filter(|r| r.section != "overhead") {
@@ -582,8 +586,8 @@ fn run() -> Result<(), Error> {
         mark_pareto: false,
         size_label: None,
     };
-    chart.write_svg(&args.out.join("scaling.svg"), 1000, 650)?;
-    chart.write_png(&args.out.join("scaling.png"), 1000, 650)?;
+    chart.write_svg(&opts.out.join("scaling.svg"), 1000, 650)?;
+    chart.write_png(&opts.out.join("scaling.png"), 1000, 650)?;
 
     println!();
     println!("summary:");
@@ -621,7 +625,7 @@ fn run() -> Result<(), Error> {
     );
     println!(
         "wrote {}/bench.csv and scaling.png|svg in {:.0} s",
-        args.out.display(),
+        opts.out.display(),
         started.elapsed().as_secs_f64()
     );
     Ok(())

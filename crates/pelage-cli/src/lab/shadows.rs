@@ -3,7 +3,7 @@
 //! through the real strands.
 //!
 //! ```text
-//! cargo run --release --example shadow_lab -- [--quick] [--out DIR]
+//! pelage lab shadows [--quick] [--out DIR]
 //! ```
 //!
 //! Writes `DIR/shadows.csv` (default `out/lab`; GPU time from timestamp queries, median
@@ -27,6 +27,9 @@ use pelage_reference::transmittance::{
     SegmentBvh, rmse_p95, segments_from_strands, transmittance_at_vertices,
 };
 
+use super::LabOpts;
+use crate::progress;
+
 /// One groom of the lab.
 struct Groom {
     name: &'static str,
@@ -34,7 +37,7 @@ struct Groom {
     hair: HairParams,
 }
 
-fn grooms(quick: bool) -> Vec<Groom> {
+fn grooms(quick: bool) -> Result<Vec<Groom>, Box<dyn std::error::Error>> {
     let scale = |full: u32, small: u32| if quick { small } else { full };
     let mut fur = HairParams::default();
     fur.roots.count = scale(20_000, 3_000);
@@ -51,7 +54,7 @@ fn grooms(quick: bool) -> Vec<Groom> {
         radius: 0.03,
         pitch: 0.08,
     };
-    let head = Mesh::icosphere(0.5, 3).expect("a valid icosphere");
+    let head = Mesh::icosphere(0.5, 3)?;
     let mut out = vec![
         Groom {
             name: "dense_fur",
@@ -72,7 +75,7 @@ fn grooms(quick: bool) -> Vec<Groom> {
     for g in &mut out {
         g.hair.wind = WindParams::calm();
     }
-    out
+    Ok(out)
 }
 
 fn map(size: u32, pcf_radius: u32) -> MapParams {
@@ -168,13 +171,6 @@ fn configurations(quick: bool) -> Vec<(&'static str, String, Option<u32>, Shadow
     out
 }
 
-fn main() {
-    if let Err(e) = run() {
-        eprintln!("error: {e}");
-        std::process::exit(1);
-    }
-}
-
 /// The strands of `groom` grown at t = 0 on `gpu`.
 fn grow(
     gpu: &Gpu,
@@ -263,16 +259,12 @@ fn measure(
     })
 }
 
-fn run() -> Result<(), Box<dyn std::error::Error>> {
-    let args = pelage_lab::LabArgs::from_env(
-        "shadow_lab",
-        "every shadow method against ray-traced transmittance",
-        "out/lab",
-    );
+/// Runs the shadow lab: writes `shadows.csv` and a chart per groom under `opts.out`.
+pub fn run(opts: &LabOpts) -> Result<(), Box<dyn std::error::Error>> {
     let started = Instant::now();
     let light = DirectionalLight::default();
     let to_light = light.to_light()?;
-    let frames = if args.quick { 5 } else { 20 };
+    let frames = if opts.quick { 5 } else { 20 };
     let mut table = Table::new(&[
         "groom",
         "method",
@@ -284,9 +276,11 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         "rmse",
         "p95",
     ]);
-    let configs = configurations(args.quick);
+    let configs = configurations(opts.quick);
+    let grooms = grooms(opts.quick)?;
+    let bar = progress::bar((grooms.len() * configs.len()) as u64, "runs")?;
     let mut budgets_text = String::new();
-    for groom in grooms(args.quick) {
+    for groom in grooms {
         // Ground truth once per groom.
         let gpu = Gpu::headless()?;
         let (strands, _) = grow(&gpu, &groom)?;
@@ -308,16 +302,17 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         ));
         let reference_started = Instant::now();
         let truth = transmittance_at_vertices(&bvh, &vertices, per, to_light, 0.01, 16);
-        println!(
+        bar.println(format!(
             "{}: {} strands, {} vertices; reference ray-traced in {:.1} s",
             groom.name,
             buffers.strand_count,
             vertices.len(),
             reference_started.elapsed().as_secs_f64()
-        );
+        ));
 
         let mut points = Vec::new();
         for (method, resolution, pcf, params) in &configs {
+            bar.set_message(format!("{} {method} {resolution}", groom.name));
             // A fresh device per run: lavapipe misplaces compute timestamps once a
             // render pass has run on a device, and the map methods are render passes.
             let gpu = Gpu::headless()?;
@@ -359,6 +354,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
                 y: f64::from(run.rmse),
                 size: Some(run.memory_mb),
             });
+            bar.inc(1);
         }
 
         // The best configuration for each time budget: the Pareto front, read left to right.
@@ -388,22 +384,23 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
             size_label: Some("memory, MB".into()),
         };
         chart.write_svg(
-            &args.out.join(format!("shadows_{}.svg", groom.name)),
+            &opts.out.join(format!("shadows_{}.svg", groom.name)),
             900,
             600,
         )?;
         chart.write_png(
-            &args.out.join(format!("shadows_{}.png", groom.name)),
+            &opts.out.join(format!("shadows_{}.png", groom.name)),
             900,
             600,
         )?;
     }
-    table.write_csv(&args.out.join("shadows.csv"))?;
+    bar.finish_and_clear();
+    table.write_csv(&opts.out.join("shadows.csv"))?;
     println!("{}", table.to_text());
     print!("{budgets_text}");
     println!(
         "wrote {}/shadows.csv and shadows_<groom>.png|svg in {:.0} s",
-        args.out.display(),
+        opts.out.display(),
         started.elapsed().as_secs_f64()
     );
     Ok(())

@@ -1,0 +1,56 @@
+//! What a command can fail with, and the exit code each failure gets.
+
+use pelage::OutputError;
+use pelage::gpu::GpuError;
+use pelage::scene::SceneFileError;
+
+/// A failed command.
+#[derive(Debug, thiserror::Error)]
+pub enum CliError {
+    /// The scene file is missing, malformed or out of range (the message names the
+    /// path, or the key and its line).
+    #[error(transparent)]
+    SceneFile(#[from] SceneFileError),
+    /// The options do not fit together.
+    #[error("{0}")]
+    Usage(String),
+    /// Building or rendering the scene failed.
+    #[error(transparent)]
+    Render(#[from] pelage::Error),
+    /// A progress bar could not be drawn.
+    #[error("progress bar: {0}")]
+    Progress(#[from] indicatif::style::TemplateError),
+    /// A lab or the benchmark failed.
+    #[error("{0}")]
+    Lab(Box<dyn std::error::Error>),
+}
+
+impl CliError {
+    /// 2 for input the user can fix (a scene file, options, out-of-range parameters),
+    /// 1 for everything else.
+    pub fn exit_code(&self) -> u8 {
+        match self {
+            CliError::SceneFile(_)
+            | CliError::Usage(_)
+            | CliError::Render(
+                pelage::Error::Param(_)
+                | pelage::Error::Strands(pelage::strands::StrandsError::Param(_))
+                | pelage::Error::Shadow(pelage::shadow::ShadowError::Param(_))
+                | pelage::Error::Shade(pelage::shade::ShadeError::Param(_)),
+            ) => 2,
+            _ => 1,
+        }
+    }
+}
+
+impl From<GpuError> for CliError {
+    fn from(e: GpuError) -> Self {
+        CliError::Render(e.into())
+    }
+}
+
+impl From<OutputError> for CliError {
+    fn from(e: OutputError) -> Self {
+        CliError::Render(e.into())
+    }
+}

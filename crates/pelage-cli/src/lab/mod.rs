@@ -1,0 +1,94 @@
+//! `pelage lab`: the experiments that chart every method's speed against its accuracy.
+//!
+//! One module per lab, each with `pub fn run(&LabOpts)`. A new lab is a module here,
+//! a variant of [`Lab`] and its arm in [`Lab::run`].
+
+use std::path::PathBuf;
+
+pub mod lod;
+pub mod oit;
+pub mod shading;
+pub mod shadows;
+
+/// The options every lab (and `pelage bench`) takes.
+#[derive(Clone, Debug, clap::Args)]
+pub struct LabOpts {
+    /// Small scenes and few configurations: a smoke run of every method in about a
+    /// minute (what CI runs).
+    #[arg(long)]
+    pub quick: bool,
+    /// Output folder for the CSV tables, charts and images; created if missing.
+    #[arg(long, value_name = "DIR", default_value = "out/lab")]
+    pub out: PathBuf,
+}
+
+/// The labs.
+#[derive(Clone, Debug, clap::Subcommand)]
+pub enum Lab {
+    /// Every shadow method, resolution and PCF kernel against ray-traced transmittance.
+    #[command(
+        long_about = "Every shadow method (voxel, deep opacity maps, shadow map + PCF, ADSM) at \
+                      several resolutions and PCF kernels, on three grooms (dense fur, long hair, \
+                      curly hair). Times each run's shadow stage with timestamp queries (median of \
+                      20 frames after 3 of warm-up, a fresh device per run), measures its memory, \
+                      and compares its transmittance at every strand vertex with transmittance \
+                      ray-traced through the real strands (RMSE, 95th percentile).\n\n\
+                      Writes DIR/shadows.csv and DIR/shadows_<groom>.png|svg (error against GPU \
+                      time, Pareto front marked), prints the table and the best method for each \
+                      time budget. About 3 minutes on 2 CPU cores with lavapipe; --quick: under 1."
+    )]
+    Shadows(LabOpts),
+    /// Every transparency method against the exact sorted composite.
+    #[command(
+        long_about = "Every order-independent transparency method and parameter (opaque, WBOIT, \
+                      k-buffer, A-buffer, DBK, random subsets) on three scenes at hair opacities \
+                      0.3 and 0.8, 320x240. Each image is compared with the exact composite (every \
+                      fragment captured, sorted and blended on the CPU) by LDR-FLIP and linear \
+                      RMSE; flicker is measured while the camera turns.\n\n\
+                      Writes DIR/oit.csv, DIR/oit_<scene>_<opacity>.png|svg (mean FLIP against GPU \
+                      time), DIR/oit_memory.csv (every method at 656x861 and 1920x1080) and the \
+                      creature's images DIR/oit_<method>.png. About 3 minutes on 2 CPU cores; \
+                      --quick: one small scene, a few configurations."
+    )]
+    Oit(LabOpts),
+    /// The shading models side by side and their cost per shaded fragment.
+    #[command(
+        long_about = "Kajiya-Kay (plain and with shifted highlights), Marschner (analytic, for \
+                      blonde, brown and black hair, and from its lookup tables) and Sadeghi on \
+                      long hair under a key and a back light.\n\n\
+                      Writes DIR/shading_sheet.png (a contact sheet of the models) and \
+                      DIR/shading.csv (stage 3 wall clock, hair fragments shaded, nanoseconds per \
+                      fragment and the extra over Kajiya-Kay). About 30 s on 2 CPU cores; --quick: \
+                      smaller images, fewer frames."
+    )]
+    Shading(LabOpts),
+    /// Level of detail at shrinking screen coverage, and the auto quality mode's picks.
+    #[command(
+        long_about = "Stochastic simplification (seed 002: lambda from the hair's screen \
+                      coverage, B0 and h, widened strands, a transition zone) and segment \
+                      reduction on the built-in creature, with its bounding box covering 60% down \
+                      to 2% of a 480x360 screen. Every LOD setting's frame time (wall clock of \
+                      submit and wait, median of 7 frames) is set against the full-detail frame, \
+                      its image against the full-detail image (mean FLIP over the image and over \
+                      the creature).\n\n\
+                      Writes DIR/lod.csv, DIR/lod.png|svg, DIR/lod_auto.csv (the auto mode: per \
+                      coverage the cheapest LOD setting within a FLIP budget of 0.05, the shadow \
+                      resolution and k-buffer depth derived from the hair's size on screen and its \
+                      depth complexity, and the cheapest shadow and transparency methods within \
+                      budget from DIR/shadows.csv and DIR/oit.csv when the other labs wrote them) \
+                      and DIR/lod_auto.png. About 4 minutes on 2 CPU cores; --quick: 10% only."
+    )]
+    Lod(LabOpts),
+}
+
+impl Lab {
+    /// Runs the chosen lab.
+    pub fn run(&self) -> Result<(), Box<dyn std::error::Error>> {
+        match self {
+            Lab::Shadows(opts) => shadows::run(opts),
+            Lab::Oit(opts) => oit::run(opts),
+            Lab::Shading(opts) => shading::run(opts),
+            Lab::Lod(opts) => lod::run(opts),
+        }
+    }
+}
