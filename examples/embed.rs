@@ -25,7 +25,7 @@ use pelage::gpu::{Gpu, wgpu};
 use pelage::scene::{Camera, HairParams, Light, Mesh, ShadeParams, VoxelParams};
 use pelage::shade::{COLOR_FORMAT, DEPTH_FORMAT, HairInputs, TargetViews, Visibility};
 use pelage::shadow::{LightVisibility, ShadowMethod, VoxelShadow};
-use pelage::strands::{GrowStrands, MeshBuffers};
+use pelage::strands::{GrowStrands, MeshBuffers, StrandStage};
 use wgpu::util::DeviceExt;
 
 const WIDTH: u32 = 320;

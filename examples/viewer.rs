@@ -176,6 +176,9 @@ struct View {
     status: String,
     screenshot_wanted: bool,
     adapter: String,
+    /// Strands and segments of the scene's groom file, when it draws one (its shape is
+    /// its own: the growth sliders do not apply).
+    groom: Option<(u32, u32)>,
 }
 
 /// The window and everything on the GPU that is not pelage's.
@@ -714,7 +717,7 @@ fn panels(ui: &mut egui::Ui, c: &mut Controls, v: &mut View) -> f32 {
                     .default_open(true)
                     .show(ui, body);
             };
-            section(ui, "Hair", &mut |ui| hair_ui(ui, c));
+            section(ui, "Hair", &mut |ui| hair_ui(ui, c, v.groom));
             section(ui, "Wind", &mut |ui| wind_ui(ui, c));
             section(ui, "Shadow", &mut |ui| shadow_ui(ui, c));
             section(ui, "Transparency", &mut |ui| transparency_ui(ui, c));
@@ -752,7 +755,19 @@ fn panels(ui: &mut egui::Ui, c: &mut Controls, v: &mut View) -> f32 {
     right.response.rect.right()
 }
 
-fn hair_ui(ui: &mut egui::Ui, c: &mut Controls) {
+/// The hair panel; `groom` holds the strands and segments of a groom file, whose count
+/// and shape are its own.
+fn hair_ui(ui: &mut egui::Ui, c: &mut Controls, groom: Option<(u32, u32)>) {
+    if let Some((strands, segments)) = groom {
+        ui.label(format!(
+            "groom file: {strands} strands x {segments} segments"
+        ));
+        let g = &mut c.hair.growth;
+        slider(ui, &mut g.width, 0.0002..=0.02, "width");
+        slider(ui, &mut g.opacity, 0.0..=1.0, "opacity");
+        slider(ui, &mut g.force_weight, 0.0..=0.5, "wind force weight");
+        return;
+    }
     slider(ui, &mut c.hair.roots.count, 100..=200_000, "strands");
     let g = &mut c.hair.growth;
     slider(ui, &mut g.length, 0.01..=0.5, "length");
@@ -989,6 +1004,7 @@ fn main() {
             orbit: Orbit::new(&base.camera),
             view: View {
                 playing: true,
+                groom: base.groom.as_ref().map(|g| (g.strands, g.segments)),
                 ..Default::default()
             },
             args,

@@ -3,15 +3,17 @@
 //! Three stages chained through GPU storage buffers, never through the CPU:
 //!
 //! 1. [`strands`]: a compute pass grows strands from a mesh (PN triangles, hair
-//!    types, gravity and wind for a time `t`);
+//!    types, gravity and wind for a time `t`), or bends the strands of a groom file
+//!    (`.hair`, `.tfx`) by the wind;
 //! 2. [`shadow`]: voxel shadows (density splatted into a light-space grid fitted
 //!    to the hair, summed along the light) and a shadow map for the mesh;
 //! 3. [`shade`]: strands drawn as camera-facing ribbons pulled from the strand
 //!    buffer, Kajiya-Kay shaded, over the opaque mesh.
 //!
-//! [`Renderer`] chains the stages for the common case: one mesh, one groom, one
-//! light, an offscreen image. Engines that bring their own device, buffers and
-//! render targets call the stage types directly ([`strands::GrowStrands`],
+//! [`Renderer`] chains the stages for the common case: one mesh, one groom (grown fur
+//! or a file's, [`Scene::groom`]), up to four lights, an offscreen image. Engines that
+//! bring their own device, buffers and render targets call the stage types directly
+//! ([`strands::GrowStrands`] or [`strands::GroomStrands`],
 //! [`shadow::VoxelShadow`], [`shade::Opaque`]) on their own encoder.
 //!
 //! ```no_run

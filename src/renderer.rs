@@ -1,18 +1,21 @@
 //! The frame pipeline: strands, shadows, then shading into an offscreen image.
 
 use pelage_gpu::{Gpu, GpuTimer, wgpu};
-use pelage_scene::{Camera, HairParams, Light, Mesh, ShadeParams, ShadowParams};
+use pelage_scene::{Camera, HairParams, Light, Mesh, Resampled, ShadeParams, ShadowParams};
 use pelage_shade::{HairInputs, HairPass, OitStats, Targets, Visibility};
 use pelage_shadow::{LightVisibility, ShadowMethod};
-use pelage_strands::{GrowStrands, LodLevel, MeshBuffers};
+use pelage_strands::{GroomStrands, GrowStrands, MeshBuffers, StrandStage};
 
 /// Everything a frame is made of.
 #[derive(Clone, Debug)]
 pub struct Scene {
-    /// The surface the hair grows from.
+    /// The surface the hair grows from (drawn under a groom, as its head, say).
     pub mesh: Mesh,
     /// Roots, growth and wind.
     pub hair: HairParams,
+    /// A groom to draw instead of growing fur from `mesh` (see [`GroomStrands`] for the
+    /// parts of `hair` it uses); `None` grows fur.
+    pub groom: Option<Resampled>,
     /// Shadow method.
     pub shadow: ShadowParams,
     /// Raster and shading.
@@ -30,6 +33,7 @@ impl Default for Scene {
         Self {
             mesh: Mesh::creature(),
             hair: HairParams::default(),
+            groom: None,
             shadow: ShadowParams::default(),
             shade: ShadeParams::default(),
             camera: Camera::default(),
@@ -39,7 +43,8 @@ impl Default for Scene {
 }
 
 impl Scene {
-    /// Reads a scene file (TOML, see [`pelage_scene::SceneFile`]) and builds or loads its mesh.
+    /// Reads a scene file (TOML, see [`pelage_scene::SceneFile`]) and builds or loads its
+    /// mesh and groom.
     pub fn from_file(path: &std::path::Path) -> Result<Self, pelage_scene::SceneFileError> {
         Self::from_scene_file(&pelage_scene::SceneFile::load(path)?, path)
     }
@@ -52,6 +57,7 @@ impl Scene {
         Ok(Self {
             mesh: file.mesh(path)?,
             hair: file.hair.clone(),
+            groom: file.groom(path)?,
             shadow: file.shadow.clone(),
             shade: file.shade.clone(),
             camera: file.camera.clone(),
@@ -64,7 +70,8 @@ impl Scene {
     /// finer than the picture can show. Unchanged when the hair's box reaches behind the
     /// camera.
     pub fn sized_for_view(&self, camera: &Camera, width: u32, height: u32) -> Self {
-        let level = LodLevel::for_view(&self.hair, self.reach(), camera, width, height);
+        let level =
+            pelage_strands::LodLevel::for_view(&self.hair, self.reach(), camera, width, height);
         let mut out = self.clone();
         if level.extent_pixels.is_finite() {
             out.shadow = self.shadow.sized_for(level.extent_pixels);
@@ -73,9 +80,22 @@ impl Scene {
     }
 
     /// A world box holding the mesh and everything that can grow on it: the mesh's
-    /// bounds grown by the longest strand (length, jitter and length map) and its width.
+    /// bounds grown by the longest strand (length, jitter and length map) and its width;
+    /// with a groom, the mesh's bounds and the groom's reach
+    /// ([`GroomStrands::reach_of`]; the rest bounds alone when its parameters are bad,
+    /// which the renderer then refuses).
     pub fn reach(&self) -> (glam::Vec3, glam::Vec3) {
         let (lo, hi) = self.mesh.bounds();
+        if let Some(groom) = &self.groom {
+            let (glo, ghi) = GroomStrands::reach_of(groom, &self.hair).unwrap_or_else(|_| {
+                let first = groom.points.first().copied().unwrap_or(lo);
+                groom
+                    .points
+                    .iter()
+                    .fold((first, first), |(a, b), &p| (a.min(p), b.max(p)))
+            });
+            return (lo.min(glo), hi.max(ghi));
+        }
         let g = &self.hair.growth;
         let map_max = self
             .hair
@@ -106,7 +126,7 @@ impl FrameStats {
 #[derive(Debug)]
 pub struct Renderer {
     mesh_buffers: MeshBuffers,
-    strands: GrowStrands,
+    strands: Box<dyn StrandStage>,
     /// One shadow per light, with the pass that hands it to the hair.
     shadows: Vec<(Box<dyn ShadowMethod>, LightVisibility)>,
     hair: Box<dyn HairPass>,
@@ -123,10 +143,22 @@ pub struct Renderer {
 }
 
 impl Renderer {
-    /// Uploads the mesh, samples the roots, builds every pipeline and a `width` x `height` target.
+    /// Uploads the mesh, samples the roots (or uploads the groom), builds every pipeline
+    /// and a `width` x `height` target.
     pub fn new(gpu: &Gpu, scene: &Scene, width: u32, height: u32) -> crate::Result<Self> {
         let mesh_buffers = MeshBuffers::upload(gpu, &scene.mesh)?;
-        let strands = GrowStrands::new(gpu, &scene.mesh, &mesh_buffers, &scene.hair)?;
+        let strands: Box<dyn StrandStage> = match &scene.groom {
+            Some(groom) => Box::new(GroomStrands::new(gpu, groom, &scene.hair)?),
+            None => Box::new(GrowStrands::new(
+                gpu,
+                &scene.mesh,
+                &mesh_buffers,
+                &scene.hair,
+            )?),
+        };
+        // What the strands amount to (a groom's count, segments and width), which the
+        // later stages size themselves by.
+        let hair = strands.params().clone();
         Light::validate_all(&scene.lights).map_err(pelage_shade::ShadeError::from)?;
         let reach = scene.reach();
         let vertices =
@@ -149,7 +181,7 @@ impl Renderer {
             let Some(shadow) = pelage_shadow::build(
                 gpu,
                 &scene.shadow,
-                &scene.hair.growth,
+                &hair.growth,
                 strands.buffers(),
                 &mesh_buffers,
                 reach,
@@ -177,7 +209,7 @@ impl Renderer {
             gpu,
             &HairInputs {
                 params: &scene.shade,
-                hair: &scene.hair,
+                hair: &hair,
                 mesh: &mesh_buffers,
                 strands: strands.buffers(),
                 shadow: binding.as_ref(),
@@ -208,7 +240,9 @@ impl Renderer {
     /// per-frame uniforms of every stage for time `t` and `camera`.
     fn prepare(&mut self, gpu: &Gpu, t: f32, camera: &Camera) -> crate::Result<()> {
         let (width, height) = (self.targets.width, self.targets.height);
-        let level = LodLevel::for_view(self.strands.params(), self.reach, camera, width, height);
+        let level = self
+            .strands
+            .level_for_view(self.reach, camera, width, height);
         self.strands.set_lod(level)?;
         // Stage 1 first: it publishes the strand layout the later stages draw.
         self.strands.set_time(&gpu.queue, t)?;
@@ -290,8 +324,8 @@ impl Renderer {
     }
 
     /// Stage 1, for binding its buffers or reading its roots.
-    pub fn strands(&self) -> &GrowStrands {
-        &self.strands
+    pub fn strands(&self) -> &dyn StrandStage {
+        self.strands.as_ref()
     }
 
     /// Light visibility at every strand vertex after the last frame, one `Vec` per light
@@ -314,7 +348,7 @@ impl Renderer {
     }
 
     /// The level of detail of the last frame: strands and segments grown, and why.
-    pub fn lod(&self) -> &LodLevel {
+    pub fn lod(&self) -> &pelage_strands::LodLevel {
         self.strands.lod()
     }
 

@@ -81,8 +81,8 @@ pub fn run(opts: &AnimateOpts) -> Result<(), CliError> {
     println!(
         "wrote {} frames of {size} ({} strands x {} segments) to {}/frame_*.png and {}",
         opts.frames,
-        scene.hair.roots.count,
-        scene.hair.growth.segments,
+        renderer.strands().params().roots.count,
+        renderer.strands().params().growth.segments,
         opts.out.display(),
         gif_path.display()
     );

@@ -24,9 +24,10 @@
 use std::time::Instant;
 
 use pelage::gpu::{Gpu, GpuTimer, ShaderLibrary, compute_pipeline, dispatch_size, wgpu};
+use pelage::scene::Resampled;
 use pelage::scene::{DirectionalLight, ShadowParams, Transparency, VoxelParams, WindParams};
 use pelage::shadow::{ShadowMethod, VoxelShadow};
-use pelage::strands::{GrowStrands, MeshBuffers};
+use pelage::strands::{GroomStrands, GrowStrands, MeshBuffers, StrandStage};
 use pelage::{Renderer, Scene};
 use pelage_lab::{ScatterChart, ScatterPoint, Table};
 
@@ -130,6 +131,31 @@ impl StrandWrites {
         pass.set_bind_group(0, &self.group, &[]);
         pass.dispatch_workgroups(self.groups.0, self.groups.1, 1);
     }
+}
+
+/// The strands `grow` grows at t = 0, read back as a groom of the same strands and segments.
+fn grown_groom(gpu: &Gpu, grow: &GrowStrands) -> Result<Resampled, Error> {
+    grow.set_time(&gpu.queue, 0.0)?;
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    grow.encode(&mut encoder, None);
+    gpu.submit_and_wait([encoder.finish()])?;
+    let bytes = pelage::gpu::read_buffer(gpu, &grow.buffers().vertices)?;
+    let points = bytes
+        .chunks_exact(16)
+        .map(|v| {
+            let f = |i: usize| f32::from_le_bytes([v[i], v[i + 1], v[i + 2], v[i + 3]]);
+            glam::Vec3::new(f(0), f(4), f(8))
+        })
+        .collect();
+    let strands = grow.buffers().strand_count;
+    Ok(Resampled {
+        points,
+        widths: None,
+        segments: grow.buffers().segments,
+        strands,
+        skipped: 0,
+        source_strands: (0..strands).collect(),
+    })
 }
 
 /// The default creature with `strands` strands of `segments` segments, in the default wind.
@@ -334,6 +360,36 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
             bytes,
             copy_ratio: ratio,
             note: "gravity and wind off: the surface evaluation and growth alone".into(),
+        });
+        // The same strands as a groom file would bring them (grown once, read back),
+        // bent by the same wind every frame: the other stage 1 method.
+        let groom = grown_groom(&gpu, &grow)?;
+        let bent = GroomStrands::new(&gpu, &groom, &s.hair)?;
+        let groom_times = time_frames(&gpu, frames, |encoder, timer, frame| {
+            bent.set_time(&gpu.queue, frame as f32 / 24.0)?;
+            bent.encode(encoder, timer);
+            Ok(())
+        })?;
+        let groom_ms = get(&groom_times, "strands: groom");
+        let bytes = 2 * vertices + roots;
+        let ratio = (bytes as f64 / groom_ms) / copy_rate;
+        bar.println(format!(
+            "  {strands:>7} strands  {:<15} {groom_ms:9.3} ms  {:8.2} MB  {:6.2} GB/s  {:5.0}% of copy",
+            "strands: groom",
+            bytes as f64 / 1e6,
+            bytes as f64 / groom_ms / 1e6,
+            100.0 * ratio
+        ));
+        rows.push(Row {
+            section: "compute",
+            stage: "strands: groom".into(),
+            strands,
+            pixels: 0,
+            gpu_ms: groom_ms,
+            bytes,
+            copy_ratio: ratio,
+            note: "the grown strands as a groom: reads rest points and roots, writes vertices"
+                .into(),
         });
         bar.inc(1);
         scan_ms.push(get(&times, "shadow: scan"));

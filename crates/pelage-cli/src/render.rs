@@ -43,8 +43,8 @@ pub fn run(opts: &RenderOpts) -> Result<(), CliError> {
     println!(
         "wrote {} ({size}, {} strands x {} segments, t = {} s)",
         opts.out.display(),
-        scene.hair.roots.count,
-        scene.hair.growth.segments,
+        renderer.strands().params().roots.count,
+        renderer.strands().params().growth.segments,
         opts.time
     );
     if scene.hair.lod.enabled {

@@ -227,6 +227,13 @@ impl SceneOpts {
             None => {}
         }
         if let Some(n) = self.strands {
+            if scene.groom.is_some() {
+                return Err(CliError::Usage(
+                    "--strands: the scene draws a groom file, whose strands are its own; \
+                     leave --strands out, or remove the scene's [groom] table to grow fur"
+                        .into(),
+                ));
+            }
             scene.hair.roots.count = n;
         }
         if self.lod {

@@ -1,4 +1,5 @@
-//! Mirror of `wgsl/strands/grow.wgsl`, loop for loop.
+//! Mirrors of the stage 1 shaders, loop for loop: `wgsl/strands/grow.wgsl` (strands grown
+//! from a mesh) and `wgsl/strands/groom.wgsl` (a groom file bent by the wind).
 
 use std::f32::consts::PI;
 
@@ -198,4 +199,69 @@ pub fn drawn_width(root: &StrandRoot, index: u32, u: &GrowUniforms) -> f32 {
         s_min: u.lod_s_min,
     };
     root.width * zone.scale((index as f32 + 0.5) / u.strand_total.max(1) as f32)
+}
+
+/// `quat_rotate` in `wgsl/strands/groom.wgsl`: `v` turned by the unit quaternion `q`
+/// (xyz = vector part, w = scalar part).
+fn quat_rotate(q: Vec4, v: Vec3) -> Vec3 {
+    let axis = q.truncate();
+    v + 2.0 * axis.cross(axis.cross(v) + q.w * v)
+}
+
+/// `quat_mul` in WGSL: the rotation `a` after `b`.
+fn quat_mul(a: Vec4, b: Vec4) -> Vec4 {
+    let (av, bv) = (a.truncate(), b.truncate());
+    (a.w * bv + b.w * av + av.cross(bv)).extend(a.w * b.w - av.dot(bv))
+}
+
+/// `quat_between` in WGSL: the shortest rotation taking unit `a` to unit `b`.
+fn quat_between(a: Vec3, b: Vec3) -> Vec4 {
+    let w = 1.0 + a.dot(b);
+    if w < 1e-6 {
+        let hint = if a.x.abs() > 0.9 { Vec3::Y } else { Vec3::X };
+        return safe_normalize(a.cross(hint), Vec3::Z).extend(0.0);
+    }
+    let q = a.cross(b).extend(w);
+    q / q.length()
+}
+
+/// Mirror of `main` in `wgsl/strands/groom.wgsl` for one strand: its rest points
+/// (`u.segments + 1`, root first) bent by the force field of `u` at the strand's time;
+/// `u.segments / u.step + 1` vertices (xyz position, w strand parameter).
+pub fn deform_groom_strand(rest: &[Vec3], root: &StrandRoot, u: &GrowUniforms) -> Vec<Vec4> {
+    let segments = u.segments;
+    let step = u.step.max(1);
+    let t = u.time + root.phase * u.phase_spread;
+    let rest_at = |i: u32| rest.get(i as usize).copied().unwrap_or(Vec3::ZERO);
+    let mut q = Vec4::new(0.0, 0.0, 0.0, 1.0);
+    let mut p = rest_at(0);
+    let mut d = Vec3::Y;
+    let mut out = Vec::with_capacity((segments / step) as usize + 1);
+    out.push(p.extend(0.0));
+    for i in 0..segments {
+        let offset = rest_at(i + 1) - rest_at(i);
+        let conjugate = (-q.truncate()).extend(q.w);
+        d = quat_rotate(q, safe_normalize(offset, quat_rotate(conjugate, d)));
+        p += d * offset.length();
+        if (i + 1) % step == 0 {
+            out.push(p.extend((i + 1) as f32 / segments as f32));
+        }
+        let bent = safe_normalize(d + force(u, p, t) * u.force_weight, d);
+        q = quat_mul(quat_between(d, bent), q);
+        q /= q.length();
+        d = bent;
+    }
+    out
+}
+
+/// Deforms the strands `u` draws (the first `u.strand_count`) of a groom whose rest
+/// points are `rest` (`u.segments + 1` per strand, in the order of `roots`), in the
+/// layout of `StrandBuffers::vertices`: the mirror of `wgsl/strands/groom.wgsl`.
+pub fn deform_groom(rest: &[Vec3], roots: &[StrandRoot], u: &GrowUniforms) -> Vec<Vec4> {
+    let per_strand = u.segments as usize + 1;
+    rest.chunks(per_strand)
+        .zip(roots)
+        .take(u.strand_count as usize)
+        .flat_map(|(points, root)| deform_groom_strand(points, root, u))
+        .collect()
 }

@@ -17,6 +17,7 @@ use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
 
 use glam::{DVec3, Vec3};
+use serde::{Deserialize, Serialize};
 
 use crate::hair_file::{HairFile, HairFileError};
 use crate::params::MAX_SEGMENTS;
@@ -488,6 +489,88 @@ impl Groom {
             .as_ref()
             .map(|w| w.iter().map(|&w| (f64::from(w) * scale) as f32).collect());
         Groom::from_parts(points, self.offsets.clone(), widths)
+    }
+}
+
+/// A groom file as a scene describes it: which file, how it is placed, and how many
+/// segments each strand is resampled to (the `[groom]` table of a scene file).
+///
+/// The file's points are first centred and scaled so that the longest side of their
+/// bounding box is `fit` (when given; `.hair` and `.tfx` files come in any units), then
+/// scaled by `scale` and moved by `translation`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GroomSource {
+    /// The `.hair` or `.tfx` file; relative to the scene file's folder in a scene file.
+    pub path: PathBuf,
+    /// Segments per strand after resampling by arc length (1 to [`MAX_SEGMENTS`]; the
+    /// default 16). Every strand gets the same count.
+    #[serde(default = "GroomSource::default_segments")]
+    pub segments: u32,
+    /// Centre the groom on the origin and scale it so that the longest side of its
+    /// bounding box is this many scene units (> 0); leave out to keep the file's units.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fit: Option<f32>,
+    /// Scale applied after `fit` (> 0; the default 1).
+    #[serde(default = "GroomSource::default_scale")]
+    pub scale: f32,
+    /// Translation applied last, scene units (the default none).
+    #[serde(default)]
+    pub translation: Vec3,
+}
+
+impl GroomSource {
+    fn default_segments() -> u32 {
+        16
+    }
+
+    fn default_scale() -> f32 {
+        1.0
+    }
+
+    /// The file at `path` with every other setting at its default.
+    pub fn new(path: impl Into<PathBuf>) -> Self {
+        Self {
+            path: path.into(),
+            segments: Self::default_segments(),
+            fit: None,
+            scale: Self::default_scale(),
+            translation: Vec3::ZERO,
+        }
+    }
+
+    /// Checks the settings (not the file); the error names the first bad one.
+    pub fn validate(&self) -> Result<(), crate::ParamError> {
+        if self.segments == 0 || self.segments > MAX_SEGMENTS {
+            return Err(crate::ParamError::new(
+                "groom.segments",
+                self.segments,
+                &format!("must be in 1..={MAX_SEGMENTS}"),
+            ));
+        }
+        if let Some(fit) = self.fit {
+            crate::params::positive("groom.fit", fit)?;
+        }
+        crate::params::positive("groom.scale", self.scale)?;
+        for (axis, v) in ["x", "y", "z"].iter().zip(self.translation.to_array()) {
+            crate::params::finite(&format!("groom.translation.{axis}"), v)?;
+        }
+        Ok(())
+    }
+
+    /// Reads the file, places it and resamples it to `segments` segments per strand.
+    ///
+    /// Errors: what [`Groom::load`], [`Groom::normalized`], [`Groom::transformed`] and
+    /// [`Groom::resample`] report (a missing or broken file names its path).
+    pub fn load(&self) -> Result<Resampled, GroomError> {
+        let mut groom = Groom::load(&self.path)?;
+        if let Some(fit) = self.fit {
+            groom = groom.normalized(fit)?;
+        }
+        if self.scale != 1.0 || self.translation != Vec3::ZERO {
+            groom = groom.transformed(self.scale, self.translation)?;
+        }
+        groom.resample(self.segments)
     }
 }
 

@@ -1,5 +1,5 @@
 //! CPU scene data for pelage: meshes (procedural and OBJ), Cem Yuksel `.hair`
-//! files, camera, lights and the parameters of every stage.
+//! and AMD TressFX `.tfx` files, camera, lights and the parameters of every stage.
 //!
 //! Everything here is plain CPU data with serde support; nothing here knows
 //! about the GPU. The stage crates turn these types into GPU buffers.
@@ -18,7 +18,7 @@ pub mod tfx_file;
 pub mod transparency;
 
 pub use camera::Camera;
-pub use groom::{Groom, GroomError, Resampled};
+pub use groom::{Groom, GroomError, GroomSource, Resampled};
 pub use hair_file::{HairFile, HairFileError};
 pub use light::{DirectionalLight, Light, MAX_LIGHTS, PointLight};
 pub use lod::{LodParams, Transition};

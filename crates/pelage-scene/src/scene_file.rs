@@ -22,12 +22,25 @@
 //! kind = "directional"
 //! direction = [-0.85, -0.6, 0.1]
 //! ```
+//!
+//! A `[groom]` table draws the strands of a `.hair` or `.tfx` file instead of growing
+//! fur from the mesh (see [`GroomSource`]; the mesh is still drawn, as the head, say):
+//!
+//! ```toml
+//! [groom]
+//! path = "long_hair.hair" # relative to the scene file
+//! segments = 16           # resampled by arc length
+//! fit = 1.8               # centred, longest side 1.8 units (leave out: the file's units)
+//! ```
 
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
-use crate::{Camera, HairParams, Light, Mesh, MeshError, ObjError, ShadeParams, ShadowParams};
+use crate::{
+    Camera, GroomError, GroomSource, HairParams, Light, Mesh, MeshError, ObjError, Resampled,
+    ShadeParams, ShadowParams,
+};
 
 /// The surface the hair grows from.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -80,6 +93,11 @@ pub struct SceneFile {
     pub mesh: MeshSource,
     /// Roots, growth and wind.
     pub hair: HairParams,
+    /// A groom file to draw instead of fur grown from the mesh (none by default): its
+    /// strands replace `hair.roots` and the shape keys of `hair.growth`, and the wind
+    /// bends them (see `pelage_strands::GroomStrands`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub groom: Option<GroomSource>,
     /// Stage 2's method.
     pub shadow: ShadowParams,
     /// Stage 3: shading model, transparency, look.
@@ -95,6 +113,7 @@ impl Default for SceneFile {
         Self {
             mesh: MeshSource::default(),
             hair: HairParams::default(),
+            groom: None,
             shadow: ShadowParams::default(),
             shade: ShadeParams::default(),
             camera: Camera::default(),
@@ -138,6 +157,16 @@ pub enum SceneFileError {
         /// The mesh error.
         source: MeshError,
     },
+    /// The groom file could not be loaded or resampled.
+    #[error("scene file {}: groom {}: {source}", path.display(), groom.display())]
+    Groom {
+        /// The scene file.
+        path: PathBuf,
+        /// The groom file.
+        groom: PathBuf,
+        /// Why (boxed: a file error is large).
+        source: Box<GroomError>,
+    },
     /// The OBJ file could not be loaded (its path is in the message).
     #[error("scene file {}: {source}", path.display())]
     Obj {
@@ -166,19 +195,26 @@ impl SceneFile {
         Ok(file)
     }
 
-    /// Reads and parses `path`; a relative OBJ path is made relative to the file's folder.
+    /// Reads and parses `path`; relative OBJ and groom paths are made relative to the
+    /// file's folder.
     pub fn load(path: &Path) -> Result<Self, SceneFileError> {
         let text = std::fs::read_to_string(path).map_err(|source| SceneFileError::Io {
             path: path.to_path_buf(),
             source,
         })?;
         let mut file = Self::parse_named(&text, path)?;
-        if let MeshSource::Obj { path: obj } = &mut file.mesh {
-            if obj.is_relative() {
+        let relative = |p: &mut PathBuf| {
+            if p.is_relative() {
                 if let Some(folder) = path.parent() {
-                    *obj = folder.join(&*obj);
+                    *p = folder.join(&*p);
                 }
             }
+        };
+        if let MeshSource::Obj { path: obj } = &mut file.mesh {
+            relative(obj);
+        }
+        if let Some(groom) = &mut file.groom {
+            relative(&mut groom.path);
         }
         Ok(file)
     }
@@ -191,7 +227,26 @@ impl SceneFile {
         self.shadow.validate()?;
         self.shade.validate()?;
         self.camera.validate()?;
+        if let Some(groom) = &self.groom {
+            groom.validate()?;
+        }
         Light::validate_all(&self.lights)
+    }
+
+    /// Loads and resamples the groom file, if the scene has one (`path` names the scene
+    /// file in errors).
+    pub fn groom(&self, path: &Path) -> Result<Option<Resampled>, SceneFileError> {
+        let Some(source) = &self.groom else {
+            return Ok(None);
+        };
+        source
+            .load()
+            .map(Some)
+            .map_err(|source_error| SceneFileError::Groom {
+                path: path.to_path_buf(),
+                groom: source.path.clone(),
+                source: Box::new(source_error),
+            })
     }
 
     /// Builds or loads the mesh (`path` names the scene file in errors).

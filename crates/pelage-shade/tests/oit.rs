@@ -10,7 +10,7 @@ use pelage_scene::{
     Camera, HairParams, Light, Mesh, ShadeParams, Transparency, WboitWeight, WindParams,
 };
 use pelage_shade::{ABuffer, HairInputs, HairPass, OitStats, Targets};
-use pelage_strands::{GrowStrands, MeshBuffers};
+use pelage_strands::{GrowStrands, MeshBuffers, StrandStage};
 
 const W: u32 = 128;
 const H: u32 = 96;

@@ -4,7 +4,7 @@ use glam::Vec3;
 use pelage_gpu::Gpu;
 use pelage_scene::{Camera, HairParams, Light, Mesh, RootParams, ShadeParams, WindParams};
 use pelage_shade::{HairInputs, HairPass, Opaque, Targets};
-use pelage_strands::{GrowStrands, MeshBuffers};
+use pelage_strands::{GrowStrands, MeshBuffers, StrandStage};
 
 const SIZE: u32 = 128;
 

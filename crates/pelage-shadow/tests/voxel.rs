@@ -9,7 +9,7 @@ use pelage_gpu::{Gpu, read_buffer};
 use pelage_reference::voxel::exclusive_scan_column;
 use pelage_scene::{GrowthParams, HairParams, Mesh, Splat, VoxelParams, WindParams};
 use pelage_shadow::{ShadowMethod, VoxelShadow};
-use pelage_strands::{GrowStrands, StrandBuffers};
+use pelage_strands::{GrowStrands, StrandBuffers, StrandStage};
 
 /// The voxel method on `strands` alone (a dummy mesh, no mesh map needed), reach box `reach`.
 fn isolated(

@@ -1,4 +1,5 @@
-//! The growth pass: one compute invocation per strand (`wgsl/strands/grow.wgsl`).
+//! The growth pass: one compute invocation per strand (`wgsl/strands/grow.wgsl`), and
+//! what every stage 1 method shares ([`StrandPass`], [`StrandStage`]).
 
 use encase::ShaderType;
 use glam::Vec3;
@@ -6,16 +7,17 @@ use pelage_gpu::{
     Gpu, GpuTimer, ShaderLibrary, UniformBuffer, bind_buffers, compute_pipeline, dispatch_size,
     storage_buffer, wgpu, zeroed_storage,
 };
-use pelage_scene::{HairParams, HairType, Mesh, SurfaceInterpolation, WindParams};
+use pelage_scene::{Camera, HairParams, HairType, Mesh, SurfaceInterpolation, WindParams};
 
 use crate::{
     LayoutCell, LodLevel, MeshBuffers, StrandLayout, StrandRoot, StrandsError, sample_roots,
 };
 
-/// Workgroup size of `grow.wgsl`.
+/// Workgroup size of `grow.wgsl` and `groom.wgsl`.
 const WORKGROUP: u32 = 64;
 
-/// The uniforms of `grow.wgsl` (`GrowUniforms` there), rewritten every frame.
+/// The uniforms of `grow.wgsl` and `groom.wgsl` (`GrowUniforms` in `strands/force.wgsl`),
+/// rewritten every frame.
 #[derive(Clone, Copy, Debug, PartialEq, ShaderType)]
 pub struct GrowUniforms {
     /// Strands grown this frame (a prefix of the groom: see [`LodLevel`]).
@@ -175,10 +177,13 @@ impl StrandBuffers {
 
 /// Stage 1: grows strands over a mesh for any time `t`.
 ///
+/// The per-frame calls (`set_time`, `set_lod`, `encode`, `buffers`, ...) are those of
+/// every stage 1 method, in [`StrandStage`].
+///
 /// ```no_run
 /// # fn demo(gpu: &pelage_gpu::Gpu) -> Result<(), pelage_strands::StrandsError> {
 /// use pelage_scene::{HairParams, Mesh};
-/// use pelage_strands::{GrowStrands, MeshBuffers};
+/// use pelage_strands::{GrowStrands, MeshBuffers, StrandStage};
 /// let mesh = Mesh::creature();
 /// let mesh_buffers = MeshBuffers::upload(gpu, &mesh)?;
 /// let strands = GrowStrands::new(gpu, &mesh, &mesh_buffers, &HairParams::default())?;
@@ -190,15 +195,8 @@ impl StrandBuffers {
 /// ```
 #[derive(Debug)]
 pub struct GrowStrands {
-    params: HairParams,
     roots: Vec<StrandRoot>,
-    pipeline: wgpu::ComputePipeline,
-    bind_group: wgpu::BindGroup,
-    uniforms: UniformBuffer<GrowUniforms>,
-    buffers: StrandBuffers,
-    /// The level of detail the next `set_time` grows.
-    level: LodLevel,
-    limits: wgpu::Limits,
+    pass: StrandPass,
 }
 
 impl GrowStrands {
@@ -227,56 +225,159 @@ impl GrowStrands {
             });
         }
         // Refuse a groom the device cannot hold before spending time on its roots.
-        let count = params.roots.count;
-        let vertex_bytes = u64::from(count) * u64::from(params.growth.segments + 1) * 16;
-        gpu.check_storage_size("strand vertices", vertex_bytes)?;
+        let vertex_bytes = StrandPass::vertex_bytes(gpu, params)?;
         let roots = sample_roots(mesh, &params.roots, &params.growth)?;
-
-        let uniforms =
-            UniformBuffer::new(gpu, "pelage grow uniforms", &GrowUniforms::new(params, 0.0))?;
         let storage = wgpu::BufferUsages::STORAGE;
         let rest_roots = storage_buffer(gpu, "pelage strand rest roots", &roots, storage)?;
-        // What later stages read: the roots with this frame's LOD width.
-        let roots_buffer = storage_buffer(gpu, "pelage strand roots", &roots, storage)?;
-        let vertices = zeroed_storage(gpu, "pelage strand vertices", vertex_bytes, storage)?;
+        let pass = StrandPass::new(
+            gpu,
+            "strands: grow",
+            "strands/grow.wgsl",
+            params,
+            &roots,
+            vertex_bytes,
+            &[
+                &mesh_buffers.positions,
+                &mesh_buffers.normals,
+                &mesh_buffers.indices,
+                &rest_roots,
+            ],
+        )?;
+        Ok(Self { roots, pass })
+    }
+}
 
-        let module = ShaderLibrary::module(gpu, "strands/grow.wgsl")?;
+impl StrandStage for GrowStrands {
+    fn pass(&self) -> &StrandPass {
+        &self.pass
+    }
+
+    fn pass_mut(&mut self) -> &mut StrandPass {
+        &mut self.pass
+    }
+
+    fn roots(&self) -> &[StrandRoot] {
+        &self.roots
+    }
+
+    fn level_for_view(
+        &self,
+        bounds: (Vec3, Vec3),
+        camera: &Camera,
+        width: u32,
+        height: u32,
+    ) -> LodLevel {
+        LodLevel::for_view(self.params(), bounds, camera, width, height)
+    }
+}
+
+/// What every stage 1 method shares: its pipeline and bind group, the per-frame
+/// [`GrowUniforms`], the [`StrandBuffers`] it writes and the level of detail it draws.
+/// A method's shader reads the uniforms at binding 0, its own inputs next, then writes
+/// the vertices and the drawn roots at the last two bindings.
+#[derive(Debug)]
+pub struct StrandPass {
+    /// The timestamp label of the pass.
+    label: &'static str,
+    params: HairParams,
+    pipeline: wgpu::ComputePipeline,
+    bind_group: wgpu::BindGroup,
+    uniforms: UniformBuffer<GrowUniforms>,
+    buffers: StrandBuffers,
+    /// The level of detail the next `set_time` grows.
+    level: LodLevel,
+    limits: wgpu::Limits,
+}
+
+impl StrandPass {
+    /// Bytes of the vertex buffer `params` needs at full detail, refused when the device
+    /// cannot bind that much.
+    pub(crate) fn vertex_bytes(gpu: &Gpu, params: &HairParams) -> crate::Result<u64> {
+        let bytes = u64::from(params.roots.count) * u64::from(params.growth.segments + 1) * 16;
+        gpu.check_storage_size("strand vertices", bytes)?;
+        Ok(bytes)
+    }
+
+    /// Allocates the strand buffers for `params` (`roots` are the rest roots, copied to
+    /// the drawn roots) and builds `shader`'s pipeline with the uniforms, `inputs`, the
+    /// vertices and the drawn roots bound in that order.
+    pub(crate) fn new(
+        gpu: &Gpu,
+        label: &'static str,
+        shader: &str,
+        params: &HairParams,
+        roots: &[StrandRoot],
+        vertex_bytes: u64,
+        inputs: &[&wgpu::Buffer],
+    ) -> crate::Result<Self> {
+        let uniforms = UniformBuffer::new(
+            gpu,
+            "pelage strand uniforms",
+            &GrowUniforms::new(params, 0.0),
+        )?;
+        let storage = wgpu::BufferUsages::STORAGE;
+        // What later stages read: the roots with this frame's LOD width.
+        let roots_buffer = storage_buffer(gpu, "pelage strand roots", roots, storage)?;
+        let vertices = zeroed_storage(gpu, "pelage strand vertices", vertex_bytes, storage)?;
+        let module = ShaderLibrary::module(gpu, shader)?;
         let (pipeline, bind_group) = gpu.scoped(|device| {
-            let pipeline = compute_pipeline(device, "pelage grow", &module, "main");
-            let bind_group = bind_buffers(
-                device,
-                "pelage grow",
-                &pipeline.get_bind_group_layout(0),
-                &[
-                    &uniforms.buffer,
-                    &mesh_buffers.positions,
-                    &mesh_buffers.normals,
-                    &mesh_buffers.indices,
-                    &rest_roots,
-                    &vertices,
-                    &roots_buffer,
-                ],
-            );
+            let pipeline = compute_pipeline(device, label, &module, "main");
+            let mut entries = vec![&uniforms.buffer];
+            entries.extend_from_slice(inputs);
+            entries.push(&vertices);
+            entries.push(&roots_buffer);
+            let bind_group =
+                bind_buffers(device, label, &pipeline.get_bind_group_layout(0), &entries);
             (pipeline, bind_group)
         })?;
-
         Ok(Self {
+            label,
             params: params.clone(),
-            roots,
             pipeline,
             bind_group,
             uniforms,
-            buffers: StrandBuffers::new(vertices, roots_buffer, count, params.growth.segments),
+            buffers: StrandBuffers::new(
+                vertices,
+                roots_buffer,
+                params.roots.count,
+                params.growth.segments,
+            ),
             level: LodLevel::full(params),
             limits: gpu.limits().clone(),
         })
     }
+}
 
-    /// Sets the time the next `encode` grows the strands for, at the level of detail
-    /// last given to [`GrowStrands::set_lod`], and publishes that level's
+/// The shape every stage 1 method has: [`GrowStrands`] (fur grown from a mesh) and
+/// [`GroomStrands`](crate::GroomStrands) (a groom file bent by the wind). Each frame:
+/// [`StrandStage::set_lod`] (optional), [`StrandStage::set_time`], then
+/// [`StrandStage::encode`]; later passes bind [`StrandStage::buffers`].
+pub trait StrandStage: std::fmt::Debug {
+    /// The state the method shares with every other.
+    fn pass(&self) -> &StrandPass;
+
+    /// The same, to change.
+    fn pass_mut(&mut self) -> &mut StrandPass;
+
+    /// One root per strand, in the order of the strand buffer (input of the CPU mirror).
+    fn roots(&self) -> &[StrandRoot];
+
+    /// The level of detail `params().lod` asks for when the hair, inside the world box
+    /// `bounds`, is seen by `camera` on a `width` x `height` target (see
+    /// [`LodLevel::for_view`]; each method bounds the error of its segment reduction).
+    fn level_for_view(
+        &self,
+        bounds: (Vec3, Vec3),
+        camera: &Camera,
+        width: u32,
+        height: u32,
+    ) -> LodLevel;
+
+    /// Sets the time the next `encode` draws the strands for, at the level of detail
+    /// last given to [`StrandStage::set_lod`], and publishes that level's
     /// [`StrandLayout`] to every pass reading the strand buffer: call it before their
     /// per-frame uniforms are written.
-    pub fn set_time(&self, queue: &wgpu::Queue, time: f32) -> crate::Result<()> {
+    fn set_time(&self, queue: &wgpu::Queue, time: f32) -> crate::Result<()> {
         if !time.is_finite() {
             return Err(pelage_scene::ParamError {
                 name: "time".into(),
@@ -285,21 +386,23 @@ impl GrowStrands {
             }
             .into());
         }
-        self.uniforms.write(queue, &self.uniforms_at(time))?;
-        self.buffers.layout.set(self.level.layout());
+        let pass = self.pass();
+        pass.uniforms.write(queue, &self.uniforms_at(time))?;
+        pass.buffers.layout.set(pass.level.layout());
         Ok(())
     }
 
-    /// Sets the level of detail the next [`GrowStrands::set_time`] grows; see
-    /// [`LodLevel::for_view`]. A level asking for more strands than the groom has, or
-    /// for a segment count that does not divide the groom's, is an error.
-    pub fn set_lod(&mut self, level: LodLevel) -> crate::Result<()> {
-        let segments = self.params.growth.segments;
-        if level.strands == 0 || level.strands > self.params.roots.count {
+    /// Sets the level of detail the next [`StrandStage::set_time`] draws; see
+    /// [`StrandStage::level_for_view`]. A level asking for more strands than the groom
+    /// has, or for a segment count that does not divide the groom's, is an error.
+    fn set_lod(&mut self, level: LodLevel) -> crate::Result<()> {
+        let pass = self.pass_mut();
+        let segments = pass.params.growth.segments;
+        if level.strands == 0 || level.strands > pass.params.roots.count {
             return Err(pelage_scene::ParamError::new(
                 "lod.strands",
                 level.strands,
-                &format!("must be in 1..={}", self.params.roots.count),
+                &format!("must be in 1..={}", pass.params.roots.count),
             )
             .into());
         }
@@ -311,52 +414,49 @@ impl GrowStrands {
             )
             .into());
         }
-        self.level = level;
+        pass.level = level;
         Ok(())
     }
 
     /// The level of detail in use.
-    pub fn lod(&self) -> &LodLevel {
-        &self.level
+    fn lod(&self) -> &LodLevel {
+        &self.pass().level
     }
 
     /// Replaces the wind (validated); takes effect at the next `set_time`.
-    pub fn set_wind(&mut self, wind: WindParams) -> crate::Result<()> {
+    fn set_wind(&mut self, wind: WindParams) -> crate::Result<()> {
         wind.validate()?;
-        self.params.wind = wind;
+        self.pass_mut().params.wind = wind;
         Ok(())
     }
 
     /// The uniforms the pass uses at `time` (what the CPU mirror needs to reproduce a frame).
-    pub fn uniforms_at(&self, time: f32) -> GrowUniforms {
-        GrowUniforms::at_level(&self.params, time, &self.level)
+    fn uniforms_at(&self, time: f32) -> GrowUniforms {
+        let pass = self.pass();
+        GrowUniforms::at_level(&pass.params, time, &pass.level)
     }
 
-    /// Records the growth pass.
-    pub fn encode(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&mut GpuTimer>) {
-        let timestamp_writes = timer.and_then(|t| t.compute_pass("strands: grow"));
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("pelage grow"),
+    /// Records the pass.
+    fn encode(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&mut GpuTimer>) {
+        let pass = self.pass();
+        let timestamp_writes = timer.and_then(|t| t.compute_pass(pass.label));
+        let mut compute = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some(pass.label),
             timestamp_writes,
         });
-        pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, &self.bind_group, &[]);
-        let groups = dispatch_size(&self.limits, u64::from(self.level.strands), WORKGROUP);
-        pass.dispatch_workgroups(groups.0, groups.1, 1);
+        compute.set_pipeline(&pass.pipeline);
+        compute.set_bind_group(0, &pass.bind_group, &[]);
+        let groups = dispatch_size(&pass.limits, u64::from(pass.level.strands), WORKGROUP);
+        compute.dispatch_workgroups(groups.0, groups.1, 1);
     }
 
     /// The buffers this stage writes.
-    pub fn buffers(&self) -> &StrandBuffers {
-        &self.buffers
+    fn buffers(&self) -> &StrandBuffers {
+        &self.pass().buffers
     }
 
-    /// The roots sampled on the CPU (input of the CPU mirror).
-    pub fn roots(&self) -> &[StrandRoot] {
-        &self.roots
-    }
-
-    /// The parameters in use.
-    pub fn params(&self) -> &HairParams {
-        &self.params
+    /// The parameters in use (for a groom, those its strands amount to).
+    fn params(&self) -> &HairParams {
+        &self.pass().params
     }
 }

@@ -1,9 +1,13 @@
-//! Stage 1 of pelage: strands grown from a triangle mesh on the GPU.
+//! Stage 1 of pelage: strands on the GPU, grown from a triangle mesh or read from a
+//! groom file.
 //!
-//! [`GrowStrands`] samples roots over the mesh once (on the CPU, deterministic
-//! from a seed), then every frame a compute pass evaluates the surface under
-//! each root (PN triangles or flat), grows the strand under gravity and wind for
-//! a time `t`, and writes [`StrandBuffers`], which later stages bind directly.
+//! Two methods with one shape ([`StrandStage`]), each writing [`StrandBuffers`], which
+//! later stages bind directly:
+//! - [`GrowStrands`] samples roots over the mesh once (on the CPU, deterministic from a
+//!   seed), then every frame a compute pass evaluates the surface under each root (PN
+//!   triangles or flat) and grows the strand under gravity and wind for a time `t`;
+//! - [`GroomStrands`] takes the strands of a `.hair` or `.tfx` file (resampled to a
+//!   fixed segment count) and every frame bends their rest shape by the wind for `t`.
 //!
 //! The mesh lives in [`MeshBuffers`]: tightly packed `f32 x3` positions and
 //! normals and a `u32` triangle list in storage buffers, which an engine may own
@@ -16,13 +20,18 @@
 //! [`StrandLayout`] of each frame is published through [`StrandBuffers::layout`], which
 //! every later pass reads when it writes its per-frame uniforms.
 
+mod groom;
 mod grow;
 mod lod;
 mod mesh_buffers;
 mod roots;
 
-pub use grow::{GrowStrands, GrowUniforms, StrandBuffers};
-pub use lod::{LayoutCell, LodLevel, StrandLayout, reduced_segments};
+pub use groom::GroomStrands;
+pub use grow::{GrowStrands, GrowUniforms, StrandBuffers, StrandPass, StrandStage};
+pub use lod::{
+    LayoutCell, LodLevel, StrandLayout, bend_error, bend_per_segment, fewest_segments,
+    reduced_segments,
+};
 pub use mesh_buffers::MeshBuffers;
 pub use roots::{StrandRoot, hash_to_unit, pcg_hash, sample_roots};
 

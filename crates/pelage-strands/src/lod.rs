@@ -112,6 +112,29 @@ impl LodLevel {
         width: u32,
         height: u32,
     ) -> Self {
+        Self::for_view_with(hair, bounds, camera, width, height, |pixels_per_unit| {
+            reduced_segments(
+                &hair.growth,
+                &hair.wind,
+                hair.lod.segment_error_pixels,
+                pixels_per_unit,
+                max_length_scale(hair),
+            )
+        })
+    }
+
+    /// [`LodLevel::for_view`] with the segment count chosen by `segments`, which is given
+    /// the pixels per world unit at the hair's nearest point and returns the count (a
+    /// divisor of `hair.growth.segments`) and its predicted error in pixels: how a stage
+    /// 1 method whose strands have a shape of their own (a groom file, say) bounds it.
+    pub fn for_view_with(
+        hair: &HairParams,
+        bounds: (Vec3, Vec3),
+        camera: &Camera,
+        width: u32,
+        height: u32,
+        segments: impl FnOnce(f32) -> (u32, f32),
+    ) -> Self {
         let full = Self::full(hair);
         if width == 0 || height == 0 {
             return full;
@@ -128,13 +151,7 @@ impl LodLevel {
         }
         let lambda = hair.lod.lambda(view.pixels);
         let zone = Transition::new(lambda, hair.lod.transition);
-        let (segments, error) = reduced_segments(
-            &hair.growth,
-            &hair.wind,
-            hair.lod.segment_error_pixels,
-            view.pixels_per_unit,
-            max_length_scale(hair),
-        );
+        let (segments, error) = segments(view.pixels_per_unit);
         Self {
             pixels: view.pixels,
             extent_pixels: view.extent,
@@ -225,9 +242,6 @@ pub fn reduced_segments(
     length_scale: f32,
 ) -> (u32, f32) {
     let full = growth.segments;
-    if max_error_pixels <= 0.0 || !pixels_per_unit.is_finite() {
-        return (full, 0.0);
-    }
     // The longest segment any strand has.
     let seg = growth.length * (1.0 + growth.length_jitter) * length_scale.max(0.0) / full as f32;
     let shape_curvature = match growth.hair_type {
@@ -244,22 +258,47 @@ pub fn reduced_segments(
             radius.abs() / (radius * radius + rise * rise).max(1e-12)
         }
     };
+    let turn = bend_per_segment(growth, wind);
+    fewest_segments(full, max_error_pixels, pixels_per_unit, |k| {
+        let span = k as f32 * seg;
+        shape_curvature * span * span / 8.0 + bend_error(k, seg, turn)
+    })
+}
+
+/// The angle, radians, by which the force field can turn a strand from one segment to
+/// the next (seed 001's bend: about `force_weight · |F|`, at most a right angle), for
+/// the largest force `growth.gravity` and `wind` can make.
+pub fn bend_per_segment(growth: &GrowthParams, wind: &WindParams) -> f32 {
     let force = growth.gravity.length()
         + wind.strength * (1.0 + wind.gust_strength.abs())
         + wind.turbulence * 3f32.sqrt();
-    // Seed 001's bend: every segment turns by about force_weight · |F| radians.
-    let turn = (growth.force_weight * force).min(std::f32::consts::FRAC_PI_2);
-    let error = |k: u32| {
-        let span = k as f32 * seg;
-        let world = shape_curvature * span * span / 8.0 + (k * k) as f32 * seg * turn / 8.0;
-        world * pixels_per_unit
-    };
+    (growth.force_weight * force).min(std::f32::consts::FRAC_PI_2)
+}
+
+/// The largest distance, world units, between a strand that turns by `turn` radians per
+/// segment of length `seg` and the chord that skips `step - 1` of its vertices.
+pub fn bend_error(step: u32, seg: f32, turn: f32) -> f32 {
+    (step * step) as f32 * seg * turn / 8.0
+}
+
+/// The fewest segments, a divisor of `full`, whose error stays within `max_error_pixels`
+/// when keeping every `k`-th vertex costs `error_world(k)` world units, and that error in
+/// pixels. Full detail when no error is allowed or the scale is not finite.
+pub fn fewest_segments(
+    full: u32,
+    max_error_pixels: f32,
+    pixels_per_unit: f32,
+    error_world: impl Fn(u32) -> f32,
+) -> (u32, f32) {
+    if max_error_pixels <= 0.0 || !pixels_per_unit.is_finite() {
+        return (full, 0.0);
+    }
     let mut best = (full, 0.0);
     for segments in (1..full).rev() {
         if !full.is_multiple_of(segments) {
             continue;
         }
-        let e = error(full / segments);
+        let e = error_world(full / segments) * pixels_per_unit;
         if !e.is_finite() || e > max_error_pixels {
             break;
         }

@@ -6,7 +6,7 @@ use pelage_reference::strands::{eval_surface, grow_strands};
 use pelage_scene::{
     HairParams, HairType, MAX_FORCE, Mesh, RootParams, SurfaceInterpolation, WindParams,
 };
-use pelage_strands::{GrowStrands, MeshBuffers};
+use pelage_strands::{GrowStrands, MeshBuffers, StrandStage};
 
 mod common;
 use common::{gpu, grow_on_gpu, read_vertices};

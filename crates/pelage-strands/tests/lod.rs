@@ -6,7 +6,7 @@ use glam::Vec3;
 use pelage_gpu::read_buffer;
 use pelage_reference::strands::{drawn_width, grow_strands};
 use pelage_scene::{Camera, HairParams, HairType, Mesh, Transition};
-use pelage_strands::{GrowStrands, LodLevel, MeshBuffers, StrandLayout, StrandRoot};
+use pelage_strands::{GrowStrands, LodLevel, MeshBuffers, StrandLayout, StrandRoot, StrandStage};
 
 mod common;
 use common::{gpu, grow_on_gpu};

@@ -26,7 +26,7 @@ use pelage::scene::{
     Camera, HairParams, Light, Mesh, ShadeParams, Transparency, WboitWeight, WindParams,
 };
 use pelage::shade::{ABuffer, HairInputs, HairPass, Targets};
-use pelage::strands::{GrowStrands, MeshBuffers};
+use pelage::strands::{GrowStrands, MeshBuffers, StrandStage};
 use pelage_lab::{ScatterChart, ScatterPoint, Table, pareto_front};
 use pelage_reference::flip::{DEFAULT_PIXELS_PER_DEGREE, LinearImage, flip, rmse_linear};
 use pelage_reference::oit::{Fragment, composite_sorted, linear_to_srgb8, srgb8_to_linear};

@@ -21,7 +21,7 @@ use pelage::scene::{
     Mesh, OpacityFormat, ShadowMapParams, ShadowParams, Splat, VoxelParams, WindParams,
 };
 use pelage::shadow::{ShadowMethod, TransmittanceProbe};
-use pelage::strands::{GrowStrands, MeshBuffers};
+use pelage::strands::{GrowStrands, MeshBuffers, StrandStage};
 use pelage_lab::{ScatterChart, ScatterPoint, Table, pareto_front};
 use pelage_reference::transmittance::{
     SegmentBvh, rmse_p95, segments_from_strands, transmittance_at_vertices,

@@ -11,6 +11,8 @@ use pelage_reference::transmittance::{
 use pelage_scene::{DirectionalLight, GrowthParams, HairParams, Mesh, WindParams};
 use pelage_shadow::{ShadowMethod, TransmittanceProbe};
 use pelage_strands::{GrowStrands, MeshBuffers, StrandBuffers, StrandRoot};
+// The per-frame calls of stage 1, for every test that uses this module.
+pub use pelage_strands::StrandStage;
 
 pub fn gpu() -> Gpu {
     Gpu::headless().unwrap_or_else(|e| panic!("these tests need a GPU adapter: {e}"))

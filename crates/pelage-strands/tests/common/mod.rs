@@ -2,7 +2,7 @@
 
 use glam::Vec4;
 use pelage_gpu::{Gpu, read_buffer, wgpu};
-use pelage_strands::GrowStrands;
+use pelage_strands::StrandStage;
 
 /// The adapter, or a failure saying what to install.
 pub fn gpu() -> Gpu {
@@ -18,8 +18,8 @@ pub fn read_vertices(gpu: &Gpu, buffer: &wgpu::Buffer) -> Vec<Vec4> {
         .collect()
 }
 
-/// Grows the strands for time `t` on the GPU and returns the vertices.
-pub fn grow_on_gpu(gpu: &Gpu, strands: &GrowStrands, t: f32) -> Vec<Vec4> {
+/// Runs a stage 1 method for time `t` on the GPU and returns the vertices.
+pub fn grow_on_gpu(gpu: &Gpu, strands: &dyn StrandStage, t: f32) -> Vec<Vec4> {
     strands.set_time(&gpu.queue, t).unwrap();
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
     strands.encode(&mut encoder, None);
