@@ -312,25 +312,27 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
             ),
             ("copy", 2 * copy.bytes, "the yardstick"),
         ];
-        for (label, bytes, note) in stages {
-            let ms = get(&times, label);
+        let compute_row = |stage: &str, ms: f64, bytes: u64, note: &str| {
             let ratio = (bytes as f64 / ms) / copy_rate;
             bar.println(format!(
-                "  {strands:>7} strands  {label:<15} {ms:9.3} ms  {:8.2} MB  {:6.2} GB/s  {:5.0}% of copy",
+                "  {strands:>7} strands  {stage:<15} {ms:9.3} ms  {:8.2} MB  {:6.2} GB/s  {:5.0}% of copy",
                 bytes as f64 / 1e6,
                 bytes as f64 / ms / 1e6,
                 100.0 * ratio
             ));
-            rows.push(Row {
+            Row {
                 section: "compute",
-                stage: label.into(),
+                stage: stage.into(),
                 strands,
                 pixels: 0,
                 gpu_ms: ms,
                 bytes,
                 copy_ratio: ratio,
                 note: note.into(),
-            });
+            }
+        };
+        for (label, bytes, note) in stages {
+            rows.push(compute_row(label, get(&times, label), bytes, note));
         }
         // The same expansion without wind forces (no noise to evaluate): how much of the
         // stage is arithmetic rather than memory traffic.
@@ -341,26 +343,12 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
             still.encode(encoder, timer);
             Ok(())
         })?;
-        let still_ms = get(&still_times, "strands: grow");
-        let bytes = roots + mesh_bytes + vertices;
-        let ratio = (bytes as f64 / still_ms) / copy_rate;
-        bar.println(format!(
-            "  {strands:>7} strands  {:<15} {still_ms:9.3} ms  {:8.2} MB  {:6.2} GB/s  {:5.0}% of copy",
-            "grow, no wind",
-            bytes as f64 / 1e6,
-            bytes as f64 / still_ms / 1e6,
-            100.0 * ratio
+        rows.push(compute_row(
+            "strands: grow, no wind",
+            get(&still_times, "strands: grow"),
+            roots + mesh_bytes + vertices,
+            "gravity and wind off: the surface evaluation and growth alone",
         ));
-        rows.push(Row {
-            section: "compute",
-            stage: "strands: grow, no wind".into(),
-            strands,
-            pixels: 0,
-            gpu_ms: still_ms,
-            bytes,
-            copy_ratio: ratio,
-            note: "gravity and wind off: the surface evaluation and growth alone".into(),
-        });
         // The same strands as a groom file would bring them (grown once, read back),
         // bent by the same wind every frame: the other stage 1 method.
         let groom = grown_groom(&gpu, &grow)?;
@@ -370,27 +358,12 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
             bent.encode(encoder, timer);
             Ok(())
         })?;
-        let groom_ms = get(&groom_times, "strands: groom");
-        let bytes = 2 * vertices + roots;
-        let ratio = (bytes as f64 / groom_ms) / copy_rate;
-        bar.println(format!(
-            "  {strands:>7} strands  {:<15} {groom_ms:9.3} ms  {:8.2} MB  {:6.2} GB/s  {:5.0}% of copy",
+        rows.push(compute_row(
             "strands: groom",
-            bytes as f64 / 1e6,
-            bytes as f64 / groom_ms / 1e6,
-            100.0 * ratio
+            get(&groom_times, "strands: groom"),
+            2 * vertices + roots,
+            "the grown strands as a groom: reads rest points and roots, writes vertices",
         ));
-        rows.push(Row {
-            section: "compute",
-            stage: "strands: groom".into(),
-            strands,
-            pixels: 0,
-            gpu_ms: groom_ms,
-            bytes,
-            copy_ratio: ratio,
-            note: "the grown strands as a groom: reads rest points and roots, writes vertices"
-                .into(),
-        });
         bar.inc(1);
         scan_ms.push(get(&times, "shadow: scan"));
         grow_points.push((f64::from(strands), get(&times, "strands: grow")));

@@ -115,3 +115,31 @@ fn garbage_never_panics() {
         let _ = SceneFile::parse(&text);
     }
 }
+
+#[test]
+fn a_groom_table_round_trips_and_its_path_is_relative_to_the_scene() {
+    let text = "[groom]\npath = \"hair/long.tfx\"\nsegments = 24\nfit = 1.5\n";
+    let file = SceneFile::parse(text).unwrap();
+    let groom = file.groom.as_ref().expect("a groom");
+    assert_eq!(
+        (groom.segments, groom.fit, groom.scale),
+        (24, Some(1.5), 1.0),
+        "the defaults fill what is left out"
+    );
+    let again = SceneFile::parse(&file.to_toml().unwrap()).unwrap();
+    assert_eq!(again, file);
+    // Without a groom the table is not written (the default scene has none).
+    assert!(!SceneFile::default().to_toml().unwrap().contains("groom"));
+
+    let dir = std::env::temp_dir().join(format!("pelage-groom-scene-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("scene.toml");
+    std::fs::write(&path, text).unwrap();
+    let loaded = SceneFile::load(&path).unwrap();
+    assert_eq!(
+        loaded.groom.unwrap().path,
+        dir.join("hair/long.tfx"),
+        "relative to the scene file's folder"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
