@@ -87,13 +87,8 @@ impl Scene {
     pub fn reach(&self) -> (glam::Vec3, glam::Vec3) {
         let (lo, hi) = self.mesh.bounds();
         if let Some(groom) = &self.groom {
-            let (glo, ghi) = GroomStrands::reach_of(groom, &self.hair).unwrap_or_else(|_| {
-                let first = groom.points.first().copied().unwrap_or(lo);
-                groom
-                    .points
-                    .iter()
-                    .fold((first, first), |(a, b), &p| (a.min(p), b.max(p)))
-            });
+            let (glo, ghi) =
+                GroomStrands::reach_of(groom, &self.hair).unwrap_or_else(|_| groom.bounds());
             return (lo.min(glo), hi.max(ghi));
         }
         let g = &self.hair.growth;

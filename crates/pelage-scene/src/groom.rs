@@ -55,6 +55,16 @@ pub struct Resampled {
     pub source_strands: Vec<u32>,
 }
 
+impl Resampled {
+    /// Component-wise minimum and maximum of all points (the origin for no points).
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        let first = self.points.first().copied().unwrap_or(Vec3::ZERO);
+        self.points
+            .iter()
+            .fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p)))
+    }
+}
+
 /// Why a groom could not be built, loaded, resampled or transformed.
 #[derive(Debug, thiserror::Error)]
 pub enum GroomError {

@@ -167,11 +167,7 @@ impl GroomStrands {
     /// strand (at most its length) and by the width.
     pub fn reach_of(groom: &Resampled, hair: &HairParams) -> crate::Result<(Vec3, Vec3)> {
         let params = Self::params_for(groom, hair)?;
-        let first = groom.points.first().copied().unwrap_or(Vec3::ZERO);
-        let (lo, hi) = groom
-            .points
-            .iter()
-            .fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+        let (lo, hi) = groom.bounds();
         // Segment j turns by at most j·turn from its rest direction, and a unit vector
         // turned by θ moves by 2 sin(θ/2) <= min(θ, 2).
         let turn = bend_per_segment(&params.growth, &params.wind);

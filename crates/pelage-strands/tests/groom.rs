@@ -63,12 +63,7 @@ fn calm() -> HairParams {
 }
 
 fn size(resampled: &Resampled) -> f32 {
-    let (lo, hi) = resampled
-        .points
-        .iter()
-        .fold((Vec3::MAX, Vec3::MIN), |(lo, hi), &p| {
-            (lo.min(p), hi.max(p))
-        });
+    let (lo, hi) = resampled.bounds();
     (hi - lo).length()
 }
 
