@@ -62,7 +62,8 @@ impl GroomStrands {
     /// cannot bind.
     pub fn new(gpu: &Gpu, groom: &Resampled, hair: &HairParams) -> crate::Result<Self> {
         let params = Self::params_for(groom, hair)?;
-        let vertex_bytes = StrandPass::vertex_bytes(gpu, &params)?;
+        // Refuse a groom the device cannot hold before shuffling it.
+        StrandPass::vertex_bytes(gpu, &params)?;
         let per_strand = groom.segments as usize + 1;
         let order = shuffled(groom.strands, hair.roots.seed);
         let seed_hash = pcg_hash(hair.roots.seed);
@@ -113,7 +114,6 @@ impl GroomStrands {
             "strands/groom.wgsl",
             &params,
             &roots,
-            vertex_bytes,
             &[&rest_buffer, &rest_roots],
         )?;
         Ok(Self {

@@ -225,7 +225,7 @@ impl GrowStrands {
             });
         }
         // Refuse a groom the device cannot hold before spending time on its roots.
-        let vertex_bytes = StrandPass::vertex_bytes(gpu, params)?;
+        StrandPass::vertex_bytes(gpu, params)?;
         let roots = sample_roots(mesh, &params.roots, &params.growth)?;
         let storage = wgpu::BufferUsages::STORAGE;
         let rest_roots = storage_buffer(gpu, "pelage strand rest roots", &roots, storage)?;
@@ -235,7 +235,6 @@ impl GrowStrands {
             "strands/grow.wgsl",
             params,
             &roots,
-            vertex_bytes,
             &[
                 &mesh_buffers.positions,
                 &mesh_buffers.normals,
@@ -307,9 +306,9 @@ impl StrandPass {
         shader: &str,
         params: &HairParams,
         roots: &[StrandRoot],
-        vertex_bytes: u64,
         inputs: &[&wgpu::Buffer],
     ) -> crate::Result<Self> {
+        let vertex_bytes = Self::vertex_bytes(gpu, params)?;
         let uniforms = UniformBuffer::new(
             gpu,
             "pelage strand uniforms",
