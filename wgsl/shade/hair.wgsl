@@ -1,5 +1,5 @@
 // Stage 3, hair: strands expanded into camera-facing ribbons in the vertex shader
-// and shaded by the hair model contract (hair_radiance, shade/hair_model.wgsl or its
+// and shaded by the hair model contract (hair_light, shade/hair_model.wgsl or its
 // redirect: Kajiya-Kay, Marschner, Sadeghi) for every light, shadowed per strand
 // vertex by stage 2's visibility buffer. Shared by every
 // hair pass: the opaque one (shade/ribbons.wgsl) and each transparency method
@@ -111,12 +111,16 @@ fn perpendicular_any(t: vec3<f32>) -> vec3<f32> {
 fn hair_shade(in: VertexOut) -> vec4<f32> {
     let t = safe_normalize(in.tangent, vec3<f32>(0.0, 1.0, 0.0));
     let v = safe_normalize(frame.eye - in.world, vec3<f32>(0.0, 0.0, 1.0));
+    // Root occlusion stands for what no light's shadow sees: the ambient light's occlusion
+    // by the body and the hair near the roots, always; and the lights' self-shadowing when
+    // stage 2 draws no shadow (with a shadow method on, the visibility already holds it).
     let occlusion = mix(1.0 - style.root_occlusion, 1.0, in.v);
-    var lit = in.color * frame.ambient;
+    let direct_occlusion = select(occlusion, 1.0, frame.visibility_stride > 0u);
+    var lit = vec3<f32>(0.0);
     for (var i = 0u; i < min(frame.light_count, MAX_LIGHTS); i += 1u) {
         let l = frame.lights[i];
-        let irradiance = frame_irradiance(l, in.world) * in.visibility[i];
-        lit += hair_radiance(t, frame_to_light(l, in.world), v, in.color, in.strand_random) * irradiance;
+        let irradiance = frame_irradiance(l, in.world);
+        lit += hair_light(t, frame_to_light(l, in.world), v, in.color, in.strand_random, in.visibility[i]) * irradiance;
     }
-    return vec4<f32>(lit * occlusion, style.opacity * in.coverage);
+    return vec4<f32>(in.color * frame.ambient * occlusion + lit * direct_occlusion, style.opacity * in.coverage);
 }

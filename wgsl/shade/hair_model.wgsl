@@ -1,8 +1,11 @@
 // The hair model contract: `hair_radiance(t, l, v, base_color, strand_random)`, the
 // radiance toward v for a light of unit irradiance from l (both pointing away from
-// the fibre). This file is the default implementation, Kajiya-Kay; a pass that
+// the fibre), and `hair_light(t, l, v, base_color, strand_random, visibility)`, the same
+// for light that stage 2 sees reaching the fibre with `visibility` in [0, 1]: the
+// single-scattering models multiply, a model with multiple scattering (Chiang's with dual
+// scattering) estimates from it the fibres in front and the light they scatter forward. This file is the default implementation, Kajiya-Kay; a pass that
 // imports it can be redirected to shade/models/marschner_model.wgsl,
-// marschner_lut_model.wgsl or sadeghi_model.wgsl (HairModel in
+// marschner_lut_model.wgsl, sadeghi_model.wgsl or chiang_model.wgsl (HairModel in
 // crates/pelage-shade/src/models.rs picks one and binds its resources).
 //
 // Reads: @group(2) @binding(0) the model's parameters (uniform KajiyaKayModel).
@@ -14,4 +17,9 @@
 
 fn hair_radiance(t: vec3<f32>, l: vec3<f32>, v: vec3<f32>, base_color: vec3<f32>, strand_random: f32) -> vec3<f32> {
     return kajiya_kay_radiance(hair_model, t, l, v, base_color, strand_random);
+}
+
+// Light from l reaching the fibre with stage 2's `visibility`: single scattering, shadowed.
+fn hair_light(t: vec3<f32>, l: vec3<f32>, v: vec3<f32>, base_color: vec3<f32>, strand_random: f32, visibility: f32) -> vec3<f32> {
+    return hair_radiance(t, l, v, base_color, strand_random) * visibility;
 }

@@ -31,7 +31,9 @@ pub use params::{
 };
 pub use scene_file::{MeshSource, SceneFile, SceneFileError};
 pub use shading::{
-    KajiyaKayParams, MarschnerParams, SadeghiParams, ShadingModel, sigma_a_from_color,
+    Absorption, ChiangParams, EUMELANIN_SIGMA_A, KajiyaKayParams, MAX_MELANIN, MarschnerParams,
+    PHEOMELANIN_SIGMA_A, SadeghiParams, ShadingModel, chiang_color_scale, sigma_a_from_color,
+    sigma_a_from_melanin, sigma_a_from_reflectance,
 };
 pub use tfx_file::{TfxFile, TfxFileError};
 pub use transparency::{MAX_OIT_K, Transparency, WboitWeight};

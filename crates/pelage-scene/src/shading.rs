@@ -299,6 +299,173 @@ pub fn sigma_a_from_color(color: Vec3) -> Vec3 {
     Vec3::new(-c.x.ln(), -c.y.ln(), -c.z.ln()) * 0.5
 }
 
+/// Eumelanin absorption per unit concentration, per unit fibre radius (linear RGB):
+/// Chiang et al. 2016 eq. 8 (after d'Eon et al. 2011), as pbrt-v3 uses it.
+pub const EUMELANIN_SIGMA_A: Vec3 = Vec3::new(0.419, 0.697, 1.37);
+
+/// Pheomelanin absorption per unit concentration, per unit fibre radius (Chiang et al. 2016
+/// eq. 8).
+pub const PHEOMELANIN_SIGMA_A: Vec3 = Vec3::new(0.187, 0.4, 1.05);
+
+/// Largest accepted melanin concentration: at 50 every channel of σ_a exceeds 9, which is
+/// black (the residual after one TT pass is below 1e-7).
+pub const MAX_MELANIN: f32 = 50.0;
+
+/// Absorption σ_a (per unit fibre radius) of a fibre with `eumelanin` and `pheomelanin`
+/// concentrations: `σ_a = eumelanin · (0.419, 0.697, 1.37) + pheomelanin · (0.187, 0.4, 1.05)`
+/// (Chiang et al. 2016 eq. 8, after d'Eon et al. 2011). About 8 eumelanin is black hair, 1.3
+/// brown, 0.3 blond; pheomelanin adds red.
+pub fn sigma_a_from_melanin(eumelanin: f32, pheomelanin: f32) -> Vec3 {
+    EUMELANIN_SIGMA_A * eumelanin + PHEOMELANIN_SIGMA_A * pheomelanin
+}
+
+/// The denominator of Chiang et al. 2016's colour inversion (their eq. 9) for azimuthal
+/// roughness `beta_n`: `5.969 - 0.215β + 2.532β² - 10.73β³ + 5.574β⁴ + 0.245β⁵`.
+pub fn chiang_color_scale(beta_n: f32) -> f32 {
+    let b = beta_n;
+    5.969 - 0.215 * b + 2.532 * b * b - 10.73 * b.powi(3) + 5.574 * b.powi(4) + 0.245 * b.powi(5)
+}
+
+/// Absorption σ_a (per unit fibre radius) that makes a dense volume of Chiang et al. 2016
+/// fibres of azimuthal roughness `beta_n` appear `color` (linear RGB) under uniform light:
+/// Chiang's eq. 9, `σ_a = (ln c / s(β_n))²` per channel, fitted by them to path-traced
+/// multiple scattering. `c` is clamped to `[1e-4, 1]` (NaN counts as black). This is what a
+/// scene's hair `color` means to the physically based models.
+pub fn sigma_a_from_reflectance(color: Vec3, beta_n: f32) -> Vec3 {
+    let s = chiang_color_scale(beta_n);
+    let f = |x: f32| {
+        let c = if x.is_nan() {
+            1.0e-4
+        } else {
+            x.clamp(1.0e-4, 1.0)
+        };
+        let y = c.ln() / s;
+        y * y
+    };
+    Vec3::new(f(color.x), f(color.y), f(color.z))
+}
+
+/// The fibre model of Chiang et al. 2016 (pbrt-v3's hair BSDF): lobes R, TT, TRT and a
+/// residual lobe for every longer path, each with a longitudinal term of roughness
+/// `beta_m` (a von Mises-Fisher-like lobe with a modified Bessel function) and a logistic
+/// azimuthal term of roughness `beta_n`; cuticle tilt `alpha_deg`; absorption from
+/// melanin, from a given σ_a, or (the default) from the hair's own colour.
+///
+/// Absorption, first match wins:
+/// - `sigma_a` set: that σ_a, per unit fibre radius;
+/// - `eumelanin` or `pheomelanin` set: [`sigma_a_from_melanin`] (an unset one is 0);
+/// - neither: every strand's own colour through [`sigma_a_from_reflectance`], so the hair
+///   appears the colour the scene asks for (`growth.color`, with its jitter).
+///
+/// Setting both `sigma_a` and a melanin concentration is refused.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct ChiangParams {
+    /// Longitudinal roughness in (0, 1] (pbrt's `beta_m`; 0.3 by default).
+    pub beta_m: f32,
+    /// Azimuthal roughness in (0, 1] (pbrt's `beta_n`; 0.3 by default). Below 0.15 the
+    /// azimuthal lobes get narrower than the GPU tables resolve well.
+    pub beta_n: f32,
+    /// Cuticle scale tilt in degrees, in [-10, 10] (pbrt's `alpha`; 2 by default).
+    pub alpha_deg: f32,
+    /// Index of refraction in (1, 4]; hair is about 1.55.
+    pub eta: f32,
+    /// Eumelanin concentration in [0, 50] (black about 8, brown 1.3, blond 0.3).
+    pub eumelanin: Option<f32>,
+    /// Pheomelanin concentration in [0, 50] (red hair).
+    pub pheomelanin: Option<f32>,
+    /// Absorption per unit fibre radius, linear RGB, each in [0, 1e4].
+    pub sigma_a: Option<Vec3>,
+    /// Light scattered between fibres (dual scattering, Zinke et al. 2008), estimated
+    /// from stage 2's shadows; `false` is single scattering.
+    pub dual_scattering: bool,
+}
+
+impl Default for ChiangParams {
+    /// pbrt-v3's defaults (β_m = β_n = 0.3, α = 2°, η = 1.55), absorption from the hair's
+    /// colour, dual scattering on.
+    fn default() -> Self {
+        Self {
+            beta_m: 0.3,
+            beta_n: 0.3,
+            alpha_deg: 2.0,
+            eta: 1.55,
+            eumelanin: None,
+            pheomelanin: None,
+            sigma_a: None,
+            dual_scattering: true,
+        }
+    }
+}
+
+/// Where a physically based model's absorption comes from.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Absorption {
+    /// Each strand's colour through [`sigma_a_from_reflectance`].
+    FromColor,
+    /// This σ_a for every strand.
+    Fixed(Vec3),
+}
+
+impl ChiangParams {
+    /// Brown hair of melanin concentrations `eumelanin`, `pheomelanin`, defaults otherwise.
+    pub fn melanin(eumelanin: f32, pheomelanin: f32) -> Self {
+        Self {
+            eumelanin: Some(eumelanin),
+            pheomelanin: Some(pheomelanin),
+            ..Self::default()
+        }
+    }
+
+    /// The absorption these parameters ask for (see the type's docs).
+    pub fn absorption(&self) -> Absorption {
+        if let Some(s) = self.sigma_a {
+            return Absorption::Fixed(s);
+        }
+        if self.eumelanin.is_some() || self.pheomelanin.is_some() {
+            return Absorption::Fixed(sigma_a_from_melanin(
+                self.eumelanin.unwrap_or(0.0),
+                self.pheomelanin.unwrap_or(0.0),
+            ));
+        }
+        Absorption::FromColor
+    }
+
+    /// σ_a of a strand of colour `color`.
+    pub fn sigma_a_for(&self, color: Vec3) -> Vec3 {
+        match self.absorption() {
+            Absorption::Fixed(s) => s,
+            Absorption::FromColor => sigma_a_from_reflectance(color, self.beta_n),
+        }
+    }
+
+    /// Checks every field; the error names the first bad one (`shading.chiang.*`).
+    pub fn validate(&self) -> Result<(), ParamError> {
+        let p = "shading.chiang";
+        in_range_open_low(&format!("{p}.beta_m"), self.beta_m, 0.0, 1.0)?;
+        in_range_open_low(&format!("{p}.beta_n"), self.beta_n, 0.0, 1.0)?;
+        in_range(&format!("{p}.alpha_deg"), self.alpha_deg, -10.0, 10.0)?;
+        in_range_open_low(&format!("{p}.eta"), self.eta, 1.0, 4.0)?;
+        if let Some(e) = self.eumelanin {
+            in_range(&format!("{p}.eumelanin"), e, 0.0, MAX_MELANIN)?;
+        }
+        if let Some(e) = self.pheomelanin {
+            in_range(&format!("{p}.pheomelanin"), e, 0.0, MAX_MELANIN)?;
+        }
+        if let Some(s) = self.sigma_a {
+            vec_in_range(&format!("{p}.sigma_a"), s, 0.0, 1.0e4)?;
+            if self.eumelanin.is_some() || self.pheomelanin.is_some() {
+                return Err(error(
+                    &format!("{p}.sigma_a"),
+                    s,
+                    "give either sigma_a or melanin concentrations (eumelanin, pheomelanin), not both",
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
 /// Sadeghi et al. 2010, the artist-friendly pseudo scattering function
 /// (digest 002/003 §B.1.6; digest 000/001 §000.1.6):
 /// ```text
@@ -446,7 +613,7 @@ impl SadeghiParams {
 
 /// Which hair shading model stage 3 uses, with its parameters.
 ///
-/// In TOML: `model = "kajiya_kay"` (or `"marschner"`, `"sadeghi"`) next to the model's
+/// In TOML: `model = "kajiya_kay"` (or `"marschner"`, `"sadeghi"`, `"chiang"`) next to the model's
 /// fields; Marschner's fields sit under `params`, next to `lut`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case", tag = "model")]
@@ -465,6 +632,8 @@ pub enum ShadingModel {
     },
     /// Sadeghi et al. 2010.
     Sadeghi(SadeghiParams),
+    /// Chiang et al. 2016 (pbrt-v3's hair), optionally with dual scattering.
+    Chiang(ChiangParams),
 }
 
 impl Default for ShadingModel {
@@ -481,6 +650,7 @@ impl ShadingModel {
             Self::KajiyaKay(p) => p.validate(),
             Self::Marschner { params, .. } => params.validate(),
             Self::Sadeghi(p) => p.validate(),
+            Self::Chiang(p) => p.validate(),
         }
     }
 }

@@ -4,7 +4,9 @@
 use pelage_gpu::{BoundResource, Gpu, ShaderBinding, UniformBuffer};
 use pelage_scene::ShadingModel;
 
-use crate::models::{KajiyaKayUniforms, MarschnerLut, MarschnerUniforms, SadeghiUniforms};
+use crate::models::{
+    ChiangTables, KajiyaKayUniforms, MarschnerLut, MarschnerUniforms, SadeghiUniforms,
+};
 
 /// Resolution of Marschner's lookup tables when [`ShadingModel::Marschner`] has `lut`
 /// set: 128 texels per axis, where `tests/models.rs` measures the tables within 0.43% of
@@ -21,14 +23,18 @@ pub const CONTRACT: &str = "shade/hair_model.wgsl";
 pub struct HairModel {
     binding: ShaderBinding,
     lut: Option<MarschnerLut>,
+    chiang: Option<ChiangTables>,
     bytes: u64,
 }
 
 impl HairModel {
-    /// Uploads `model`'s parameters; for Marschner through tables, builds them (one
-    /// compute pass, waited for).
-    pub fn new(gpu: &Gpu, model: &ShadingModel) -> crate::Result<Self> {
+    /// Uploads `model`'s parameters; for Marschner through tables and for Chiang, builds
+    /// the tables (one compute submission, waited for, here and never in the frame).
+    /// `shadow_opacity` is the opacity stage 2 gives one fibre (`growth.opacity`): dual
+    /// scattering counts the fibres in front of a strand from it.
+    pub fn new(gpu: &Gpu, model: &ShadingModel, shadow_opacity: f32) -> crate::Result<Self> {
         model.validate()?;
+        let mut chiang = None;
         let (module, resources, lut) = match model {
             ShadingModel::KajiyaKay(p) => {
                 let u = UniformBuffer::new(
@@ -84,6 +90,22 @@ impl HairModel {
                     None,
                 )
             }
+            ShadingModel::Chiang(p) => {
+                let tables = ChiangTables::new(gpu, p, shadow_opacity)?;
+                let mut encoder = gpu.device.create_command_encoder(&Default::default());
+                tables.encode(&mut encoder);
+                gpu.submit_and_wait([encoder.finish()])?;
+                let resources = [
+                    tables.model_buffer(),
+                    tables.n_buffer(),
+                    tables.dual_buffer(),
+                ]
+                .into_iter()
+                .map(|b| BoundResource::Buffer(b.clone()))
+                .collect();
+                chiang = Some(tables);
+                ("shade/models/chiang_model.wgsl", resources, None)
+            }
         };
         let bytes = resources
             .iter()
@@ -100,8 +122,14 @@ impl HairModel {
                 resources,
             },
             lut,
+            chiang,
             bytes,
         })
+    }
+
+    /// Chiang's tables and uniform, when the model is Chiang's.
+    pub fn chiang(&self) -> Option<&ChiangTables> {
+        self.chiang.as_ref()
     }
 
     /// The redirect of [`CONTRACT`] and the resources of `@group(2)`.

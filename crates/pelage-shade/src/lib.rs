@@ -22,7 +22,8 @@ pub use methods::{
     RandomSubsets, Wboit, build,
 };
 pub use models::{
-    KajiyaKayUniforms, MarschnerLut, MarschnerLutInfo, MarschnerUniforms, SadeghiUniforms,
+    ChiangTables, ChiangUniforms, KajiyaKayUniforms, MarschnerLut, MarschnerLutInfo,
+    MarschnerUniforms, SadeghiUniforms,
 };
 pub use pelage_scene::ShadeParams;
 pub use ribbons::{FrameLight, FrameUniforms, MeshStyle, RibbonStyle};

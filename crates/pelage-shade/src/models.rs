@@ -7,6 +7,7 @@
 //! | Marschner | `shade/models/marschner.wgsl` | `marschner_radiance` | [`MarschnerUniforms`] |
 //! | Marschner, tables | `shade/models/marschner_lut_lookup.wgsl` | `marschner_radiance_lut` | [`MarschnerUniforms`] + [`MarschnerLut`] at group 2 |
 //! | Sadeghi | `shade/models/sadeghi.wgsl` | `sadeghi_radiance` | [`SadeghiUniforms`] |
+//! | Chiang 2016 | `shade/models/chiang.wgsl` | `chiang_radiance`, `chiang_light` (dual scattering) | [`ChiangUniforms`] + [`ChiangTables`] at group 2 |
 //!
 //! Every function has the shape
 //! `fn X_radiance(m: XModel, t, l, v, base_color: vec3<f32>, strand_random: f32) -> vec3<f32>`
@@ -45,7 +46,10 @@
 use encase::ShaderType;
 use glam::Vec3;
 use pelage_gpu::{Gpu, ShaderLibrary, UniformBuffer, compute_pipeline, wgpu, zeroed_storage};
-use pelage_scene::{KajiyaKayParams, MarschnerParams, ParamError, SadeghiParams};
+use pelage_scene::{
+    Absorption, ChiangParams, KajiyaKayParams, MarschnerParams, ParamError, SadeghiParams,
+    chiang_color_scale,
+};
 
 /// `KajiyaKayModel` in `wgsl/shade/models/kajiya_kay.wgsl`.
 #[derive(Clone, Copy, Debug, PartialEq, ShaderType)]
@@ -451,5 +455,238 @@ impl MarschnerLut {
             layout,
             entries: &self.bind_group_entries(),
         })
+    }
+}
+
+/// `ChiangModel` in `wgsl/shade/models/chiang.wgsl`: the fibre of Chiang et al. 2016 with
+/// pbrt-v3's derived constants.
+#[derive(Clone, Copy, Debug, PartialEq, ShaderType)]
+pub struct ChiangUniforms {
+    /// Absorption per unit fibre radius (when `from_color` is 0).
+    pub sigma_a: Vec3,
+    /// 1: σ_a from each strand's colour (Chiang eq. 9); 0: `sigma_a`.
+    pub from_color: u32,
+    /// Longitudinal variances `v_R, v_TT, v_TRT` (pbrt: `v_0 = (0.726 β_m + 0.812 β_m² +
+    /// 3.7 β_m^20)²`, `v_1 = v_0 / 4`, `v_2 = 4 v_0`; the residual lobe uses `v_2`).
+    pub v: Vec3,
+    /// Index of refraction.
+    pub eta: f32,
+    /// `sin(2^k α)`, `k = 0, 1, 2`.
+    pub sin_2k_alpha: Vec3,
+    /// Logistic scale `s = √(π/8) (0.265 β_n + 1.194 β_n² + 5.372 β_n^22)`.
+    pub s: f32,
+    /// `cos(2^k α)`, `k = 0, 1, 2`.
+    pub cos_2k_alpha: Vec3,
+    /// [`pelage_scene::chiang_color_scale`] of `β_n`.
+    pub color_scale: f32,
+    /// 1: dual scattering.
+    pub dual: u32,
+    /// Opacity of one fibre in stage 2's shadows (`growth.opacity`).
+    pub shadow_opacity: f32,
+    /// Padding.
+    pub _pad0: u32,
+    /// Padding.
+    pub _pad1: u32,
+}
+
+impl ChiangUniforms {
+    /// The uniforms of `p` for hair whose shadows count each fibre as `shadow_opacity`.
+    pub fn from_params(p: &ChiangParams, shadow_opacity: f32) -> Self {
+        let bm = p.beta_m;
+        let bn = p.beta_n;
+        let v0 = (0.726 * bm + 0.812 * bm * bm + 3.7 * bm.powi(20)).powi(2);
+        let s = (std::f32::consts::PI / 8.0).sqrt()
+            * (0.265 * bn + 1.194 * bn * bn + 5.372 * bn.powi(22));
+        let mut sin_2k = [0.0f32; 3];
+        let mut cos_2k = [0.0f32; 3];
+        sin_2k[0] = p.alpha_deg.to_radians().sin();
+        cos_2k[0] = (1.0 - sin_2k[0] * sin_2k[0]).max(0.0).sqrt();
+        for i in 1..3 {
+            sin_2k[i] = 2.0 * cos_2k[i - 1] * sin_2k[i - 1];
+            cos_2k[i] = cos_2k[i - 1] * cos_2k[i - 1] - sin_2k[i - 1] * sin_2k[i - 1];
+        }
+        let (sigma_a, from_color) = match p.absorption() {
+            Absorption::Fixed(s) => (s, 0),
+            Absorption::FromColor => (Vec3::ZERO, 1),
+        };
+        Self {
+            sigma_a,
+            from_color,
+            v: Vec3::new(v0, 0.25 * v0, 4.0 * v0),
+            eta: p.eta,
+            sin_2k_alpha: Vec3::from_array(sin_2k),
+            s,
+            cos_2k_alpha: Vec3::from_array(cos_2k),
+            color_scale: chiang_color_scale(bn),
+            dual: u32::from(p.dual_scattering),
+            shadow_opacity,
+            _pad0: 0,
+            _pad1: 0,
+        }
+    }
+}
+
+/// The tables of Chiang's far-field fibre on the GPU (`wgsl/shade/models/chiang_tables.wgsl`
+/// builds them, `chiang.wgsl` reads them), with the model's uniform.
+///
+/// - **N**, `PHI × THETA × SIGMA` vec4 over `(φ ∈ [0, π], |θ_o| ∈ [0, π/2], x = σ/(σ + 1) ∈
+///   [0, 1])`: the azimuthal terms `N_R, N_TT, N_TRT, N_3` with the fibre offset `h`
+///   integrated out (512 midpoints over `γ_o = asin h`). A channel reads them at its own
+///   σ_a, so strands of any colour share one table; only η and β_n shape it.
+/// - **Dual**, `THETA × SIGMA × 2` vec4: the forward and backward energy of each lobe for
+///   light at `|θ_i|`, integrals over φ of the N table, for dual scattering.
+///
+/// The tables depend on η and β_n only: [`ChiangTables::update`] rewrites the uniform and
+/// tells whether the tables must be rebuilt (then [`ChiangTables::encode`] again).
+#[derive(Debug)]
+pub struct ChiangTables {
+    uniforms: ChiangUniforms,
+    model: UniformBuffer<ChiangUniforms>,
+    n: wgpu::Buffer,
+    dual: wgpu::Buffer,
+    pipelines: [wgpu::ComputePipeline; 2],
+    group: wgpu::BindGroup,
+}
+
+impl ChiangTables {
+    /// Texels of the N table along φ (`CHIANG_PHI` in WGSL).
+    pub const PHI: u32 = 64;
+    /// Texels along `|θ|` (`CHIANG_THETA`).
+    pub const THETA: u32 = 32;
+    /// Texels along `x = σ/(σ + 1)` (`CHIANG_SIGMA`).
+    pub const SIGMA: u32 = 32;
+
+    /// Allocates the tables and the build pipelines for `params` (call
+    /// [`ChiangTables::encode`] before sampling them); `shadow_opacity` is the opacity the
+    /// shadow methods give one fibre (`growth.opacity`).
+    pub fn new(gpu: &Gpu, params: &ChiangParams, shadow_opacity: f32) -> crate::Result<Self> {
+        params.validate()?;
+        if !shadow_opacity.is_finite() || !(0.0..=1.0).contains(&shadow_opacity) {
+            return Err(ParamError {
+                name: "growth.opacity".into(),
+                value: shadow_opacity.to_string(),
+                reason: "must be in [0, 1]".into(),
+            }
+            .into());
+        }
+        let uniforms = ChiangUniforms::from_params(params, shadow_opacity);
+        let model = UniformBuffer::new(gpu, "pelage chiang model", &uniforms)?;
+        let usage = wgpu::BufferUsages::STORAGE;
+        let n_bytes = u64::from(Self::PHI * Self::THETA * Self::SIGMA) * TEXEL_BYTES;
+        let dual_bytes = u64::from(Self::THETA * Self::SIGMA * 2) * TEXEL_BYTES;
+        let n = zeroed_storage(gpu, "pelage chiang N", n_bytes, usage)?;
+        let dual = zeroed_storage(gpu, "pelage chiang dual", dual_bytes, usage)?;
+        let module = ShaderLibrary::module(gpu, "shade/models/chiang_tables.wgsl")?;
+        // One explicit layout for both entry points (each uses only some of the bindings,
+        // so layouts derived from them would differ).
+        let (pipelines, group) = gpu.scoped(|device| {
+            let entry = |binding, ty| wgpu::BindGroupLayoutEntry {
+                binding,
+                visibility: wgpu::ShaderStages::COMPUTE,
+                ty: wgpu::BindingType::Buffer {
+                    ty,
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            };
+            let rw = wgpu::BufferBindingType::Storage { read_only: false };
+            let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("pelage chiang tables"),
+                entries: &[
+                    entry(0, wgpu::BufferBindingType::Uniform),
+                    entry(1, rw),
+                    entry(2, rw),
+                ],
+            });
+            let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("pelage chiang tables"),
+                bind_group_layouts: &[Some(&layout)],
+                immediate_size: 0,
+            });
+            let pipeline = |label, entry_point| {
+                device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                    label: Some(label),
+                    layout: Some(&pipeline_layout),
+                    module: &module,
+                    entry_point: Some(entry_point),
+                    compilation_options: Default::default(),
+                    cache: None,
+                })
+            };
+            let pipelines = [
+                pipeline("pelage chiang N", "azimuthal"),
+                pipeline("pelage chiang dual", "energies"),
+            ];
+            let group = pelage_gpu::bind_buffers(
+                device,
+                "pelage chiang tables",
+                &layout,
+                &[&model.buffer, &n, &dual],
+            );
+            (pipelines, group)
+        })?;
+        Ok(Self {
+            uniforms,
+            model,
+            n,
+            dual,
+            pipelines,
+            group,
+        })
+    }
+
+    /// Rewrites the uniform for `params` (takes effect at the next submit). Returns whether
+    /// the tables depend on what changed (η or β_n), so [`ChiangTables::encode`] must run again.
+    pub fn update(
+        &mut self,
+        queue: &wgpu::Queue,
+        params: &ChiangParams,
+        shadow_opacity: f32,
+    ) -> crate::Result<bool> {
+        params.validate()?;
+        let next = ChiangUniforms::from_params(params, shadow_opacity);
+        let rebuild = next.eta != self.uniforms.eta || next.s != self.uniforms.s;
+        self.model.write(queue, &next)?;
+        self.uniforms = next;
+        Ok(rebuild)
+    }
+
+    /// Records the two compute passes that fill the tables (N, then the energies from it).
+    pub fn encode(&self, encoder: &mut wgpu::CommandEncoder) {
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("pelage chiang tables"),
+            timestamp_writes: None,
+        });
+        pass.set_bind_group(0, &self.group, &[]);
+        pass.set_pipeline(&self.pipelines[0]);
+        pass.dispatch_workgroups(Self::PHI.div_ceil(64), Self::THETA, Self::SIGMA);
+        pass.set_pipeline(&self.pipelines[1]);
+        pass.dispatch_workgroups(Self::THETA.div_ceil(8), Self::SIGMA.div_ceil(8), 1);
+    }
+
+    /// The uniforms as last written.
+    pub fn uniforms(&self) -> &ChiangUniforms {
+        &self.uniforms
+    }
+
+    /// The `ChiangModel` uniform (binding 0 of group 2).
+    pub fn model_buffer(&self) -> &wgpu::Buffer {
+        &self.model.buffer
+    }
+
+    /// The N table (binding 1).
+    pub fn n_buffer(&self) -> &wgpu::Buffer {
+        &self.n
+    }
+
+    /// The dual-scattering energies (binding 2).
+    pub fn dual_buffer(&self) -> &wgpu::Buffer {
+        &self.dual
+    }
+
+    /// GPU memory held, in bytes.
+    pub fn memory_bytes(&self) -> u64 {
+        self.n.size() + self.dual.size() + self.model.buffer.size()
     }
 }

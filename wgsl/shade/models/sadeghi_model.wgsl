@@ -11,3 +11,8 @@
 fn hair_radiance(t: vec3<f32>, l: vec3<f32>, v: vec3<f32>, base_color: vec3<f32>, strand_random: f32) -> vec3<f32> {
     return sadeghi_radiance(hair_model, t, l, v, base_color, strand_random);
 }
+
+// Light from l reaching the fibre with stage 2's `visibility`: single scattering, shadowed.
+fn hair_light(t: vec3<f32>, l: vec3<f32>, v: vec3<f32>, base_color: vec3<f32>, strand_random: f32, visibility: f32) -> vec3<f32> {
+    return hair_radiance(t, l, v, base_color, strand_random) * visibility;
+}

@@ -1,0 +1,263 @@
+//! Chiang et al. 2016 fibres on a real adapter (lavapipe in CI): the WGSL far-field model
+//! and its tables against the CPU twin `pelage_reference::chiang`, the white furnace, and
+//! dual scattering's limits.
+//!
+//! Run with `--nocapture` to see the measured errors.
+
+use std::f64::consts::PI;
+
+use encase::ShaderType;
+use glam::{DVec3, Vec3};
+use pelage_gpu::{
+    Gpu, ShaderLibrary, UniformBuffer, bind_buffers, compute_pipeline, dispatch_size, read_buffer,
+    storage_buffer, wgpu, zeroed_storage,
+};
+use pelage_scene::ChiangParams;
+use pelage_shade::ChiangTables;
+
+fn gpu() -> Gpu {
+    Gpu::headless().unwrap_or_else(|e| panic!("these tests need a GPU adapter: {e}"))
+}
+
+/// `ChiangEvalSettings` in `wgsl/shade/models/chiang_eval.wgsl`.
+#[derive(Clone, Copy, Debug, ShaderType)]
+struct EvalSettings {
+    mode: u32,
+    count: u32,
+    _pad0: u32,
+    _pad1: u32,
+}
+
+/// Modes of `chiang_eval.wgsl`.
+const SINGLE: u32 = 0;
+const LIGHT: u32 = 1;
+
+/// One evaluation: tangent, light and eye directions, base colour, visibility.
+#[derive(Clone, Copy, Debug)]
+struct Case {
+    t: Vec3,
+    l: Vec3,
+    v: Vec3,
+    color: Vec3,
+    visibility: f32,
+}
+
+/// Directions on a Fibonacci sphere.
+fn fibonacci(n: usize) -> Vec<Vec3> {
+    let golden = PI * (3.0 - 5.0f64.sqrt());
+    (0..n)
+        .map(|i| {
+            let y = 1.0 - 2.0 * (i as f64 + 0.5) / n as f64;
+            let r = (1.0 - y * y).sqrt();
+            let a = golden * i as f64;
+            DVec3::new(r * a.cos(), y, r * a.sin()).as_vec3()
+        })
+        .collect()
+}
+
+/// Tables built for `params` and `shadow_opacity`.
+fn tables(gpu: &Gpu, params: &ChiangParams, shadow_opacity: f32) -> ChiangTables {
+    let t = ChiangTables::new(gpu, params, shadow_opacity).unwrap();
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    t.encode(&mut encoder);
+    gpu.submit_and_wait([encoder.finish()]).unwrap();
+    t
+}
+
+/// Evaluates every case in `mode` with `tables` and reads back the radiances.
+fn eval(gpu: &Gpu, tables: &ChiangTables, mode: u32, cases: &[Case]) -> Vec<Vec3> {
+    let module = ShaderLibrary::module(gpu, "shade/models/chiang_eval.wgsl").unwrap();
+    let pipeline = compute_pipeline(&gpu.device, "eval chiang", &module, "main");
+    let vecs: Vec<glam::Vec4> = cases
+        .iter()
+        .flat_map(|c| {
+            [
+                c.t.extend(c.visibility),
+                c.l.extend(0.0),
+                c.v.extend(0.0),
+                c.color.extend(1.0),
+            ]
+        })
+        .collect();
+    let case_buffer =
+        storage_buffer(gpu, "eval cases", &vecs, wgpu::BufferUsages::STORAGE).unwrap();
+    let results = zeroed_storage(
+        gpu,
+        "eval results",
+        16 * cases.len() as u64,
+        wgpu::BufferUsages::STORAGE,
+    )
+    .unwrap();
+    let settings = UniformBuffer::new(
+        gpu,
+        "eval settings",
+        &EvalSettings {
+            mode,
+            count: cases.len() as u32,
+            _pad0: 0,
+            _pad1: 0,
+        },
+    )
+    .unwrap();
+    let device = &gpu.device;
+    let group0 = bind_buffers(
+        device,
+        "eval group 0",
+        &pipeline.get_bind_group_layout(0),
+        &[&settings.buffer, &case_buffer, &results],
+    );
+    let group2 = bind_buffers(
+        device,
+        "eval group 2",
+        &pipeline.get_bind_group_layout(2),
+        &[
+            tables.model_buffer(),
+            tables.n_buffer(),
+            tables.dual_buffer(),
+        ],
+    );
+    let (x, y) = dispatch_size(gpu.limits(), cases.len() as u64, 64);
+    let mut encoder = device.create_command_encoder(&Default::default());
+    {
+        let mut pass = encoder.begin_compute_pass(&Default::default());
+        pass.set_pipeline(&pipeline);
+        pass.set_bind_group(0, &group0, &[]);
+        pass.set_bind_group(2, &group2, &[]);
+        pass.dispatch_workgroups(x, y, 1);
+    }
+    gpu.submit_and_wait([encoder.finish()]).unwrap();
+    let bytes = read_buffer(gpu, &results).unwrap();
+    bytemuck::cast_slice::<u8, [f32; 4]>(&bytes)
+        .iter()
+        .map(|v| Vec3::new(v[0], v[1], v[2]))
+        .collect()
+}
+
+/// The eye at `theta_o` (degrees from the normal plane) of a fibre along +x.
+fn eye_at(theta_o_deg: f64) -> Vec3 {
+    let th = theta_o_deg.to_radians();
+    DVec3::new(th.sin(), th.cos(), 0.0).as_vec3()
+}
+
+/// White furnace: with no absorption and no tilt the radiance integrated over every light
+/// direction (a sphere of unit radiance) is the fibre's albedo, 1.
+#[test]
+fn white_furnace_is_one_without_tilt() {
+    let gpu = gpu();
+    let lights = fibonacci(40_000);
+    let t = Vec3::X;
+    let mut worst: f64 = 0.0;
+    for (beta_m, beta_n) in [(0.3, 0.3), (0.5, 0.5), (0.8, 0.8), (0.25, 0.6)] {
+        let params = ChiangParams {
+            beta_m,
+            beta_n,
+            alpha_deg: 0.0,
+            sigma_a: Some(Vec3::ZERO),
+            dual_scattering: false,
+            ..Default::default()
+        };
+        let tab = tables(&gpu, &params, 0.5);
+        let mut cases = Vec::new();
+        let angles: Vec<f64> = (-8..=8).map(|k| 10.0 * k as f64).collect();
+        for &th in &angles {
+            for &l in &lights {
+                cases.push(Case {
+                    t,
+                    l,
+                    v: eye_at(th),
+                    color: Vec3::ONE,
+                    visibility: 1.0,
+                });
+            }
+        }
+        let out = eval(&gpu, &tab, SINGLE, &cases);
+        for (k, &th) in angles.iter().enumerate() {
+            let chunk = &out[k * lights.len()..(k + 1) * lights.len()];
+            let sum: DVec3 = chunk.iter().map(|r| r.as_dvec3()).sum();
+            let albedo = sum * (4.0 * PI / lights.len() as f64);
+            println!(
+                "furnace beta_m {beta_m} beta_n {beta_n} theta_o {th:+.0}: {:.4} {:.4} {:.4}",
+                albedo.x, albedo.y, albedo.z
+            );
+            worst = worst.max((albedo - DVec3::ONE).abs().max_element());
+        }
+    }
+    println!("largest |albedo - 1|: {worst:.4}");
+    assert!(worst <= 0.01, "white furnace off by {worst}");
+}
+
+/// Dual scattering's limits: unshadowed it adds back-scattering to single scattering and
+/// never takes light away; in full shadow single scattering is black while light scattered
+/// through the fibres in front still reaches blond hair, less of it through more fibres,
+/// and black hair passes almost nothing.
+#[test]
+fn dual_scattering_limits() {
+    let gpu = gpu();
+    let t = Vec3::X;
+    let v = eye_at(10.0);
+    let lights = fibonacci(64);
+    let blond = Vec3::new(0.8, 0.6, 0.35);
+    let black = Vec3::new(0.03, 0.025, 0.02);
+    let single = ChiangParams {
+        dual_scattering: false,
+        ..Default::default()
+    };
+    let dual = ChiangParams::default();
+    let opacity = 0.5;
+    let single_t = tables(&gpu, &single, opacity);
+    let dual_t = tables(&gpu, &dual, opacity);
+    let mut cases = Vec::new();
+    for &visibility in &[1.0f32, 0.25, 1e-3] {
+        for &color in &[blond, black] {
+            for &l in &lights {
+                cases.push(Case {
+                    t,
+                    l,
+                    v,
+                    color,
+                    visibility,
+                });
+            }
+        }
+    }
+    let s = eval(&gpu, &single_t, LIGHT, &cases);
+    let d = eval(&gpu, &dual_t, LIGHT, &cases);
+    let n = lights.len();
+    let mean = |x: &[Vec3]| x.iter().map(|c| c.as_dvec3()).sum::<DVec3>() / x.len() as f64;
+    let block = |x: &[Vec3], i: usize| mean(&x[i * n..(i + 1) * n]);
+    for (i, (vis, name)) in [
+        (1.0, "blond"),
+        (1.0, "black"),
+        (0.25, "blond"),
+        (0.25, "black"),
+        (1e-3, "blond"),
+        (1e-3, "black"),
+    ]
+    .iter()
+    .enumerate()
+    {
+        println!(
+            "visibility {vis}: {name}: single {:.4?} dual {:.4?}",
+            block(&s, i),
+            block(&d, i)
+        );
+    }
+    assert!(d.iter().all(|c| c.is_finite() && c.min_element() >= 0.0));
+    // Unshadowed: dual = single + local back scattering >= single, for every case.
+    for k in 0..2 * n {
+        assert!(
+            d[k].cmpge(s[k] - Vec3::splat(1e-6)).all(),
+            "case {k}: {} < {}",
+            d[k],
+            s[k]
+        );
+    }
+    let (blond_lit, blond_half, blond_dark) = (block(&d, 0), block(&d, 2), block(&d, 4));
+    let black_dark = block(&d, 5);
+    assert!(block(&s, 4).max_element() < 1e-3 * blond_lit.max_element());
+    assert!(blond_dark.min_element() > 1e-3, "{blond_dark}");
+    assert!(blond_half.cmpgt(blond_dark).all());
+    assert!(black_dark.max_element() < 0.05 * blond_dark.max_element());
+    // Blond keeps its red more than its blue through the fibres.
+    assert!(blond_dark.x / blond_dark.z > blond_lit.x / blond_lit.z);
+}

@@ -1,0 +1,15 @@
+// The hair model contract (shade/hair_model.wgsl) implemented by Chiang et al. 2016 fibres,
+// with dual scattering when the model asks for it (shade/models/chiang.wgsl).
+//
+// Reads: @group(2) @binding(0..2) the model's parameters and tables (chiang.wgsl).
+// Writes: nothing; no entry point.
+
+#import shade/models/chiang.wgsl
+
+fn hair_radiance(t: vec3<f32>, l: vec3<f32>, v: vec3<f32>, base_color: vec3<f32>, strand_random: f32) -> vec3<f32> {
+    return chiang_radiance(chiang, t, l, v, base_color, strand_random);
+}
+
+fn hair_light(t: vec3<f32>, l: vec3<f32>, v: vec3<f32>, base_color: vec3<f32>, strand_random: f32, visibility: f32) -> vec3<f32> {
+    return chiang_light(chiang, t, l, v, base_color, strand_random, visibility);
+}
