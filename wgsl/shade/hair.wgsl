@@ -122,5 +122,5 @@ fn hair_shade(in: VertexOut) -> vec4<f32> {
         let irradiance = frame_irradiance(l, in.world);
         lit += hair_light(t, frame_to_light(l, in.world), v, in.color, in.strand_random, in.visibility[i]) * irradiance;
     }
-    return vec4<f32>(in.color * frame.ambient * occlusion + lit * direct_occlusion, style.opacity * in.coverage);
+    return vec4<f32>(hair_ambient(in.color) * (frame.ambient * occlusion) + lit * direct_occlusion, style.opacity * in.coverage);
 }

@@ -3,7 +3,8 @@
 // the fibre), and `hair_light(t, l, v, base_color, strand_random, visibility)`, the same
 // for light that stage 2 sees reaching the fibre with `visibility` in [0, 1]: the
 // single-scattering models multiply, a model with multiple scattering (Chiang's with dual
-// scattering) estimates from it the fibres in front and the light they scatter forward. This file is the default implementation, Kajiya-Kay; a pass that
+// scattering) estimates from it the fibres in front and the light they scatter forward;
+// and `hair_ambient(base_color)`, the hair's radiance per unit of `frame.ambient`. This file is the default implementation, Kajiya-Kay; a pass that
 // imports it can be redirected to shade/models/marschner_model.wgsl,
 // marschner_lut_model.wgsl, sadeghi_model.wgsl or chiang_model.wgsl (HairModel in
 // crates/pelage-shade/src/models.rs picks one and binds its resources).
@@ -22,4 +23,10 @@ fn hair_radiance(t: vec3<f32>, l: vec3<f32>, v: vec3<f32>, base_color: vec3<f32>
 // Light from l reaching the fibre with stage 2's `visibility`: single scattering, shadowed.
 fn hair_light(t: vec3<f32>, l: vec3<f32>, v: vec3<f32>, base_color: vec3<f32>, strand_random: f32, visibility: f32) -> vec3<f32> {
     return hair_radiance(t, l, v, base_color, strand_random) * visibility;
+}
+
+// Radiance of the hair under the ambient light, per unit of `frame.ambient`: the strand's
+// colour (an artistic model: `ambient` is a fraction of the base colour, as it always was).
+fn hair_ambient(base_color: vec3<f32>) -> vec3<f32> {
+    return base_color;
 }

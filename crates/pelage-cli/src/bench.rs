@@ -25,7 +25,10 @@ use std::time::Instant;
 
 use pelage::gpu::{Gpu, GpuTimer, ShaderLibrary, compute_pipeline, dispatch_size, wgpu};
 use pelage::scene::Resampled;
-use pelage::scene::{DirectionalLight, ShadowParams, Transparency, VoxelParams, WindParams};
+use pelage::scene::{
+    ChiangParams, DirectionalLight, ShadingModel, ShadowParams, Transparency, VoxelParams,
+    WindParams,
+};
 use pelage::shadow::{ShadowMethod, VoxelShadow};
 use pelage::strands::{GroomStrands, GrowStrands, MeshBuffers, StrandStage};
 use pelage::{Renderer, Scene};
@@ -248,7 +251,7 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
     ];
     // Steps: each strand count's compute stages and each of its transparency methods,
     // then the bare lit pass and the three combinations of section 4.
-    let bar = progress::bar((counts.len() * (1 + methods.len()) + 4) as u64, "steps")?;
+    let bar = progress::bar((counts.len() * (1 + methods.len()) + 7) as u64, "steps")?;
 
     // 1. Compute stages and the copy kernel, on a device that never draws.
     bar.println(format!(
@@ -517,6 +520,60 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
             note: format!(
                 "wall clock; copy_ratio column = ratio to the bare lit pass ({bare:.3} ms)"
             ),
+        });
+    }
+
+    // 4b. The cost of the physically based fibre and of dual scattering in the shade
+    //     stage: Chiang single and dual scattering (and Kajiya-Kay, the default) with voxel
+    //     shadows, opaque, at seed 000's sizes. Wall clock of the shade stage submitted
+    //     alone, median of the frames.
+    let models = [
+        ("kajiya-kay", ShadingModel::default()),
+        (
+            "chiang single scattering",
+            ShadingModel::Chiang(ChiangParams {
+                dual_scattering: false,
+                ..ChiangParams::default()
+            }),
+        ),
+        (
+            "chiang dual scattering",
+            ShadingModel::Chiang(ChiangParams::default()),
+        ),
+    ];
+    let mut model_ms = Vec::new();
+    for (name, model) in models {
+        let gpu = Gpu::headless()?;
+        let mut s = scene(seed_strands, 15);
+        s.shade.model = model;
+        s.shade.sample_count = 1;
+        let mut renderer = Renderer::new(&gpu, &s, seed_size, seed_size)?;
+        renderer.render(&gpu, 0.0, &s.camera)?;
+        let stages = renderer.stage_wall_times(&gpu, 0.0, &s.camera, frames.min(7))?;
+        let shade: Vec<f64> = stages
+            .iter()
+            .filter(|(n, _)| n == "shade")
+            .map(|(_, ms)| *ms)
+            .collect();
+        model_ms.push((name, median(shade)));
+        bar.inc(1);
+    }
+    let single_ms = model_ms[1].1;
+    for &(name, ms) in &model_ms {
+        let ratio = ms / single_ms;
+        bar.println(format!(
+            "  {seed_strands} hairs at {seed_size}x{seed_size}, voxel shadows: shade stage with {name}: {ms:.1} ms = {ratio:.2}x chiang single scattering"
+        ));
+        rows.push(Row {
+            section: "scattering",
+            stage: name.into(),
+            strands: seed_strands,
+            pixels: u64::from(seed_size) * u64::from(seed_size),
+            gpu_ms: ms,
+            bytes: 0,
+            copy_ratio: ratio,
+            note: "wall clock of the shade stage; ratio column = ratio to chiang single scattering"
+                .into(),
         });
     }
 

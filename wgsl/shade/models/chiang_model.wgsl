@@ -13,3 +13,13 @@ fn hair_radiance(t: vec3<f32>, l: vec3<f32>, v: vec3<f32>, base_color: vec3<f32>
 fn hair_light(t: vec3<f32>, l: vec3<f32>, v: vec3<f32>, base_color: vec3<f32>, strand_random: f32, visibility: f32) -> vec3<f32> {
     return chiang_light(chiang, t, l, v, base_color, strand_random, visibility);
 }
+
+// Radiance of the hair under the ambient light, per unit of `frame.ambient`. `ambient` is
+// the irradiance the mesh's colour multiplies (a uniform sky of radiance ambient / pi, as
+// for a Lambertian mesh of albedo pi * mesh_color), and Chiang's colour is what a dense
+// volume of these fibres reflects under uniform light: colour * ambient / pi, the colour
+// being the one the fibre's sigma_a stands for (Chiang eq. 9 inverted).
+fn hair_ambient(base_color: vec3<f32>) -> vec3<f32> {
+    let sigma = chiang_sigma_a(chiang, base_color);
+    return exp(-sqrt(sigma) * chiang.color_scale) * INV_PI;
+}

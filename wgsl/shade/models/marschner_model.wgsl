@@ -16,3 +16,9 @@ fn hair_radiance(t: vec3<f32>, l: vec3<f32>, v: vec3<f32>, base_color: vec3<f32>
 fn hair_light(t: vec3<f32>, l: vec3<f32>, v: vec3<f32>, base_color: vec3<f32>, strand_random: f32, visibility: f32) -> vec3<f32> {
     return hair_radiance(t, l, v, base_color, strand_random) * visibility;
 }
+
+// Radiance of the hair under the ambient light, per unit of `frame.ambient`: the strand's
+// colour (an artistic model: `ambient` is a fraction of the base colour, as it always was).
+fn hair_ambient(base_color: vec3<f32>) -> vec3<f32> {
+    return base_color;
+}

@@ -7,6 +7,7 @@ use std::path::PathBuf;
 
 pub mod lod;
 pub mod oit;
+pub mod scattering;
 pub mod shading;
 pub mod shadows;
 
@@ -79,6 +80,35 @@ pub enum Lab {
                       and DIR/lod_auto.png. About 4 minutes on 2 CPU cores; --quick: 10% only."
     )]
     Lod(LabOpts),
+    /// Chiang fibres, single and dual scattering, against a path tracer.
+    #[command(
+        long_about = "Black, brown and blond hair (eumelanin 8, 1.3, 0.3) as fur on the creature \
+                      and long hair on a head, 256x256, lit by a sun and a sky: pelage's Chiang \
+                      model with dual scattering off and on (k-buffer k = 8, voxel shadows) \
+                      against an independent path tracer of the same strands (real cylinders, \
+                      Chiang's BSDF at the true fibre offset, 16 bounces, the mesh a diffuse \
+                      occluder), the mean of two seeds; their difference is the reference's \
+                      noise floor.\n\n\
+                      Writes DIR/scattering.csv (mean FLIP over the image and over the hair, the \
+                      hair's luminance against the reference's, the shade stage's wall clock, the \
+                      noise floor), DIR/scattering.png|svg (FLIP against time), \
+                      DIR/scattering_sheet.png (path tracer | single | dual | FLIP) and the \
+                      path-traced images (HDR and PNG) in DIR/scattering/. About 15 minutes on 2 \
+                      CPU cores at 64 spp; --quick: 64x64, fur, brown and blond, 16 spp."
+    )]
+    Scattering(ScatteringOpts),
+}
+
+/// The options of `pelage lab scattering`.
+#[derive(Clone, Debug, clap::Args)]
+pub struct ScatteringOpts {
+    /// What every lab takes.
+    #[command(flatten)]
+    pub lab: LabOpts,
+    /// Samples per pixel of each of the path tracer's two renders (default 64; 16 with
+    /// --quick). Each row's noise floor says whether it was enough.
+    #[arg(long, value_name = "N")]
+    pub spp: Option<u32>,
 }
 
 impl Lab {
@@ -89,6 +119,7 @@ impl Lab {
             Lab::Oit(opts) => oit::run(opts),
             Lab::Shading(opts) => shading::run(opts),
             Lab::Lod(opts) => lod::run(opts),
+            Lab::Scattering(opts) => scattering::run(&opts.lab, opts.spp),
         }
     }
 }
