@@ -29,8 +29,11 @@ use std::time::Instant;
 use egui::{CollapsingHeader, Slider};
 use glam::Vec3;
 use pelage::gpu::{Gpu, ShaderLibrary, wgpu};
+use pelage::scene::sigma_a_from_color;
+use pelage::scene::{
+    Absorption, ChiangParams, MAX_MELANIN, ShadowParams, Transparency, WindParams,
+};
 use pelage::scene::{Camera, HairParams, HairType, Light, ShadeParams, ShadingModel};
-use pelage::scene::{ShadowParams, Transparency, WindParams, sigma_a_from_color};
 use pelage::{FrameStats, Renderer, Scene};
 use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
 use winit::event_loop::{ActiveEventLoop, EventLoop};
@@ -932,11 +935,18 @@ fn transparency_ui(ui: &mut egui::Ui, c: &mut Controls) {
 }
 
 fn shading_ui(ui: &mut egui::Ui, c: &mut Controls) {
-    let names = ["kajiya_kay", "marschner", "marschner_lut", "sadeghi"];
+    let names = [
+        "kajiya_kay",
+        "marschner",
+        "marschner_lut",
+        "sadeghi",
+        "chiang",
+    ];
     let current = match c.shade.model {
         ShadingModel::KajiyaKay(_) => 0,
         ShadingModel::Marschner { lut, .. } => 1 + usize::from(lut),
         ShadingModel::Sadeghi(_) => 3,
+        ShadingModel::Chiang(_) => 4,
     };
     if let Some(i) = pick(ui, "model", &names, current) {
         let (lut, params) = match &c.shade.model {
@@ -946,6 +956,7 @@ fn shading_ui(ui: &mut egui::Ui, c: &mut Controls) {
         c.shade.model = match i {
             0 => ShadingModel::KajiyaKay(Default::default()),
             3 => ShadingModel::Sadeghi(Default::default()),
+            4 => ShadingModel::Chiang(Default::default()),
             _ => ShadingModel::Marschner { params, lut },
         };
     }
@@ -980,9 +991,69 @@ fn shading_ui(ui: &mut egui::Ui, c: &mut Controls) {
             slider(ui, &mut p.glint_intensity, 0.0..=5.0, "I_G glints");
             slider(ui, &mut p.diffuse, 0.0..=1.0, "diffuse");
         }
+        ShadingModel::Chiang(p) => chiang_ui(ui, p, c.hair.growth.color),
     }
     slider(ui, &mut c.shade.ambient, 0.0..=1.0, "ambient");
     slider(ui, &mut c.shade.root_occlusion, 0.0..=1.0, "root occlusion");
+}
+
+/// Chiang et al. 2016: roughness, tilt, index, where the absorption comes from (the hair
+/// colour, melanin concentrations, or σ_a itself) and dual scattering.
+fn chiang_ui(ui: &mut egui::Ui, p: &mut ChiangParams, hair_color: Vec3) {
+    slider(ui, &mut p.beta_m, 0.02..=1.0, "β_m longitudinal roughness");
+    slider(ui, &mut p.beta_n, 0.02..=1.0, "β_n azimuthal roughness");
+    slider(ui, &mut p.alpha_deg, -10.0..=10.0, "α cuticle tilt (°)");
+    slider(ui, &mut p.eta, 1.01..=2.5, "η index");
+    let pigments = ["from the hair colour", "melanin", "σ_a"];
+    let pigment = |p: &ChiangParams| match p.absorption() {
+        _ if p.sigma_a.is_some() => 2,
+        Absorption::Fixed(_) => 1,
+        Absorption::FromColor => 0,
+    };
+    if let Some(i) = pick(ui, "pigment", &pigments, pigment(p)) {
+        // The absorption now, so that switching to σ_a keeps the look.
+        let now = p.sigma_a_for(hair_color);
+        p.sigma_a = None;
+        p.eumelanin = None;
+        p.pheomelanin = None;
+        match i {
+            1 => {
+                p.eumelanin = Some(1.3);
+                p.pheomelanin = Some(0.0);
+            }
+            2 => p.sigma_a = Some(now),
+            _ => {}
+        }
+    }
+    let log_slider = |ui: &mut egui::Ui, v: &mut f32, hi: f32, text: &str| {
+        ui.add(Slider::new(v, 0.0..=hi).logarithmic(true).text(text));
+    };
+    match pigment(p) {
+        2 => {
+            let mut s = p.sigma_a.unwrap_or_default();
+            log_slider(ui, &mut s.x, 20.0, "σ_a red");
+            log_slider(ui, &mut s.y, 20.0, "σ_a green");
+            log_slider(ui, &mut s.z, 20.0, "σ_a blue");
+            p.sigma_a = Some(s);
+        }
+        1 => {
+            let mut eumelanin = p.eumelanin.unwrap_or(0.0);
+            let mut pheomelanin = p.pheomelanin.unwrap_or(0.0);
+            log_slider(
+                ui,
+                &mut eumelanin,
+                MAX_MELANIN,
+                "eumelanin (0.3 blond, 8 black)",
+            );
+            log_slider(ui, &mut pheomelanin, MAX_MELANIN, "pheomelanin (red)");
+            p.eumelanin = Some(eumelanin);
+            p.pheomelanin = Some(pheomelanin);
+        }
+        _ => {
+            ui.label("absorption from each strand's colour (hair panel)");
+        }
+    }
+    ui.checkbox(&mut p.dual_scattering, "dual scattering");
 }
 
 fn main() {

@@ -4,9 +4,9 @@
 
 use glam::Vec3;
 use pelage::scene::{
-    AdsmParams, DeepOpacityParams, DirectionalLight, HairType, KajiyaKayParams, LayerSpacing,
-    Light, MarschnerParams, PointLight, ShadingModel, ShadowMapParams, ShadowParams, Transparency,
-    VoxelParams,
+    AdsmParams, ChiangParams, DeepOpacityParams, DirectionalLight, HairType, KajiyaKayParams,
+    LayerSpacing, Light, MarschnerParams, PointLight, ShadingModel, ShadowMapParams, ShadowParams,
+    Transparency, VoxelParams,
 };
 use pelage::{Error, Renderer, Scene, gpu::Gpu, gpu::GpuError, strands::StrandsError};
 
@@ -251,6 +251,177 @@ const CASES: &[Case] = &[
             }
         },
         Kind::Param("shading.marschner.sigma_a"),
+    ),
+    (
+        "Chiang eumelanin negative",
+        |s| {
+            s.shade.model = ShadingModel::Chiang(ChiangParams {
+                eumelanin: Some(-0.5),
+                ..Default::default()
+            })
+        },
+        Kind::Param("shading.chiang.eumelanin"),
+    ),
+    (
+        "Chiang eumelanin NaN",
+        |s| {
+            s.shade.model = ShadingModel::Chiang(ChiangParams {
+                eumelanin: Some(f32::NAN),
+                ..Default::default()
+            })
+        },
+        Kind::Param("shading.chiang.eumelanin"),
+    ),
+    (
+        "Chiang pheomelanin negative",
+        |s| {
+            s.shade.model = ShadingModel::Chiang(ChiangParams {
+                pheomelanin: Some(-1.0),
+                ..Default::default()
+            })
+        },
+        Kind::Param("shading.chiang.pheomelanin"),
+    ),
+    (
+        "Chiang pheomelanin NaN",
+        |s| {
+            s.shade.model = ShadingModel::Chiang(ChiangParams {
+                pheomelanin: Some(f32::NAN),
+                ..Default::default()
+            })
+        },
+        Kind::Param("shading.chiang.pheomelanin"),
+    ),
+    (
+        "Chiang melanin beyond black",
+        |s| {
+            s.shade.model = ShadingModel::Chiang(ChiangParams {
+                eumelanin: Some(100.0),
+                ..Default::default()
+            })
+        },
+        Kind::Param("shading.chiang.eumelanin"),
+    ),
+    (
+        "Chiang beta_m zero",
+        |s| {
+            s.shade.model = ShadingModel::Chiang(ChiangParams {
+                beta_m: 0.0,
+                ..Default::default()
+            })
+        },
+        Kind::Param("shading.chiang.beta_m"),
+    ),
+    (
+        "Chiang beta_m above 1",
+        |s| {
+            s.shade.model = ShadingModel::Chiang(ChiangParams {
+                beta_m: 1.5,
+                ..Default::default()
+            })
+        },
+        Kind::Param("shading.chiang.beta_m"),
+    ),
+    (
+        "Chiang beta_m NaN",
+        |s| {
+            s.shade.model = ShadingModel::Chiang(ChiangParams {
+                beta_m: f32::NAN,
+                ..Default::default()
+            })
+        },
+        Kind::Param("shading.chiang.beta_m"),
+    ),
+    (
+        "Chiang beta_n zero",
+        |s| {
+            s.shade.model = ShadingModel::Chiang(ChiangParams {
+                beta_n: 0.0,
+                ..Default::default()
+            })
+        },
+        Kind::Param("shading.chiang.beta_n"),
+    ),
+    (
+        "Chiang beta_n negative",
+        |s| {
+            s.shade.model = ShadingModel::Chiang(ChiangParams {
+                beta_n: -0.3,
+                ..Default::default()
+            })
+        },
+        Kind::Param("shading.chiang.beta_n"),
+    ),
+    (
+        "Chiang beta_n NaN",
+        |s| {
+            s.shade.model = ShadingModel::Chiang(ChiangParams {
+                beta_n: f32::NAN,
+                ..Default::default()
+            })
+        },
+        Kind::Param("shading.chiang.beta_n"),
+    ),
+    (
+        "Chiang alpha NaN",
+        |s| {
+            s.shade.model = ShadingModel::Chiang(ChiangParams {
+                alpha_deg: f32::NAN,
+                ..Default::default()
+            })
+        },
+        Kind::Param("shading.chiang.alpha_deg"),
+    ),
+    (
+        "Chiang eta of 1",
+        |s| {
+            s.shade.model = ShadingModel::Chiang(ChiangParams {
+                eta: 1.0,
+                ..Default::default()
+            })
+        },
+        Kind::Param("shading.chiang.eta"),
+    ),
+    (
+        "Chiang eta below 1",
+        |s| {
+            s.shade.model = ShadingModel::Chiang(ChiangParams {
+                eta: 0.8,
+                ..Default::default()
+            })
+        },
+        Kind::Param("shading.chiang.eta"),
+    ),
+    (
+        "Chiang eta NaN",
+        |s| {
+            s.shade.model = ShadingModel::Chiang(ChiangParams {
+                eta: f32::NAN,
+                ..Default::default()
+            })
+        },
+        Kind::Param("shading.chiang.eta"),
+    ),
+    (
+        "Chiang sigma_a NaN",
+        |s| {
+            s.shade.model = ShadingModel::Chiang(ChiangParams {
+                sigma_a: Some(Vec3::new(0.1, f32::NAN, 0.1)),
+                ..Default::default()
+            })
+        },
+        Kind::Param("shading.chiang.sigma_a"),
+    ),
+    (
+        "Chiang sigma_a and melanin",
+        |s| {
+            s.shade.model = ShadingModel::Chiang(ChiangParams {
+                sigma_a: Some(Vec3::splat(0.2)),
+                eumelanin: Some(1.0),
+                ..Default::default()
+            })
+        },
+        Kind::Param("shading.chiang.sigma_a"),
     ),
     (
         "two samples per pixel",

@@ -119,9 +119,13 @@ pub enum ModelArg {
     MarschnerLut,
     /// Sadeghi's artist-friendly model.
     Sadeghi,
+    /// Chiang et al. 2016's fibres (pbrt-v3's hair), absorption from the hair colour
+    /// unless --melanin, dual scattering on unless --dual-scattering off.
+    Chiang,
 }
 
 impl ModelArg {
+    /// This model at its defaults.
     fn params(self) -> ShadingModel {
         match self {
             Self::KajiyaKay => ShadingModel::default(),
@@ -134,8 +138,71 @@ impl ModelArg {
                 lut: true,
             },
             Self::Sadeghi => ShadingModel::Sadeghi(Default::default()),
+            Self::Chiang => ShadingModel::Chiang(Default::default()),
         }
     }
+
+    /// The scene's model switched to this one: a scene that already uses this model
+    /// keeps its parameters (`marschner` and `marschner_lut` share Marschner's, and only
+    /// switch the lookup tables); another model starts from this one's defaults.
+    fn applied_to(self, current: &ShadingModel) -> ShadingModel {
+        match (self, current) {
+            (Self::KajiyaKay, ShadingModel::KajiyaKay(_))
+            | (Self::Sadeghi, ShadingModel::Sadeghi(_))
+            | (Self::Chiang, ShadingModel::Chiang(_)) => current.clone(),
+            (Self::Marschner | Self::MarschnerLut, ShadingModel::Marschner { params, .. }) => {
+                ShadingModel::Marschner {
+                    params: params.clone(),
+                    lut: self == Self::MarschnerLut,
+                }
+            }
+            _ => self.params(),
+        }
+    }
+}
+
+/// Melanin concentrations on the command line: `EU` or `EU,PHEO`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Melanin {
+    /// Eumelanin concentration.
+    pub eumelanin: f32,
+    /// Pheomelanin concentration, when given.
+    pub pheomelanin: Option<f32>,
+}
+
+impl FromStr for Melanin {
+    type Err = String;
+
+    /// Parses the numbers only; their range is checked with the model's parameters, so
+    /// the error names the parameter (`shading.chiang.eumelanin`).
+    fn from_str(text: &str) -> Result<Self, String> {
+        let number = |v: &str, what: &str| {
+            v.trim().parse::<f32>().map_err(|e| {
+                format!(
+                    "{what} `{v}` in `{text}`: {e} (expected EU or EU,PHEO, e.g. 0.3 or 1.3,0.2)"
+                )
+            })
+        };
+        match text.split_once(',') {
+            Some((eu, pheo)) => Ok(Self {
+                eumelanin: number(eu, "eumelanin")?,
+                pheomelanin: Some(number(pheo, "pheomelanin")?),
+            }),
+            None => Ok(Self {
+                eumelanin: number(text, "eumelanin")?,
+                pheomelanin: None,
+            }),
+        }
+    }
+}
+
+/// A switch on the command line.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum OnOff {
+    /// Enabled.
+    On,
+    /// Disabled.
+    Off,
 }
 
 /// Light set-ups by command-line name.
@@ -171,9 +238,25 @@ pub struct SceneOpts {
     /// Transparency (the scene's by default: opaque).
     #[arg(long, value_name = "METHOD")]
     pub oit: Option<OitArg>,
-    /// Hair shading model (the scene's by default: kajiya_kay).
+    /// Hair shading model (the scene's by default: kajiya_kay). When the scene already
+    /// uses this model its parameters are kept (marschner and marschner_lut share them);
+    /// another model starts from its defaults.
     #[arg(long, value_name = "MODEL")]
     pub model: Option<ModelArg>,
+    /// Melanin of the chiang model (--model chiang, or a scene that uses it), as
+    /// concentrations, dimensionless, each in [0, 50]: eumelanin EU and optionally
+    /// pheomelanin PHEO. The absorption per unit fibre radius is
+    /// EU·(0.419, 0.697, 1.37) + PHEO·(0.187, 0.4, 1.05): 0.3 is blond, 1.3 brown, 8 black;
+    /// pheomelanin adds red. PHEO left out keeps the scene's (none: 0); a sigma_a of the
+    /// scene is replaced. Default: the scene's absorption (none given: from the hair
+    /// colour). Refused when the model is not chiang.
+    #[arg(long, value_name = "EU[,PHEO]", allow_hyphen_values = true)]
+    pub melanin: Option<Melanin>,
+    /// Dual scattering of the chiang model: light scattered between fibres, estimated
+    /// from the shadows (on), or single scattering only (off). Default: the scene's (on
+    /// unless it says otherwise). Refused when the model is not chiang.
+    #[arg(long, value_name = "on|off")]
+    pub dual_scattering: Option<OnOff>,
     /// Lights (the scene's by default: one key light).
     #[arg(long, value_name = "SET")]
     pub lights: Option<LightsArg>,
@@ -214,8 +297,9 @@ impl SceneOpts {
             scene.shade.transparency = oit.params();
         }
         if let Some(model) = self.model {
-            scene.shade.model = model.params();
+            scene.shade.model = model.applied_to(&scene.shade.model);
         }
+        self.apply_chiang_options(&mut scene.shade.model)?;
         match self.lights {
             Some(LightsArg::Key) => {
                 scene.lights.truncate(1);
@@ -244,6 +328,45 @@ impl SceneOpts {
     }
 }
 
+impl SceneOpts {
+    /// Applies --melanin and --dual-scattering to `model`, which must be Chiang's when
+    /// either is given, then checks the model's parameters (a bad value is an error that
+    /// names the parameter, `shading.chiang.eumelanin` say, with exit code 2).
+    fn apply_chiang_options(&self, model: &mut ShadingModel) -> Result<(), CliError> {
+        let given: Vec<&str> = [
+            self.melanin.map(|_| "--melanin"),
+            self.dual_scattering.map(|_| "--dual-scattering"),
+        ]
+        .into_iter()
+        .flatten()
+        .collect();
+        if given.is_empty() {
+            return Ok(());
+        }
+        let ShadingModel::Chiang(params) = model else {
+            return Err(CliError::Usage(format!(
+                "{}: only the chiang model has this, and the model is {}; give --model chiang too",
+                given.join(", "),
+                model.name()
+            )));
+        };
+        if let Some(melanin) = self.melanin {
+            params.eumelanin = Some(melanin.eumelanin);
+            if let Some(pheomelanin) = melanin.pheomelanin {
+                params.pheomelanin = Some(pheomelanin);
+            }
+            // Melanin and a given sigma_a exclude each other: the option replaces it.
+            params.sigma_a = None;
+        }
+        if let Some(dual) = self.dual_scattering {
+            params.dual_scattering = dual == OnOff::On;
+        }
+        model
+            .validate()
+            .map_err(|e| CliError::Render(pelage::Error::Param(e)))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -260,5 +383,245 @@ mod tests {
         assert!("96".parse::<Size>().is_err());
         assert!("0x72".parse::<Size>().is_err());
         assert!("ax72".parse::<Size>().is_err());
+    }
+
+    #[test]
+    fn melanin_parses_one_or_two_numbers() {
+        assert_eq!(
+            "0.3".parse::<Melanin>(),
+            Ok(Melanin {
+                eumelanin: 0.3,
+                pheomelanin: None
+            })
+        );
+        assert_eq!(
+            " 1.3 , 0.2".parse::<Melanin>(),
+            Ok(Melanin {
+                eumelanin: 1.3,
+                pheomelanin: Some(0.2)
+            })
+        );
+        // Out-of-range numbers parse: the model's check names them.
+        assert!("-1".parse::<Melanin>().is_ok());
+        assert!("nan".parse::<Melanin>().unwrap().eumelanin.is_nan());
+        assert!("".parse::<Melanin>().is_err());
+        assert!("brown".parse::<Melanin>().is_err());
+        assert!("1,".parse::<Melanin>().is_err());
+        assert!("1,2,3".parse::<Melanin>().is_err());
+    }
+
+    /// The scene options `args` parse to.
+    fn opts(args: &[&str]) -> SceneOpts {
+        #[derive(clap::Parser)]
+        struct Cli {
+            #[command(flatten)]
+            scene: SceneOpts,
+        }
+        use clap::Parser;
+        Cli::try_parse_from(std::iter::once("pelage").chain(args.iter().copied()))
+            .unwrap_or_else(|e| panic!("{args:?}: {e}"))
+            .scene
+    }
+
+    /// A scene file with this `[shade.model]` table, in a folder of its own.
+    struct SceneWith(std::path::PathBuf);
+
+    impl SceneWith {
+        fn new(name: &str, model: &str) -> Self {
+            let dir = std::env::temp_dir()
+                .join(format!("pelage-scene-opts-{}-{name}", std::process::id()));
+            std::fs::create_dir_all(&dir).unwrap();
+            let path = dir.join("scene.toml");
+            std::fs::write(&path, format!("[shade.model]\n{model}\n")).unwrap();
+            Self(path)
+        }
+
+        fn model(&self, args: &[&str]) -> Result<ShadingModel, CliError> {
+            let path = self.0.to_string_lossy().into_owned();
+            let mut all = vec!["--scene", path.as_str()];
+            all.extend_from_slice(args);
+            opts(&all).scene().map(|s| s.shade.model)
+        }
+    }
+
+    impl Drop for SceneWith {
+        fn drop(&mut self) {
+            if let Some(dir) = self.0.parent() {
+                let _ = std::fs::remove_dir_all(dir);
+            }
+        }
+    }
+
+    #[test]
+    fn model_keeps_the_scene_parameters_of_that_model() {
+        use pelage::scene::{ChiangParams, KajiyaKayParams, MarschnerParams, SadeghiParams};
+        let marschner = |lut| ShadingModel::Marschner {
+            params: MarschnerParams {
+                eta: 1.6,
+                ..Default::default()
+            },
+            lut,
+        };
+        let kk = ShadingModel::KajiyaKay(KajiyaKayParams {
+            shininess: 20.0,
+            ..Default::default()
+        });
+        let sadeghi = ShadingModel::Sadeghi(SadeghiParams {
+            diffuse: 0.1,
+            ..Default::default()
+        });
+        let chiang = ShadingModel::Chiang(ChiangParams {
+            beta_m: 0.5,
+            eumelanin: Some(2.0),
+            ..Default::default()
+        });
+        let cases: [(&str, &str, ShadingModel, ShadingModel); 5] = [
+            (
+                "kajiya_kay",
+                "model = \"kajiya_kay\"\nshininess = 20.0",
+                kk.clone(),
+                kk,
+            ),
+            (
+                "marschner",
+                "model = \"marschner\"\neta = 1.6",
+                marschner(false),
+                marschner(false),
+            ),
+            (
+                "marschner_lut",
+                "model = \"marschner\"\nlut = true\neta = 1.6",
+                marschner(true),
+                marschner(true),
+            ),
+            (
+                "sadeghi",
+                "model = \"sadeghi\"\ndiffuse = 0.1",
+                sadeghi.clone(),
+                sadeghi,
+            ),
+            (
+                "chiang",
+                "model = \"chiang\"\nbeta_m = 0.5\neumelanin = 2.0",
+                chiang.clone(),
+                chiang,
+            ),
+        ];
+        for (name, table, scene_model, expected) in cases {
+            let scene = SceneWith::new(name, table);
+            assert_eq!(scene.model(&[]).unwrap(), scene_model, "{name}");
+            assert_eq!(scene.model(&["--model", name]).unwrap(), expected, "{name}");
+        }
+        // marschner and marschner_lut switch the tables and keep the parameters.
+        let scene = SceneWith::new("switch", "model = \"marschner\"\neta = 1.6");
+        assert_eq!(
+            scene.model(&["--model", "marschner_lut"]).unwrap(),
+            marschner(true)
+        );
+        let scene = SceneWith::new(
+            "switch_back",
+            "model = \"marschner\"\nlut = true\neta = 1.6",
+        );
+        assert_eq!(
+            scene.model(&["--model", "marschner"]).unwrap(),
+            marschner(false)
+        );
+        // Another model starts from its defaults.
+        assert_eq!(
+            scene.model(&["--model", "chiang"]).unwrap(),
+            ShadingModel::Chiang(ChiangParams::default())
+        );
+        assert_eq!(
+            scene.model(&["--model", "kajiya_kay"]).unwrap(),
+            ShadingModel::default()
+        );
+    }
+
+    #[test]
+    fn chiang_options_set_melanin_and_dual_scattering_and_nothing_else() {
+        use pelage::scene::ChiangParams;
+        let scene = SceneWith::new(
+            "chiang_opts",
+            "model = \"chiang\"\nbeta_m = 0.5\npheomelanin = 0.4",
+        );
+        let ShadingModel::Chiang(p) = scene.model(&["--melanin", "1.3"]).unwrap() else {
+            panic!("not chiang");
+        };
+        assert_eq!(
+            p,
+            ChiangParams {
+                beta_m: 0.5,
+                eumelanin: Some(1.3),
+                pheomelanin: Some(0.4),
+                ..Default::default()
+            }
+        );
+        let ShadingModel::Chiang(p) = scene
+            .model(&["--melanin", "8,0", "--dual-scattering", "off"])
+            .unwrap()
+        else {
+            panic!("not chiang");
+        };
+        assert_eq!(
+            (p.eumelanin, p.pheomelanin, p.dual_scattering, p.beta_m),
+            (Some(8.0), Some(0.0), false, 0.5)
+        );
+        // A scene's sigma_a gives way to the melanin of the command line.
+        let sigma = SceneWith::new(
+            "chiang_sigma",
+            "model = \"chiang\"\nsigma_a = [0.1, 0.2, 0.3]",
+        );
+        let ShadingModel::Chiang(p) = sigma.model(&["--melanin", "0.3"]).unwrap() else {
+            panic!("not chiang");
+        };
+        assert_eq!((p.sigma_a, p.eumelanin), (None, Some(0.3)));
+        // The built-in scene with --model chiang.
+        let model = opts(&["--model", "chiang", "--melanin", "0.3"])
+            .scene()
+            .unwrap()
+            .shade
+            .model;
+        assert_eq!(
+            model,
+            ShadingModel::Chiang(ChiangParams {
+                eumelanin: Some(0.3),
+                ..Default::default()
+            })
+        );
+    }
+
+    #[test]
+    fn chiang_options_refuse_another_model_and_bad_values() {
+        for args in [
+            &["--melanin", "0.3"][..],
+            &["--dual-scattering", "off"],
+            &["--model", "marschner", "--melanin", "0.3"],
+            &["--model", "sadeghi", "--dual-scattering", "on"],
+        ] {
+            let e = opts(args).scene().unwrap_err();
+            let m = e.to_string();
+            assert!(matches!(e, CliError::Usage(_)), "{args:?}: {m}");
+            assert_eq!(e.exit_code(), 2);
+            let option = args[args.len() - 2];
+            assert!(m.contains(option) && m.contains("chiang"), "{args:?}: {m}");
+        }
+        for (value, key) in [
+            ("-0.5", "shading.chiang.eumelanin"),
+            ("nan", "shading.chiang.eumelanin"),
+            ("inf", "shading.chiang.eumelanin"),
+            ("51", "shading.chiang.eumelanin"),
+            ("0.3,-1", "shading.chiang.pheomelanin"),
+            ("0.3,nan", "shading.chiang.pheomelanin"),
+        ] {
+            let e = opts(&["--model", "chiang", "--melanin", value])
+                .scene()
+                .unwrap_err();
+            let m = e.to_string();
+            assert!(
+                matches!(&e, CliError::Render(pelage::Error::Param(p)) if p.name == key),
+                "{value}: {m}"
+            );
+            assert_eq!(e.exit_code(), 2, "{value}");
+        }
     }
 }

@@ -106,7 +106,13 @@ fn help_of_every_command() {
         "--lights",
         "k_buffer",
         "marschner_lut",
+        "chiang",
         "key_back",
+        "--melanin",
+        "EU[,PHEO]",
+        "[0, 50]",
+        "--dual-scattering",
+        "on|off",
     ];
     let render = ok(&["render", "--help"]);
     assert_mentions(&render, &scene_options);
@@ -287,4 +293,166 @@ fn info_prints_the_adapter() {
             "k-buffer at 1920x1080",
         ],
     );
+}
+
+/// Runs `args`, asserts exit code 2 with an `error: ` message (no panic) that mentions
+/// every word of `words`, returns stderr.
+fn exits_2(args: &[&str], words: &[&str]) -> String {
+    let out = pelage(args);
+    let stderr = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "pelage {args:?}:\n{stderr}");
+    assert!(
+        !stderr.contains("panicked"),
+        "pelage {args:?} panicked:\n{stderr}"
+    );
+    assert!(stderr.starts_with("error: "), "pelage {args:?}:\n{stderr}");
+    assert_mentions(&stderr, words);
+    stderr
+}
+
+#[test]
+fn an_unknown_key_at_marschners_own_level_is_refused() {
+    // The case: this used to render with exit 0.
+    let dir = Scratch::new("marschner-key");
+    let scene = dir.file(
+        "marschner.toml",
+        "[shade.model]\nmodel = \"marschner\"\nbogus_key = 1\n",
+    );
+    exits_2(
+        &["render", "--scene", &scene.to_string_lossy()],
+        &["marschner.toml", "bogus_key", "line 3"],
+    );
+    let scene = dir.file(
+        "none.toml",
+        "[shadow]\nmethod = \"none\"\nresolution = [64, 64, 64]\n",
+    );
+    exits_2(
+        &["render", "--scene", &scene.to_string_lossy()],
+        &["none.toml", "resolution", "line 3"],
+    );
+}
+
+#[test]
+fn chiang_options_refuse_another_model() {
+    exits_2(
+        &["render", "--size", "32x24", "--melanin", "0.3"],
+        &["--melanin", "chiang", "kajiya_kay"],
+    );
+    exits_2(
+        &[
+            "animate",
+            "--model",
+            "marschner",
+            "--dual-scattering",
+            "off",
+        ],
+        &["--dual-scattering", "chiang", "marschner"],
+    );
+    // A value that is not on or off, or not a number, is clap's error, naming the option.
+    exits_2(
+        &["render", "--model", "chiang", "--dual-scattering", "maybe"],
+        &["--dual-scattering"],
+    );
+    exits_2(
+        &["render", "--model", "chiang", "--melanin", "brown"],
+        &["--melanin", "brown"],
+    );
+}
+
+#[test]
+fn bad_chiang_values_on_the_command_line_exit_2() {
+    for (melanin, key) in [
+        ("-0.5", "shading.chiang.eumelanin"),
+        ("nan", "shading.chiang.eumelanin"),
+        ("60", "shading.chiang.eumelanin"),
+        ("0.3,-1", "shading.chiang.pheomelanin"),
+        ("0.3,NaN", "shading.chiang.pheomelanin"),
+    ] {
+        exits_2(
+            &[
+                "render",
+                "--size",
+                "32x24",
+                "--model",
+                "chiang",
+                "--melanin",
+                melanin,
+            ],
+            &[key],
+        );
+    }
+}
+
+#[test]
+fn bad_chiang_values_in_a_scene_file_exit_2() {
+    let dir = Scratch::new("chiang-values");
+    for (i, (line, key)) in [
+        ("beta_m = 0.0", "shading.chiang.beta_m"),
+        ("beta_m = 1.5", "shading.chiang.beta_m"),
+        ("beta_n = nan", "shading.chiang.beta_n"),
+        ("alpha_deg = nan", "shading.chiang.alpha_deg"),
+        ("eta = 1.0", "shading.chiang.eta"),
+        ("eumelanin = -1.0", "shading.chiang.eumelanin"),
+        ("pheomelanin = nan", "shading.chiang.pheomelanin"),
+        ("sigma_a = [0.1, -0.1, 0.1]", "shading.chiang.sigma_a"),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let name = format!("chiang_{i}.toml");
+        let scene = dir.file(
+            &name,
+            &format!("[shade.model]\nmodel = \"chiang\"\n{line}\n"),
+        );
+        exits_2(
+            &["render", "--scene", &scene.to_string_lossy()],
+            &[&name, key],
+        );
+    }
+}
+
+/// The repository's scenes folder.
+fn scenes() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes")
+}
+
+#[test]
+fn render_blond_chiang_tiny() {
+    let dir = Scratch::new("blond");
+    let png = dir.0.join("blond.png");
+    let png_arg = png.to_string_lossy().into_owned();
+    let scene = scenes().join("blond_chiang.toml");
+    ok(&[
+        "render",
+        "--scene",
+        &scene.to_string_lossy(),
+        "--size",
+        "64x48",
+        "--strands",
+        "400",
+        "-o",
+        &png_arg,
+    ]);
+    assert_not_blank(&png, 64, 48);
+    // The options on the built-in scene: black hair, single scattering.
+    let png = dir.0.join("black.png");
+    let png_arg = png.to_string_lossy().into_owned();
+    ok(&[
+        "render",
+        "--size",
+        "64x48",
+        "--strands",
+        "400",
+        "--shadow",
+        "none",
+        "--model",
+        "chiang",
+        "--melanin",
+        "8",
+        "--dual-scattering",
+        "off",
+        "-o",
+        &png_arg,
+    ]);
+    assert_not_blank(&png, 64, 48);
 }

@@ -13,6 +13,7 @@ pub mod mesh;
 pub mod obj;
 pub mod params;
 pub mod scene_file;
+mod scene_keys;
 pub mod shading;
 pub mod tfx_file;
 pub mod transparency;

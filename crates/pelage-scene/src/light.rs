@@ -74,7 +74,7 @@ pub const MAX_LIGHTS: usize = 4;
 
 /// One light of a scene.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "kind", rename_all = "snake_case")]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Light {
     /// Parallel light from one direction.
     Directional(DirectionalLight),

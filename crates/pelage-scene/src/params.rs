@@ -144,7 +144,7 @@ impl RootParams {
 
 /// The shape a strand is grown in, on top of gravity and wind.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case", tag = "kind")]
+#[serde(rename_all = "snake_case", tag = "kind", deny_unknown_fields)]
 pub enum HairType {
     /// Straight strands that bend only under the forces.
     #[default]
@@ -660,7 +660,7 @@ pub enum OpacityFormat {
 
 /// How the deep opacity layers are spaced behind the front-most hair.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case", tag = "kind")]
+#[serde(rename_all = "snake_case", tag = "kind", deny_unknown_fields)]
 pub enum LayerSpacing {
     /// Every layer `depth` scene units deep (the last one runs to the back of the hair).
     Linear {
@@ -793,7 +793,7 @@ impl Default for AdsmParams {
 
 /// Which shadow method stage 2 runs.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case", tag = "method")]
+#[serde(rename_all = "snake_case", tag = "method", deny_unknown_fields)]
 pub enum ShadowParams {
     /// No shadows.
     None,

@@ -4,7 +4,18 @@
 //! `scenes/default.toml` in the repository lists every key with its default value
 //! (it is [`SceneFile::default`] written out, and a test keeps the two equal). An
 //! unknown key, a value of the wrong type or a missing file is an error that names the
-//! key (with its line) or the path.
+//! key (with its line) or the path. Every table refuses a key it does not use, the
+//! tagged ones included (`[mesh]`, `[hair.growth.hair_type]`, `[shadow]`,
+//! `[shadow.spacing]`, `[shade.model]`, `[shade.transparency]`, `[[lights]]`), whatever
+//! the variant: `method = "none"` with another key is an error at that key's line.
+//!
+//! The tag of a tagged table is optional too: left out, it is the variant of the type's
+//! `Default` (`[shadow]` with only `resolution` is voxel shadows at that resolution;
+//! `[shade.model]` is Kajiya-Kay, `[shade.transparency]` opaque, `[mesh]` the creature,
+//! a light directional), and an error about a key there says so. Marschner's parameters
+//! may sit directly in `[shade.model]`, as every other model's do, or in
+//! `[shade.model.params]` (the form [`SceneFile::to_toml`] writes); a parameter given in
+//! both is an error.
 //!
 //! ```toml
 //! [mesh]
@@ -39,7 +50,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::{
     Camera, GroomError, GroomSource, HairParams, Light, Mesh, MeshError, ObjError, Resampled,
-    ShadeParams, ShadowParams,
+    ShadeParams, ShadowParams, scene_keys,
 };
 
 /// The surface the hair grows from.
@@ -184,10 +195,20 @@ impl SceneFile {
     }
 
     fn parse_named(text: &str, path: &Path) -> Result<Self, SceneFileError> {
-        let file: SceneFile = toml::from_str(text).map_err(|e| SceneFileError::Toml {
+        let toml_error = |message: String| SceneFileError::Toml {
             path: path.to_path_buf(),
-            message: e.to_string(),
-        })?;
+            message,
+        };
+        let mut doc = toml::de::DeTable::parse(text).map_err(|e| toml_error(e.to_string()))?;
+        let normalized = scene_keys::normalize(&mut doc).map_err(|e| toml_error(e.render(text)))?;
+        let file = SceneFile::deserialize(toml::de::Deserializer::from(doc.clone())).map_err(
+            |mut e| {
+                e.set_input(Some(text));
+                toml_error(scene_keys::repoint(&e, &doc, &normalized, text))
+            },
+        )?;
+        scene_keys::check_every_key_used(&doc, &file, &normalized)
+            .map_err(|e| toml_error(e.render(text)))?;
         file.validate().map_err(|source| SceneFileError::Param {
             path: path.to_path_buf(),
             source,

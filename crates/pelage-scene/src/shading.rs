@@ -408,7 +408,7 @@ pub enum Absorption {
 }
 
 impl ChiangParams {
-    /// Brown hair of melanin concentrations `eumelanin`, `pheomelanin`, defaults otherwise.
+    /// Hair of melanin concentrations `eumelanin`, `pheomelanin`, defaults otherwise.
     pub fn melanin(eumelanin: f32, pheomelanin: f32) -> Self {
         Self {
             eumelanin: Some(eumelanin),
@@ -614,9 +614,11 @@ impl SadeghiParams {
 /// Which hair shading model stage 3 uses, with its parameters.
 ///
 /// In TOML: `model = "kajiya_kay"` (or `"marschner"`, `"sadeghi"`, `"chiang"`) next to the model's
-/// fields; Marschner's fields sit under `params`, next to `lut`.
+/// fields; Marschner's fields sit under `params`, next to `lut`. A scene file
+/// ([`SceneFile`](crate::SceneFile)) also takes Marschner's fields directly next to
+/// `model`, as for the other models, and takes Kajiya-Kay when `model` is left out.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case", tag = "model")]
+#[serde(rename_all = "snake_case", tag = "model", deny_unknown_fields)]
 pub enum ShadingModel {
     /// Kajiya-Kay with optional shifted highlights.
     KajiyaKay(KajiyaKayParams),
@@ -644,6 +646,18 @@ impl Default for ShadingModel {
 }
 
 impl ShadingModel {
+    /// The model's name as the command line and the labs write it: `kajiya_kay`,
+    /// `marschner`, `marschner_lut` (Marschner from its lookup tables), `sadeghi`, `chiang`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::KajiyaKay(_) => "kajiya_kay",
+            Self::Marschner { lut: false, .. } => "marschner",
+            Self::Marschner { lut: true, .. } => "marschner_lut",
+            Self::Sadeghi(_) => "sadeghi",
+            Self::Chiang(_) => "chiang",
+        }
+    }
+
     /// Checks the chosen model's parameters; the error names the bad field.
     pub fn validate(&self) -> Result<(), ParamError> {
         match self {
@@ -665,6 +679,7 @@ mod tests {
         KajiyaKayParams::default().validate().unwrap();
         MarschnerParams::default().validate().unwrap();
         SadeghiParams::default().validate().unwrap();
+        ChiangParams::default().validate().unwrap();
     }
 
     #[test]
@@ -741,6 +756,94 @@ mod tests {
     }
 
     #[test]
+    fn chiang_bad_values_name_the_field() {
+        ChiangParams::default().validate().unwrap();
+        ChiangParams::melanin(0.3, 0.0).validate().unwrap();
+        ChiangParams::melanin(MAX_MELANIN, MAX_MELANIN)
+            .validate()
+            .unwrap();
+        let with = |f: fn(&mut ChiangParams)| {
+            let mut p = ChiangParams::default();
+            f(&mut p);
+            p.validate().map_err(|e| e.name)
+        };
+        type Spoil = fn(&mut ChiangParams);
+        let cases: [(Spoil, &str); 17] = [
+            (|p| p.beta_m = 0.0, "beta_m"),
+            (|p| p.beta_m = -0.1, "beta_m"),
+            (|p| p.beta_m = 1.01, "beta_m"),
+            (|p| p.beta_m = f32::NAN, "beta_m"),
+            (|p| p.beta_n = 0.0, "beta_n"),
+            (|p| p.beta_n = 2.0, "beta_n"),
+            (|p| p.beta_n = f32::NAN, "beta_n"),
+            (|p| p.alpha_deg = f32::NAN, "alpha_deg"),
+            (|p| p.alpha_deg = 11.0, "alpha_deg"),
+            (|p| p.eta = 1.0, "eta"),
+            (|p| p.eta = 0.5, "eta"),
+            (|p| p.eta = f32::NAN, "eta"),
+            (|p| p.eumelanin = Some(-0.1), "eumelanin"),
+            (|p| p.eumelanin = Some(f32::NAN), "eumelanin"),
+            (|p| p.pheomelanin = Some(-1.0), "pheomelanin"),
+            (
+                |p| p.sigma_a = Some(Vec3::new(0.1, f32::NAN, 0.1)),
+                "sigma_a",
+            ),
+            (
+                |p| {
+                    p.sigma_a = Some(Vec3::splat(0.1));
+                    p.pheomelanin = Some(0.5);
+                },
+                "sigma_a",
+            ),
+        ];
+        for (spoil, field) in cases {
+            assert_eq!(
+                with(spoil),
+                Err(format!("shading.chiang.{field}")),
+                "{field}"
+            );
+        }
+        // The edges of the ranges are accepted.
+        assert_eq!(with(|p| p.beta_m = 1.0), Ok(()));
+        assert_eq!(with(|p| p.eta = 1.0001), Ok(()));
+        assert_eq!(with(|p| p.eumelanin = Some(0.0)), Ok(()));
+        let m = ShadingModel::Chiang(ChiangParams {
+            beta_n: 0.0,
+            ..Default::default()
+        });
+        assert_eq!(m.validate().unwrap_err().name, "shading.chiang.beta_n");
+    }
+
+    #[test]
+    fn chiang_absorption_comes_from_sigma_a_then_melanin_then_the_colour() {
+        let brown = Vec3::new(0.36, 0.2, 0.09);
+        let p = ChiangParams::default();
+        assert_eq!(p.absorption(), Absorption::FromColor);
+        assert_eq!(p.sigma_a_for(brown), sigma_a_from_reflectance(brown, 0.3));
+        let p = ChiangParams {
+            eumelanin: Some(0.3),
+            ..Default::default()
+        };
+        assert_eq!(p.absorption(), Absorption::Fixed(EUMELANIN_SIGMA_A * 0.3));
+        let p = ChiangParams {
+            pheomelanin: Some(2.0),
+            ..Default::default()
+        };
+        assert_eq!(p.absorption(), Absorption::Fixed(PHEOMELANIN_SIGMA_A * 2.0));
+        let s = Vec3::new(0.1, 0.2, 0.3);
+        let p = ChiangParams {
+            sigma_a: Some(s),
+            ..Default::default()
+        };
+        assert_eq!(p.sigma_a_for(brown), s);
+        // A lighter colour absorbs less, white not at all.
+        let light = sigma_a_from_reflectance(Vec3::splat(0.8), 0.3);
+        let dark = sigma_a_from_reflectance(Vec3::splat(0.2), 0.3);
+        assert!(light.x < dark.x, "{light} {dark}");
+        assert_eq!(sigma_a_from_reflectance(Vec3::ONE, 0.3), Vec3::ZERO);
+    }
+
+    #[test]
     fn derived_lobes_follow_marschner_table_1() {
         let p = MarschnerParams::default();
         assert_eq!(p.lobe_shifts_deg(), [-7.5, 3.75, 11.25]);
@@ -766,6 +869,13 @@ mod tests {
                 lut: true,
             },
             ShadingModel::Sadeghi(SadeghiParams::default()),
+            ShadingModel::Chiang(ChiangParams::default()),
+            ShadingModel::Chiang(ChiangParams::melanin(0.3, 0.0)),
+            ShadingModel::Chiang(ChiangParams {
+                sigma_a: Some(Vec3::new(0.2, 0.4, 0.8)),
+                dual_scattering: false,
+                ..Default::default()
+            }),
         ] {
             let text = toml::to_string(&model).unwrap();
             let back: ShadingModel = toml::from_str(&text).unwrap();
@@ -798,5 +908,18 @@ mod tests {
             toml::from_str::<ShadingModel>("model = \"kajiya_kay\"\nshinyness = 2.0\n").is_err()
         );
         assert!(toml::from_str::<ShadingModel>("model = \"phong\"\n").is_err());
+        // Marschner's own level refuses what it does not know (it used to drop it).
+        assert!(toml::from_str::<ShadingModel>("model = \"marschner\"\nbogus_key = 1\n").is_err());
+        let c: ShadingModel =
+            toml::from_str("model = \"chiang\"\neumelanin = 0.3\ndual_scattering = false\n")
+                .unwrap();
+        assert_eq!(
+            c,
+            ShadingModel::Chiang(ChiangParams {
+                eumelanin: Some(0.3),
+                dual_scattering: false,
+                ..Default::default()
+            })
+        );
     }
 }

@@ -143,3 +143,64 @@ fn a_groom_table_round_trips_and_its_path_is_relative_to_the_scene() {
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn bad_chiang_values_in_a_scene_file_are_named() {
+    let chiang = |body: &str| format!("[shade.model]\nmodel = \"chiang\"\n{body}\n");
+    for (body, key) in [
+        ("eumelanin = -0.5", "shading.chiang.eumelanin"),
+        ("pheomelanin = -1.0", "shading.chiang.pheomelanin"),
+        ("eumelanin = nan", "shading.chiang.eumelanin"),
+        ("beta_m = 0.0", "shading.chiang.beta_m"),
+        ("beta_m = 1.5", "shading.chiang.beta_m"),
+        ("beta_m = nan", "shading.chiang.beta_m"),
+        ("beta_n = -0.2", "shading.chiang.beta_n"),
+        ("beta_n = inf", "shading.chiang.beta_n"),
+        ("alpha_deg = nan", "shading.chiang.alpha_deg"),
+        ("eta = 1.0", "shading.chiang.eta"),
+        ("eta = nan", "shading.chiang.eta"),
+        ("sigma_a = [0.1, nan, 0.1]", "shading.chiang.sigma_a"),
+        (
+            "sigma_a = [0.1, 0.1, 0.1]\neumelanin = 1.0",
+            "shading.chiang.sigma_a",
+        ),
+    ] {
+        let text = chiang(body);
+        let e = SceneFile::parse(&text).unwrap_err();
+        let m = e.to_string();
+        assert!(
+            matches!(&e, SceneFileError::Param { source, .. } if source.name == key),
+            "{text}\n{m}"
+        );
+        assert!(m.contains(key), "{m}");
+    }
+    let file = SceneFile::parse(&chiang("eumelanin = 0.3\ndual_scattering = false")).unwrap();
+    let pelage_scene::ShadingModel::Chiang(p) = file.shade.model else {
+        panic!("not chiang");
+    };
+    assert_eq!((p.eumelanin, p.dual_scattering), (Some(0.3), false));
+}
+
+#[test]
+fn every_scene_in_the_repository_parses_and_blond_chiang_is_blond() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes");
+    let mut count = 0;
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_some_and(|e| e == "toml") {
+            SceneFile::load(&path).unwrap_or_else(|e| panic!("{e}"));
+            count += 1;
+        }
+    }
+    assert!(count >= 3, "{count} scenes");
+    let file = SceneFile::load(&dir.join("blond_chiang.toml")).unwrap();
+    assert_eq!(file.mesh, MeshSource::Creature);
+    let pelage_scene::ShadingModel::Chiang(p) = &file.shade.model else {
+        panic!("blond_chiang.toml does not use the Chiang model");
+    };
+    assert_eq!(p.eumelanin, Some(0.3));
+    assert_eq!(
+        p.absorption(),
+        pelage_scene::Absorption::Fixed(pelage_scene::sigma_a_from_melanin(0.3, 0.0))
+    );
+}
