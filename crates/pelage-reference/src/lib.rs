@@ -4,10 +4,18 @@
 //! loop (the file it mirrors is named in its doc), in plain `f32`, so the GPU
 //! can be compared against it within float noise. Nothing here ships in the
 //! frame path: only tests, labs and benchmarks depend on this crate.
+//!
+//! Two modules are ground truth rather than twins, in `f64`: [`chiang`], the hair fibre
+//! BSDF of Chiang et al. 2016 as pbrt-v3 defines it (with its far-field, h-averaged form
+//! for the GPU model to match), and [`path_tracer`], a multi-threaded path tracer of the
+//! strands as real cylinders with that BSDF (multiple scattering, shadows, a Lambertian
+//! mesh).
 
+pub mod chiang;
 pub mod flip;
 pub mod noise;
 pub mod oit;
+pub mod path_tracer;
 pub mod shading;
 pub mod strands;
 pub mod transmittance;

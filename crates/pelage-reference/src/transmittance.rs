@@ -13,6 +13,11 @@
 //!
 //! Degenerate segments (non-finite end points, radius or opacity, radius <= 0, or
 //! zero length) are never hit: a zero-length cylinder has no volume.
+//!
+//! Besides these any-hit transmittance queries, [`SegmentBvh::closest_hit`] and
+//! [`SegmentBvh::occluded`] treat the cylinders as opaque surfaces for the path tracer
+//! ([`crate::path_tracer`]): a ray hits a cylinder where it *enters* it, so a ray that starts
+//! inside a cylinder does not hit that one.
 
 use glam::{DVec3, Vec3, Vec4};
 use pelage_strands::{hash_to_unit, pcg_hash};
@@ -187,6 +192,82 @@ fn hits_f64(seg: &Segment, o: DVec3, d: DVec3, max_t: f64) -> bool {
         hi_closed: false,
     };
     !iv.intersect(inside).is_empty()
+}
+
+/// Where the ray `o + t d` (`d` unit) first enters the cylinder of a valid `seg` for
+/// `t` in `(0, max_t]`: `(t, s, h)` with `s` the axis parameter of the entry point and `h`
+/// the fibre offset (see [`SegmentHit::h`]). `None` when it does not, or when `o` is inside
+/// the cylinder (the entry is then at `t <= 0`).
+fn entry_f64(seg: &Segment, o: DVec3, d: DVec3, max_t: f64) -> Option<(f64, f64, f64)> {
+    let a = seg.a.as_dvec3();
+    let e = seg.b.as_dvec3() - a;
+    let ee = e.length_squared();
+    let r = seg.radius as f64;
+    let w = o - a;
+    let s0 = w.dot(e) / ee;
+    let ds = d.dot(e) / ee;
+    // Axis range s in [0, 1) as a range of t.
+    let (mut lo, mut hi) = if ds == 0.0 {
+        if !(0.0..1.0).contains(&s0) {
+            return None;
+        }
+        (f64::NEG_INFINITY, f64::INFINITY)
+    } else if ds > 0.0 {
+        (-s0 / ds, (1.0 - s0) / ds)
+    } else {
+        ((1.0 - s0) / ds, -s0 / ds)
+    };
+    // Inside the infinite cylinder: A t^2 + 2 B t + C < 0.
+    let wp = w - e * s0;
+    let dp = d - e * ds;
+    let qa = dp.length_squared();
+    let qb = wp.dot(dp);
+    let qc = wp.length_squared() - r * r;
+    if qa < PARALLEL_SIN2 {
+        if qc >= 0.0 {
+            return None;
+        }
+    } else {
+        let disc = qb * qb - qa * qc;
+        if disc <= 0.0 {
+            return None;
+        }
+        let q = -(qb + disc.sqrt().copysign(qb));
+        let (t0, t1) = (q / qa, qc / q);
+        lo = lo.max(t0.min(t1));
+        hi = hi.min(t0.max(t1));
+    }
+    if lo.is_nan() || hi.is_nan() || lo >= hi || lo <= 0.0 || lo > max_t {
+        return None;
+    }
+    // h = x̂ · (d̂⊥ × q) / r with q any vector from the axis to the ray: e · (d × w) is
+    // |e| |d⊥| times it.
+    let h = if qa < PARALLEL_SIN2 {
+        0.0
+    } else {
+        (e.dot(d.cross(w)) / (ee.sqrt() * qa.sqrt() * r)).clamp(-1.0, 1.0)
+    };
+    Some((lo, s0 + lo * ds, h))
+}
+
+/// A ray's entry into a strand cylinder, found by [`SegmentBvh::closest_hit`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SegmentHit {
+    /// Index of the segment in [`SegmentBvh::segments`].
+    pub index: usize,
+    /// A copy of the segment hit.
+    pub segment: Segment,
+    /// Distance from the ray origin to the entry point (the ray direction is normalised).
+    pub t: f64,
+    /// Axis parameter of the entry point's projection onto `a -> b`, in [0, 1].
+    pub s: f64,
+    /// The fibre offset of the ray, in [-1, 1], as [`crate::chiang`] defines it:
+    /// `h = x̂ · (d̂⊥ × q) / radius`, where `x̂` is the unit axis `a -> b`, `d̂⊥` the unit
+    /// part of the ray direction perpendicular to it and `q` the shortest vector from the
+    /// axis line to the ray line. The entry point's outward normal then has azimuth
+    /// `φ_o - asin h` about `x̂` (`φ_o` that of `-d`). 0 for a ray along the axis (it
+    /// enters through a flat end).
+    pub h: f64,
 }
 
 /// A checked ray: origin, unit direction and length, all in `f64`.
@@ -397,6 +478,148 @@ impl SegmentBvh {
         self.for_each_hit(origin, dir, max_t, exclude_strand, |_| n += 1);
         n
     }
+}
+
+/// Nodes a traversal stack can hold: the median split halves every range, so a tree over
+/// fewer than 2^32 segments is at most 34 deep, and a depth-first stack never holds more
+/// than depth + 1 nodes.
+const STACK_SIZE: usize = 64;
+
+impl SegmentBvh {
+    /// The nearest cylinder entry along `origin + t * dir / |dir|`, `t` in `(0, max_t]`
+    /// (`max_t` may be infinite), treating the cylinders as opaque surfaces: a cylinder is hit
+    /// where the ray enters it (through its side or a flat end); a cylinder that contains
+    /// `origin` is not hit. With `skip = Some((strand, min_t))`, entries into segments of
+    /// `strand` at `t < min_t` are ignored (the path tracer's guard against a fibre hitting
+    /// itself at its joints). `None` for a zero or non-finite `dir`, a non-finite origin,
+    /// `max_t` NaN or <= 0, or no hit.
+    pub fn closest_hit(
+        &self,
+        origin: DVec3,
+        dir: DVec3,
+        max_t: f64,
+        skip: Option<(u32, f64)>,
+    ) -> Option<SegmentHit> {
+        self.first_entry(origin, dir, max_t, skip, false)
+    }
+
+    /// Whether [`Self::closest_hit`] would find any hit (stops at the first one found).
+    pub fn occluded(
+        &self,
+        origin: DVec3,
+        dir: DVec3,
+        max_t: f64,
+        skip: Option<(u32, f64)>,
+    ) -> bool {
+        self.first_entry(origin, dir, max_t, skip, true).is_some()
+    }
+
+    fn first_entry(
+        &self,
+        origin: DVec3,
+        dir: DVec3,
+        max_t: f64,
+        skip: Option<(u32, f64)>,
+        any: bool,
+    ) -> Option<SegmentHit> {
+        let len = dir.length();
+        if self.nodes.is_empty()
+            || !origin.is_finite()
+            || !dir.is_finite()
+            || len <= 0.0
+            || max_t.is_nan()
+            || max_t <= 0.0
+        {
+            return None;
+        }
+        let d = dir / len;
+        let o = origin;
+        let mut best: Option<SegmentHit> = None;
+        let mut t_max = max_t;
+        let mut stack = [0u32; STACK_SIZE];
+        let mut sp = 0usize;
+        if slab_near(o, d, t_max, &self.nodes[0]).is_some() {
+            stack[0] = 0;
+            sp = 1;
+        }
+        while sp > 0 {
+            sp -= 1;
+            let node = &self.nodes[stack[sp] as usize];
+            if slab_near(o, d, t_max, node).is_none() {
+                continue;
+            }
+            if node.count == 0 {
+                let (l, r) = (node.first, node.first + 1);
+                let nl = slab_near(o, d, t_max, &self.nodes[l as usize]);
+                let nr = slab_near(o, d, t_max, &self.nodes[r as usize]);
+                // Push the farther child first so the nearer one is visited first.
+                let order = match (nl, nr) {
+                    (Some(a), Some(b)) if a <= b => [Some(r), Some(l)],
+                    (Some(_), Some(_)) => [Some(l), Some(r)],
+                    (Some(_), None) => [None, Some(l)],
+                    (None, Some(_)) => [None, Some(r)],
+                    (None, None) => [None, None],
+                };
+                for n in order.into_iter().flatten() {
+                    if let Some(slot) = stack.get_mut(sp) {
+                        *slot = n;
+                        sp += 1;
+                    }
+                }
+                continue;
+            }
+            let first = node.first as usize;
+            for (k, seg) in self.segments[first..first + node.count as usize]
+                .iter()
+                .enumerate()
+            {
+                let Some((t, s, h)) = entry_f64(seg, o, d, t_max) else {
+                    continue;
+                };
+                if let Some((strand, min_t)) = skip {
+                    if seg.strand == strand && t < min_t {
+                        continue;
+                    }
+                }
+                t_max = t;
+                best = Some(SegmentHit {
+                    index: first + k,
+                    segment: *seg,
+                    t,
+                    s: s.clamp(0.0, 1.0),
+                    h,
+                });
+                if any {
+                    return best;
+                }
+            }
+        }
+        best
+    }
+}
+
+/// Slab test against a node's box: the entry distance (clamped to 0) when the ray meets the
+/// closed box for some `t` in `[0, max_t]`.
+fn slab_near(o: DVec3, d: DVec3, max_t: f64, node: &Node) -> Option<f64> {
+    let mut near = 0.0f64;
+    let mut far = max_t;
+    for i in 0..3 {
+        if d[i] == 0.0 {
+            if o[i] < node.min[i] || o[i] > node.max[i] {
+                return None;
+            }
+            continue;
+        }
+        let inv = 1.0 / d[i];
+        let t1 = (node.min[i] - o[i]) * inv;
+        let t2 = (node.max[i] - o[i]) * inv;
+        near = near.max(t1.min(t2));
+        far = far.min(t1.max(t2));
+        if near > far {
+            return None;
+        }
+    }
+    Some(near)
 }
 
 /// Slab test: whether the ray meets the closed box for some `t` in `[0, max_t]`.
