@@ -216,7 +216,7 @@ impl Common {
                 )?,
             ),
         };
-        let model = HairModel::new(gpu, &params.model, hair.growth.opacity)?;
+        let model = HairModel::new(gpu, &params.model)?;
         let redirects: Vec<(&'static str, &'static str)> = shadow
             .iter()
             .map(|b| b.redirect())

@@ -30,9 +30,7 @@ pub struct HairModel {
 impl HairModel {
     /// Uploads `model`'s parameters; for Marschner through tables and for Chiang, builds
     /// the tables (one compute submission, waited for, here and never in the frame).
-    /// `shadow_opacity` is the opacity stage 2 gives one fibre (`growth.opacity`): dual
-    /// scattering counts the fibres in front of a strand from it.
-    pub fn new(gpu: &Gpu, model: &ShadingModel, shadow_opacity: f32) -> crate::Result<Self> {
+    pub fn new(gpu: &Gpu, model: &ShadingModel) -> crate::Result<Self> {
         model.validate()?;
         let mut chiang = None;
         let (module, resources, lut) = match model {
@@ -91,7 +89,7 @@ impl HairModel {
                 )
             }
             ShadingModel::Chiang(p) => {
-                let tables = ChiangTables::new(gpu, p, shadow_opacity)?;
+                let tables = ChiangTables::new(gpu, p)?;
                 let mut encoder = gpu.device.create_command_encoder(&Default::default());
                 tables.encode(&mut encoder);
                 gpu.submit_and_wait([encoder.finish()])?;

@@ -481,17 +481,17 @@ pub struct ChiangUniforms {
     pub color_scale: f32,
     /// 1: dual scattering.
     pub dual: u32,
-    /// Opacity of one fibre in stage 2's shadows (`growth.opacity`).
-    pub shadow_opacity: f32,
     /// Padding.
     pub _pad0: u32,
     /// Padding.
     pub _pad1: u32,
+    /// Padding.
+    pub _pad2: u32,
 }
 
 impl ChiangUniforms {
-    /// The uniforms of `p` for hair whose shadows count each fibre as `shadow_opacity`.
-    pub fn from_params(p: &ChiangParams, shadow_opacity: f32) -> Self {
+    /// The uniforms of `p`.
+    pub fn from_params(p: &ChiangParams) -> Self {
         let bm = p.beta_m;
         let bn = p.beta_n;
         let v0 = (0.726 * bm + 0.812 * bm * bm + 3.7 * bm.powi(20)).powi(2);
@@ -519,9 +519,9 @@ impl ChiangUniforms {
             cos_2k_alpha: Vec3::from_array(cos_2k),
             color_scale: chiang_color_scale(bn),
             dual: u32::from(p.dual_scattering),
-            shadow_opacity,
             _pad0: 0,
             _pad1: 0,
+            _pad2: 0,
         }
     }
 }
@@ -557,19 +557,10 @@ impl ChiangTables {
     pub const SIGMA: u32 = 32;
 
     /// Allocates the tables and the build pipelines for `params` (call
-    /// [`ChiangTables::encode`] before sampling them); `shadow_opacity` is the opacity the
-    /// shadow methods give one fibre (`growth.opacity`).
-    pub fn new(gpu: &Gpu, params: &ChiangParams, shadow_opacity: f32) -> crate::Result<Self> {
+    /// [`ChiangTables::encode`] before sampling them).
+    pub fn new(gpu: &Gpu, params: &ChiangParams) -> crate::Result<Self> {
         params.validate()?;
-        if !shadow_opacity.is_finite() || !(0.0..=1.0).contains(&shadow_opacity) {
-            return Err(ParamError {
-                name: "growth.opacity".into(),
-                value: shadow_opacity.to_string(),
-                reason: "must be in [0, 1]".into(),
-            }
-            .into());
-        }
-        let uniforms = ChiangUniforms::from_params(params, shadow_opacity);
+        let uniforms = ChiangUniforms::from_params(params);
         let model = UniformBuffer::new(gpu, "pelage chiang model", &uniforms)?;
         let usage = wgpu::BufferUsages::STORAGE;
         let n_bytes = u64::from(Self::PHI * Self::THETA * Self::SIGMA) * TEXEL_BYTES;
@@ -642,10 +633,9 @@ impl ChiangTables {
         &mut self,
         queue: &wgpu::Queue,
         params: &ChiangParams,
-        shadow_opacity: f32,
     ) -> crate::Result<bool> {
         params.validate()?;
-        let next = ChiangUniforms::from_params(params, shadow_opacity);
+        let next = ChiangUniforms::from_params(params);
         let rebuild = next.eta != self.uniforms.eta || next.s != self.uniforms.s;
         self.model.write(queue, &next)?;
         self.uniforms = next;

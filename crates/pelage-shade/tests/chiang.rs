@@ -55,9 +55,9 @@ fn fibonacci(n: usize) -> Vec<Vec3> {
         .collect()
 }
 
-/// Tables built for `params` and `shadow_opacity`.
-fn tables(gpu: &Gpu, params: &ChiangParams, shadow_opacity: f32) -> ChiangTables {
-    let t = ChiangTables::new(gpu, params, shadow_opacity).unwrap();
+/// Tables built for `params`.
+fn tables(gpu: &Gpu, params: &ChiangParams) -> ChiangTables {
+    let t = ChiangTables::new(gpu, params).unwrap();
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
     t.encode(&mut encoder);
     gpu.submit_and_wait([encoder.finish()]).unwrap();
@@ -156,7 +156,7 @@ fn white_furnace_is_one_without_tilt() {
             dual_scattering: false,
             ..Default::default()
         };
-        let tab = tables(&gpu, &params, 0.5);
+        let tab = tables(&gpu, &params);
         let mut cases = Vec::new();
         let angles: Vec<f64> = (-8..=8).map(|k| 10.0 * k as f64).collect();
         for &th in &angles {
@@ -203,9 +203,8 @@ fn dual_scattering_limits() {
         ..Default::default()
     };
     let dual = ChiangParams::default();
-    let opacity = 0.5;
-    let single_t = tables(&gpu, &single, opacity);
-    let dual_t = tables(&gpu, &dual, opacity);
+    let single_t = tables(&gpu, &single);
+    let dual_t = tables(&gpu, &dual);
     let mut cases = Vec::new();
     for &visibility in &[1.0f32, 0.25, 1e-3] {
         for &color in &[blond, black] {
@@ -319,7 +318,7 @@ fn gpu_matches_cpu_twin() {
     for (name, params) in configs {
         let sigma = params.sigma_a_for(color);
         let fibre = twin(&params, sigma);
-        let tab = tables(&gpu, &params, 0.5);
+        let tab = tables(&gpu, &params);
         let mut cases = Vec::new();
         for &t in &tangents {
             for &l in &dirs {

@@ -18,13 +18,15 @@
 // own sigma_a: the colour (and with it sigma_a) may change from strand to strand.
 //
 // Dual scattering (chiang_dual_radiance): stage 2's visibility V of the light at the strand
-// vertex is read as n layers of fibres of opacity a in front (V = (1 - a)^n, a the hair's
-// shadow opacity). Light crossing them keeps V unscattered and reaches
-// T = (1 - a + a af)^n in all, af the forward-scattered fraction of one fibre (Zinke's
-// a_f bar, here per unit opacity). Then, per channel:
+// vertex is read as its own model of the hair in front: V = exp(-tau), tau = a E[N] the
+// expected number of fibre crossings times the fibre opacity (the voxel grid's and the deep
+// opacity maps' optical depth, eq. of shadow/voxel_splat.wgsl). Under the same Poisson
+// model a crossing scatters a fraction af forward (Zinke's a_f bar), so light reaches the
+// strand with T = E[(1 - a + a af)^N] = exp(-tau (1 - af)) = V^(1 - af) in all, V of it
+// unscattered. Then, per channel:
 //   F_direct  = V (f_s + d_b f_back(sigma_b^2))
 //   F_scatter = (T - V) d_f (sum_p M_p(v_p + 4 sigma_f^2) N^G_p + pi d_b f_back(sigma_b^2 + sigma_f^2))
-//   sigma_f^2 = a n beta_f^2 (the spread of a scatterings on average), N^G_p = af_p / pi,
+//   sigma_f^2 = tau beta_f^2 (the spread of tau scatterings on average), N^G_p = af_p / pi,
 //   f_back    = A_b M_b / pi, M_b the longitudinal lobe shifted by Delta_b,
 // with A_b, Delta_b and sigma_b from Zinke's eqs. 13 to 15 and d_f = d_b = 0.7 (Zinke's
 // density factors). Longitudinal lobes are pbrt's Mp with the shift and variance in its
@@ -61,10 +63,9 @@ struct ChiangModel {
     color_scale: f32,
     // 1: dual scattering; 0: single scattering.
     dual: u32,
-    // Opacity of one fibre in stage 2's shadows, to count the fibres in front.
-    shadow_opacity: f32,
     _pad0: u32,
     _pad1: u32,
+    _pad2: u32,
 }
 
 @group(2) @binding(0) var<uniform> chiang: ChiangModel;
@@ -281,8 +282,7 @@ fn chiang_dual_channel(
     e: ChiangEnergies,
     f_s: f32,
     visibility: f32,
-    layers: f32,
-    opacity: f32,
+    tau: f32,
 ) -> f32 {
     // Lobe shifts and variances in theta_h: R at alpha, TT at -alpha/2, TRT at -2 alpha,
     // the residual at 0; variances v_p / 4.
@@ -310,9 +310,9 @@ fn chiang_dual_channel(
         / (ab + ab3 * (2.0 * beta_f + 3.0 * beta_b));
     let sigma_b2 = sigma_b * sigma_b;
     // Global scattering: what crossed the fibres in front, and its spread.
-    let total = pow(1.0 - opacity + opacity * min(af, 1.0), layers);
+    let total = exp(-tau * (1.0 - min(af, 1.0)));
     let scattered = max(total - visibility, 0.0);
-    let sigma_f2 = opacity * layers * beta_f2;
+    let sigma_f2 = tau * beta_f2;
     let back_direct = a_b * chiang_mp_shifted(a, delta_b, sigma_b2) * INV_PI;
     let f_direct = visibility * (f_s + CHIANG_DB * back_direct);
     if (scattered <= 0.0) {
@@ -327,8 +327,7 @@ fn chiang_dual_channel(
 }
 
 // Dual scattering: the radiance toward v for a light of unit irradiance from l that stage 2
-// sees reaching the strand with `visibility` (in [0, 1]) through hair of shadow opacity
-// m.shadow_opacity.
+// sees reaching the strand with `visibility` (in [0, 1]).
 fn chiang_dual_radiance(
     m: ChiangModel,
     t: vec3<f32>,
@@ -341,9 +340,8 @@ fn chiang_dual_radiance(
     let sigma = chiang_sigma_a(m, base_color);
     let f_s = chiang_single(m, a, sigma);
     let vis = clamp(visibility, 0.0, 1.0);
-    let opacity = clamp(m.shadow_opacity, 0.02, 0.98);
-    // Layers of fibres in front: V = (1 - opacity)^n.
-    let layers = log(max(vis, 1e-6)) / log(1.0 - opacity);
+    // Optical depth of the hair in front: V = exp(-tau) (at most 69, V = 1e-30).
+    let tau = -log(max(vis, 1e-30));
     let x = vec3<f32>(
         chiang_sigma_coordinate(sigma.x),
         chiang_sigma_coordinate(sigma.y),
@@ -353,9 +351,9 @@ fn chiang_dual_radiance(
     let eg = chiang_dual_at(a.theta_i, x.y);
     let eb = chiang_dual_at(a.theta_i, x.z);
     return vec3<f32>(
-        chiang_dual_channel(m, a, er, f_s.x, vis, layers, opacity),
-        chiang_dual_channel(m, a, eg, f_s.y, vis, layers, opacity),
-        chiang_dual_channel(m, a, eb, f_s.z, vis, layers, opacity),
+        chiang_dual_channel(m, a, er, f_s.x, vis, tau),
+        chiang_dual_channel(m, a, eg, f_s.y, vis, tau),
+        chiang_dual_channel(m, a, eb, f_s.z, vis, tau),
     );
 }
 

@@ -9,7 +9,8 @@
 //!
 //! Black, brown and blond hair (eumelanin 8, 1.3, 0.3) × fur on the creature and long hair
 //! on a head, 256x256 (`--quick`: 64x64, one groom, two colours, 16 spp). The reference is
-//! the mean of two path-traced images with different seeds; their own difference (FLIP of
+//! the mean of two path-traced images with different seeds (a third, with one bounce, is
+//! the single-scattering reference); their own difference (FLIP of
 //! one seed against the other) is the noise floor each row reports. pelage renders the
 //! same scene with the k-buffer (k = 8) and the voxel shadow, the Chiang model with dual
 //! scattering off and on.
@@ -133,14 +134,15 @@ fn render_pelage(
     Ok((image, ms, renderer, gpu))
 }
 
-/// Path-traces the strands `renderer` drew for `scene`, twice (seeds 1 and 2).
+/// Path-traces the strands `renderer` drew for `scene`: twice (seeds 1 and 2) with every
+/// bounce, and once (seed 3) with one bounce only, the single-scattering reference.
 fn path_trace(
     scene: &Scene,
     renderer: &Renderer,
     gpu: &Gpu,
     size: u32,
     spp: u32,
-) -> Result<[PathTracedImage; 2], Box<dyn std::error::Error>> {
+) -> Result<[PathTracedImage; 3], Box<dyn std::error::Error>> {
     let strands = renderer.strands();
     let buffers = strands.buffers();
     let vertices: Vec<Vec4> =
@@ -177,7 +179,7 @@ fn path_trace(
         mesh_albedo: (scene.shade.mesh_color * std::f32::consts::PI).as_dvec3(),
         lights: &scene.lights,
     })?;
-    let render = |seed| {
+    let render = |seed, max_bounces| {
         tracer.render(
             &scene.camera,
             size,
@@ -185,12 +187,13 @@ fn path_trace(
             &PathTracerSettings {
                 spp,
                 seed,
+                max_bounces,
                 background: DVec3::splat(f64::from(SKY)),
                 ..Default::default()
             },
         )
     };
-    Ok([render(1)?, render(2)?])
+    Ok([render(1, 16)?, render(2, 16)?, render(3, 1)?])
 }
 
 /// Mean of `map` over the pixels where `mask` is at least 0.5 (NaN when there are none).
@@ -271,6 +274,7 @@ pub fn run(opts: &LabOpts, spp: Option<u32>) -> Result<(), Box<dyn std::error::E
         "hair_flip",
         "hair_luminance_ratio",
         "shade_ms",
+        "hair_flip_vs_1_bounce",
         "reference_spp",
         "noise_mean_flip",
         "noise_hair_flip",
@@ -287,21 +291,21 @@ pub fn run(opts: &LabOpts, spp: Option<u32>) -> Result<(), Box<dyn std::error::E
             let (single_image, single_ms, renderer, gpu) = render_pelage(&single, size, frames)?;
             let (dual_image, dual_ms, _, _) = render_pelage(&dual, size, frames)?;
             let traced = Instant::now();
-            let [a, b] = path_trace(&single, &renderer, &gpu, size, spp)?;
-            let reference_s = traced.elapsed().as_secs_f64() / 2.0;
+            let [a, b, one] = path_trace(&single, &renderer, &gpu, size, spp)?;
+            let reference_s = traced.elapsed().as_secs_f64() / 3.0;
             let stem = format!("{groom}_{name}");
-            for (img, seed) in [(&a, 1), (&b, 2)] {
+            for (img, seed) in [(&a, "seed1"), (&b, "seed2"), (&one, "1_bounce")] {
                 img.write_hdr(
                     &opts
                         .out
                         .join("scattering")
-                        .join(format!("{stem}_seed{seed}.hdr")),
+                        .join(format!("{stem}_{seed}.hdr")),
                 )?;
                 img.write_png(
                     &opts
                         .out
                         .join("scattering")
-                        .join(format!("{stem}_seed{seed}.png")),
+                        .join(format!("{stem}_{seed}.png")),
                 )?;
             }
             let mask: Vec<f32> = a
@@ -333,6 +337,27 @@ pub fn run(opts: &LabOpts, spp: Option<u32>) -> Result<(), Box<dyn std::error::E
             let noise = flip(&la, &lb, DEFAULT_PIXELS_PER_DEGREE)?;
             let (noise_mean, noise_hair) = (noise.mean(), masked_mean(&noise, &mask));
             let ref_luma = hair_luminance(&reference, &mask);
+            let single_reference = one.to_linear_image()?;
+            {
+                // How far single scattering itself is from the whole: the gap dual
+                // scattering has to close.
+                let map = flip(&reference, &single_reference, DEFAULT_PIXELS_PER_DEGREE)?;
+                let ratio = hair_luminance(&single_reference, &mask) / ref_luma;
+                table.push(vec![
+                    groom.into(),
+                    name.into(),
+                    "path_tracer_1_bounce".into(),
+                    format!("{:.4}", map.mean()),
+                    format!("{:.4}", masked_mean(&map, &mask)),
+                    format!("{ratio:.3}"),
+                    String::new(),
+                    "0".into(),
+                    (2 * spp).to_string(),
+                    format!("{noise_mean:.4}"),
+                    format!("{noise_hair:.4}"),
+                    format!("{reference_s:.1}"),
+                ])?;
+            }
             let mut dual_flip = None;
             for (method, image, ms) in [
                 ("single", &single_image, single_ms),
@@ -342,6 +367,10 @@ pub fn run(opts: &LabOpts, spp: Option<u32>) -> Result<(), Box<dyn std::error::E
                 let map = flip(&reference, &test, DEFAULT_PIXELS_PER_DEGREE)?;
                 let hair_flip = masked_mean(&map, &mask);
                 let ratio = hair_luminance(&test, &mask) / ref_luma;
+                let vs_single = masked_mean(
+                    &flip(&single_reference, &test, DEFAULT_PIXELS_PER_DEGREE)?,
+                    &mask,
+                );
                 table.push(vec![
                     groom.into(),
                     name.into(),
@@ -350,6 +379,7 @@ pub fn run(opts: &LabOpts, spp: Option<u32>) -> Result<(), Box<dyn std::error::E
                     format!("{hair_flip:.4}"),
                     format!("{ratio:.3}"),
                     format!("{ms:.2}"),
+                    format!("{vs_single:.4}"),
                     (2 * spp).to_string(),
                     format!("{noise_mean:.4}"),
                     format!("{noise_hair:.4}"),
@@ -363,7 +393,7 @@ pub fn run(opts: &LabOpts, spp: Option<u32>) -> Result<(), Box<dyn std::error::E
                     size: None,
                 });
                 bar.println(format!(
-                    "{groom:<9} {name:<6} {method:<6} FLIP {:.4} (hair {hair_flip:.4}, noise {noise_hair:.4})  luminance x{ratio:.3}  shade {ms:.1} ms",
+                    "{groom:<9} {name:<6} {method:<6} FLIP {:.4} (hair {hair_flip:.4}, noise {noise_hair:.4}; against 1 bounce {vs_single:.4})  luminance x{ratio:.3}  shade {ms:.1} ms",
                     map.mean()
                 ));
                 if method == "dual" {

@@ -147,7 +147,7 @@ pub fn run(opts: &LabOpts) -> Result<(), Box<dyn std::error::Error>> {
         let ms = median(times);
         let ns = ms * 1e6 / fragments as f64;
         let base = *base_ns.get_or_insert(ns);
-        let lut_mb = pelage::shade::HairModel::new(&gpu, &model, 1.0)?.memory_bytes() as f64 / 1e6;
+        let lut_mb = pelage::shade::HairModel::new(&gpu, &model)?.memory_bytes() as f64 / 1e6;
         table.push(vec![
             name.into(),
             format!("{ms:.3}"),
