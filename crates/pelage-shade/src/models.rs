@@ -629,11 +629,7 @@ impl ChiangTables {
 
     /// Rewrites the uniform for `params` (takes effect at the next submit). Returns whether
     /// the tables depend on what changed (η or β_n), so [`ChiangTables::encode`] must run again.
-    pub fn update(
-        &mut self,
-        queue: &wgpu::Queue,
-        params: &ChiangParams,
-    ) -> crate::Result<bool> {
+    pub fn update(&mut self, queue: &wgpu::Queue, params: &ChiangParams) -> crate::Result<bool> {
         params.validate()?;
         let next = ChiangUniforms::from_params(params);
         let rebuild = next.eta != self.uniforms.eta || next.s != self.uniforms.s;

@@ -25,8 +25,9 @@
 // strand with T = E[(1 - a + a af)^N] = exp(-tau (1 - af)) = V^(1 - af) in all, V of it
 // unscattered. Then, per channel:
 //   F_direct  = V (f_s + d_b f_back(sigma_b^2))
-//   F_scatter = (T - V) d_f (sum_p M_p(v_p + 4 sigma_f^2) N^G_p + pi d_b f_back(sigma_b^2 + sigma_f^2))
-//   sigma_f^2 = tau beta_f^2 (the spread of tau scatterings on average), N^G_p = af_p / pi,
+//   F_scatter = (T - V) d_f (M_f(beta_f^2 + sigma_f^2) af / pi + pi d_b f_back(sigma_b^2 + sigma_f^2))
+//   sigma_f^2 = tau beta_f^2 (the spread of tau scatterings on average), M_f the lobe of the
+//   forward energy's mean shift alpha_f (Zinke's M^G with its lobes merged),
 //   f_back    = A_b M_b / pi, M_b the longitudinal lobe shifted by Delta_b,
 // with A_b, Delta_b and sigma_b from Zinke's eqs. 13 to 15 and d_f = d_b = 0.7 (Zinke's
 // density factors). Longitudinal lobes are pbrt's Mp with the shift and variance in its
@@ -319,10 +320,11 @@ fn chiang_dual_channel(
         return f_direct;
     }
     let back_scatter = a_b * chiang_mp_shifted(a, delta_b, sigma_b2 + sigma_f2) * INV_PI;
-    var spread = 0.0;
-    for (var p = 0u; p < 4u; p += 1u) {
-        spread += chiang_mp_shifted(a, shift[p], var_h[p] + sigma_f2) * e.forward[p] * INV_PI;
-    }
+    // The forward-scattered light's last scattering: one lobe of the forward energy's mean
+    // shift and variance (Zinke's alpha_f, beta_f) widened by the spread, times the
+    // azimuthally averaged N^G = af / pi (the lobes of Zinke's M^G merged: at the spreads
+    // that matter they overlap, and one lobe costs a quarter).
+    let spread = chiang_mp_shifted(a, alpha_f, beta_f2 + sigma_f2) * af * INV_PI;
     return f_direct + scattered * CHIANG_DF * (spread + PI * CHIANG_DB * back_scatter);
 }
 
