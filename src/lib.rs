@@ -35,7 +35,7 @@ pub use pelage_strands as strands;
 mod output;
 mod renderer;
 
-pub use output::{OutputError, save_png, write_atomically};
+pub use output::{AtomicFile, OutputError, remove_pending_temporaries, save_png, write_atomically};
 pub use renderer::{FrameStats, Renderer, Scene};
 
 /// Any error of the frame pipeline.

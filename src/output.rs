@@ -1,20 +1,28 @@
-//! Writing outputs without leaving half-written files.
+//! Writing outputs without leaving half-written files, with
+//! [`pelage_scene::atomic_file::AtomicFile`] (the one atomic writer of pelage): a short
+//! temporary in the same folder renamed over the target, symbolic links
+//! followed, devices such as `/dev/null` written through.
 
 use std::path::{Path, PathBuf};
+
+pub use pelage_scene::atomic_file::{AtomicFile, remove_pending_temporaries};
 
 /// Writing a file failed.
 #[derive(Debug, thiserror::Error)]
 pub enum OutputError {
     /// The file system refused.
-    #[error("cannot write {path}: {source}")]
+    #[error("cannot write {}: {source}", path.display())]
     Io {
         /// The file.
         path: PathBuf,
         /// Why.
         source: std::io::Error,
     },
-    /// Encoding an image failed.
-    #[error("cannot encode {path}: {message}")]
+    /// Opening, writing or renaming the file failed (the message says which).
+    #[error(transparent)]
+    Write(#[from] pelage_scene::atomic_file::WriteError),
+    /// Encoding an image failed, or writing its bytes did.
+    #[error("cannot write {}: {message}", path.display())]
     Encode {
         /// The file.
         path: PathBuf,
@@ -24,43 +32,32 @@ pub enum OutputError {
 }
 
 /// Writes `path` by letting `write` fill a temporary file beside it, then renaming it
-/// into place, so an interrupted run never leaves a half-written file. Creates parent folders.
+/// into place, so an interrupted run never leaves a half-written file. Creates parent
+/// folders, follows symbolic links and writes through anything that is not a regular
+/// file (`/dev/null`); see [`AtomicFile`].
 pub fn write_atomically(
     path: &Path,
-    write: impl FnOnce(&mut std::io::BufWriter<std::fs::File>) -> Result<(), String>,
+    write: impl FnOnce(&mut AtomicFile) -> Result<(), String>,
 ) -> Result<(), OutputError> {
-    let io = |source| OutputError::Io {
-        path: path.to_path_buf(),
-        source,
-    };
-    if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
-        std::fs::create_dir_all(parent).map_err(io)?;
+    let mut file = AtomicFile::create(path)?;
+    if let Err(message) = write(&mut file) {
+        // A write error the encoder met (a full disk) is clearer than its own wording.
+        return Err(match file.commit() {
+            Err(e) => e.into(),
+            Ok(()) => OutputError::Encode {
+                path: path.to_path_buf(),
+                message,
+            },
+        });
     }
-    let mut name = path.file_name().unwrap_or_default().to_os_string();
-    name.push(format!(".tmp{}", std::process::id()));
-    let tmp = path.with_file_name(name);
-    let result = (|| {
-        let file = std::fs::File::create(&tmp).map_err(io)?;
-        let mut writer = std::io::BufWriter::new(file);
-        write(&mut writer).map_err(|message| OutputError::Encode {
-            path: path.to_path_buf(),
-            message,
-        })?;
-        let file = writer.into_inner().map_err(|e| io(e.into_error()))?;
-        file.sync_all().map_err(io)?;
-        std::fs::rename(&tmp, path).map_err(io)
-    })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result
+    Ok(file.commit()?)
 }
 
 /// Saves an RGBA image as PNG, atomically.
 pub fn save_png(image: &image::RgbaImage, path: &Path) -> Result<(), OutputError> {
     write_atomically(path, |w| {
         image
-            .write_to(w, image::ImageFormat::Png)
+            .write_with_encoder(image::codecs::png::PngEncoder::new(w))
             .map_err(|e| e.to_string())
     })
 }

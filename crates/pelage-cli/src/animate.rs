@@ -1,15 +1,25 @@
 //! `pelage animate`: a PNG sequence of a scene in wind and an animated GIF preview.
 
+use std::io::Write;
+use std::ops::Range;
 use std::path::PathBuf;
 use std::time::Instant;
 
 use pelage::gpu::Gpu;
-use pelage::{Renderer, save_png, write_atomically};
+use pelage::{AtomicFile, OutputError, Renderer, save_png};
 
 use crate::error::CliError;
 use crate::progress;
 use crate::report::{median_per_pass, print_pass_times};
 use crate::scene_opts::SceneOpts;
+
+/// The most frames one animation may have (`--frames`): 11.6 hours at 24 frames a
+/// second. Memory does not grow with it (the GIF is encoded frame by frame).
+pub const MAX_FRAMES: u32 = 1_000_000;
+
+/// The GPU times of at most this many frames (the first ones rendered) enter the
+/// printed medians, so their memory does not grow with the frame count.
+pub const MAX_TIMED_FRAMES: usize = 1000;
 
 /// Options of `pelage animate`.
 #[derive(Clone, Debug, clap::Args)]
@@ -17,70 +27,159 @@ pub struct AnimateOpts {
     /// The scene and its overrides.
     #[command(flatten)]
     pub scene: SceneOpts,
-    /// Number of frames to render.
+    /// Number of frames of the animation, 1 to 1000000.
     #[arg(long, value_name = "N", default_value_t = 48,
-          value_parser = clap::value_parser!(u32).range(1..))]
+          value_parser = clap::value_parser!(u32).range(1..=i64::from(MAX_FRAMES)))]
     pub frames: u32,
     /// Frames per second of the animation: frame i shows the wind at i / FPS seconds,
     /// and the GIF plays at this rate.
     #[arg(long, value_name = "N", default_value_t = 24,
           value_parser = clap::value_parser!(u32).range(1..))]
     pub fps: u32,
+    /// Render only frames A to B-1 of the animation (half-open, 0 <= A < B <= N). They
+    /// keep their index in the file names (frame_0040.png, ...) and are identical to
+    /// the same frames of the full run; the GIF holds only them. Default: all frames.
+    #[arg(long, value_name = "A..B")]
+    pub range: Option<String>,
     /// Output folder for frame_0000.png, frame_0001.png, ... and wind.gif; created if missing.
     #[arg(long, value_name = "DIR", default_value = "out/wind")]
     pub out: PathBuf,
+}
+
+/// Which frames to render and when each is: planned up front in constant memory.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FramePlan {
+    /// Frames of the whole animation.
+    pub total: u32,
+    /// Frames per second.
+    pub fps: u32,
+    /// The frames to render (global indices).
+    pub range: Range<u32>,
+}
+
+impl FramePlan {
+    /// Plans `frames` frames at `fps`, restricted to `range` (`"A..B"`) when given.
+    /// The error names `--frames` or `--range`.
+    pub fn new(frames: u32, fps: u32, range: Option<&str>) -> Result<Self, String> {
+        if frames == 0 || frames > MAX_FRAMES {
+            return Err(format!(
+                "--frames {frames}: must be between 1 and {MAX_FRAMES}"
+            ));
+        }
+        if fps == 0 {
+            return Err("--fps 0: must be at least 1".into());
+        }
+        let range = match range {
+            None => 0..frames,
+            Some(text) => {
+                let bad = |why: &str| format!("--range {text}: {why}");
+                let (a, b) = text
+                    .split_once("..")
+                    .ok_or_else(|| bad("expected A..B, e.g. 40..80"))?;
+                let parse = |s: &str| {
+                    s.trim()
+                        .parse::<u32>()
+                        .map_err(|_| bad(&format!("'{s}' is not a frame index")))
+                };
+                let (a, b) = (parse(a)?, parse(b)?);
+                if a >= b {
+                    return Err(bad("empty or reversed (A..B renders A to B-1, so A < B)"));
+                }
+                if b > frames {
+                    return Err(bad(&format!(
+                        "beyond --frames {frames} (B is at most {frames})"
+                    )));
+                }
+                a..b
+            }
+        };
+        Ok(Self {
+            total: frames,
+            fps,
+            range,
+        })
+    }
+
+    /// Seconds of the whole animation.
+    pub fn duration(&self) -> f32 {
+        self.total as f32 / self.fps as f32
+    }
+
+    /// The time of frame `f`, in seconds.
+    pub fn time(&self, f: u32) -> f32 {
+        f as f32 / self.fps as f32
+    }
+
+    /// Number of frames rendered.
+    pub fn len(&self) -> u32 {
+        self.range.end - self.range.start
+    }
+
+    /// The frames to render with their times, lazily.
+    pub fn frames(&self) -> impl Iterator<Item = (u32, f32)> + '_ {
+        self.range.clone().map(|f| (f, self.time(f)))
+    }
 }
 
 /// Renders the animation, writes the frames and the GIF, prints the GPU time per pass
 /// (median over the frames) and the wall clock of each stage submitted alone.
 pub fn run(opts: &AnimateOpts) -> Result<(), CliError> {
     let started = Instant::now();
+    let plan =
+        FramePlan::new(opts.frames, opts.fps, opts.range.as_deref()).map_err(CliError::Usage)?;
     let scene = opts.scene.scene()?;
     let gpu = Gpu::headless()?;
     println!("adapter: {}", gpu.describe());
     let size = opts.scene.size;
     let mut renderer = Renderer::new(&gpu, &scene, size.width, size.height)?;
 
-    let bar = progress::bar(u64::from(opts.frames), "frames")?;
-    let duration = opts.frames as f32 / opts.fps as f32;
-    let mut passes = Vec::with_capacity(opts.frames as usize);
-    let mut paths = Vec::with_capacity(opts.frames as usize);
-    for f in 0..opts.frames {
-        let t = f as f32 / opts.fps as f32;
-        // A slow orbit over the animation (a quarter of a radian in all), so the wind is
-        // seen from several sides.
-        let camera = scene.camera.orbited(-0.5 * t / duration);
-        passes.push(renderer.render(&gpu, t, &camera)?.passes);
-        let path = opts.out.join(format!("frame_{f:04}.png"));
-        save_png(&renderer.image(&gpu)?, &path)?;
-        paths.push(path);
-        bar.inc(1);
-    }
-    bar.finish_and_clear();
-
-    // Animated preview: every frame, at the animation's frame rate, read back from the
-    // PNGs one at a time (a long animation need not fit in memory).
+    // Animated preview, encoded frame by frame as they are rendered (a long
+    // animation need not fit in memory), renamed into place at the end.
     let gif_path = opts.out.join("wind.gif");
+    let mut gif = AtomicFile::create(&gif_path).map_err(OutputError::from)?;
+    let encode_error = |e: image::ImageError| OutputError::Encode {
+        path: gif_path.clone(),
+        message: e.to_string(),
+    };
     let delay = image::Delay::from_numer_denom_ms(1000, opts.fps);
-    write_atomically(&gif_path, |w| {
-        let mut encoder = image::codecs::gif::GifEncoder::new_with_speed(w, 20);
+    let bar = progress::bar(u64::from(plan.len()), "frames")?;
+    let mut passes = Vec::new();
+    let encoded = (|| {
+        let mut encoder = image::codecs::gif::GifEncoder::new_with_speed(&mut gif, 20);
         encoder
             .set_repeat(image::codecs::gif::Repeat::Infinite)
-            .map_err(|e| e.to_string())?;
-        for path in &paths {
-            let frame = image::open(path)
-                .map_err(|e| format!("{}: {e}", path.display()))?
-                .into_rgba8();
+            .map_err(encode_error)?;
+        for (f, t) in plan.frames() {
+            // A slow orbit over the animation (a quarter of a radian in all), so the wind
+            // is seen from several sides.
+            let camera = scene.camera.orbited(-0.5 * t / plan.duration());
+            let stats = renderer.render(&gpu, t, &camera)?;
+            if passes.len() < MAX_TIMED_FRAMES {
+                passes.push(stats.passes);
+            }
+            let image = renderer.image(&gpu)?;
+            save_png(&image, &opts.out.join(format!("frame_{f:04}.png")))?;
             encoder
-                .encode_frame(image::Frame::from_parts(frame, 0, 0, delay))
-                .map_err(|e| e.to_string())?;
+                .encode_frame(image::Frame::from_parts(image, 0, 0, delay))
+                .map_err(encode_error)?;
+            bar.inc(1);
         }
-        Ok(())
-    })?;
+        Ok::<(), CliError>(())
+    })();
+    bar.finish_and_clear();
+    if let Err(e) = encoded {
+        // A write error (a full disk) says more than the encoder's wording of it.
+        let _ = gif.flush();
+        return Err(match gif.commit() {
+            Err(write) => OutputError::from(write).into(),
+            Ok(()) => e,
+        });
+    }
+    gif.commit().map_err(OutputError::from)?;
 
     println!(
         "wrote {} frames of {size} ({} strands x {} segments) to {}/frame_*.png and {}",
-        opts.frames,
+        plan.len(),
         renderer.strands().params().roots.count,
         renderer.strands().params().growth.segments,
         opts.out.display(),
@@ -88,14 +187,64 @@ pub fn run(opts: &AnimateOpts) -> Result<(), CliError> {
     );
     print_pass_times(
         &median_per_pass(&passes),
-        &format!("GPU time per pass (median over {} frames):", opts.frames),
+        &format!("GPU time per pass (median over {} frames):", passes.len()),
     );
     // Cross-check that does not rely on the driver's timestamps: each stage alone, wall clock.
-    let last = (opts.frames - 1) as f32 / opts.fps as f32;
+    let last = plan.time(plan.range.end - 1);
     println!("wall clock per stage, submitted alone (median of 5):");
     for (stage, ms) in renderer.stage_wall_times(&gpu, last, &scene.camera, 5)? {
         println!("  {stage:<28} {ms:9.3} ms");
     }
     println!("wall time: {:.1} s", started.elapsed().as_secs_f64());
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_plan_is_constant_memory_and_lazy() {
+        // The largest animation plans in a few bytes, whatever its length: nothing is
+        // reserved per frame.
+        let plan = FramePlan::new(MAX_FRAMES, 24, None).unwrap();
+        assert!(std::mem::size_of::<FramePlan>() <= 16);
+        assert_eq!(plan.len(), MAX_FRAMES);
+        let mut frames = plan.frames();
+        assert_eq!(
+            frames.size_hint(),
+            (MAX_FRAMES as usize, Some(MAX_FRAMES as usize))
+        );
+        assert_eq!(frames.next(), Some((0, 0.0)));
+        assert_eq!(frames.nth(47), Some((48, 2.0)));
+    }
+
+    #[test]
+    fn frames_beyond_the_maximum_are_refused() {
+        for frames in [0, MAX_FRAMES + 1, u32::MAX] {
+            let e = FramePlan::new(frames, 24, None).unwrap_err();
+            assert!(e.contains("--frames"), "{e}");
+        }
+    }
+
+    #[test]
+    fn a_range_keeps_global_times() {
+        let full = FramePlan::new(120, 24, None).unwrap();
+        let part = FramePlan::new(120, 24, Some("40..80")).unwrap();
+        assert_eq!(part.range, 40..80);
+        assert_eq!(part.len(), 40);
+        assert_eq!(part.duration(), full.duration());
+        let full: Vec<_> = full.frames().skip(40).take(40).collect();
+        assert_eq!(part.frames().collect::<Vec<_>>(), full);
+    }
+
+    #[test]
+    fn bad_ranges_name_the_option() {
+        for bad in [
+            "5..5", "4..2", "0..121", "x..3", "3", "1..2..3", "-1..2", "",
+        ] {
+            let e = FramePlan::new(120, 24, Some(bad)).unwrap_err();
+            assert!(e.starts_with("--range"), "{bad}: {e}");
+        }
+    }
 }

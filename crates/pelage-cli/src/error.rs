@@ -26,7 +26,8 @@ pub enum CliError {
 }
 
 impl CliError {
-    /// 2 for input the user can fix (a scene file, options, out-of-range parameters),
+    /// 2 for input the user can fix (a scene file, options, out-of-range parameters, a
+    /// `WGPU_BACKEND` naming no backend),
     /// 1 for everything else.
     pub fn exit_code(&self) -> u8 {
         match self {
@@ -36,7 +37,8 @@ impl CliError {
                 pelage::Error::Param(_)
                 | pelage::Error::Strands(pelage::strands::StrandsError::Param(_))
                 | pelage::Error::Shadow(pelage::shadow::ShadowError::Param(_))
-                | pelage::Error::Shade(pelage::shade::ShadeError::Param(_)),
+                | pelage::Error::Shade(pelage::shade::ShadeError::Param(_))
+                | pelage::Error::Gpu(GpuError::BadBackend { .. }),
             ) => 2,
             _ => 1,
         }

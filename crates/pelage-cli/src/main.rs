@@ -30,7 +30,13 @@ Examples:
   pelage info
 
 Without a GPU, install Mesa's software Vulkan driver (mesa-vulkan-drivers, lavapipe);
-WGPU_BACKEND=gl selects llvmpipe through OpenGL instead.";
+WGPU_BACKEND=gl selects llvmpipe through OpenGL instead.
+
+When XDG_RUNTIME_DIR is unset or not a private folder of yours, pelage sets it to
+$TMPDIR/pelage-runtime-<uid> (created with mode 700) for the GPU drivers.
+Outputs are written to a temporary (.pelage-<pid>-<n>.tmp) renamed into place;
+symbolic links are followed and devices such as /dev/null written through. On
+Ctrl-C or SIGTERM the temporaries are removed and pelage exits with 130.";
 
 /// Compute-first GPU hair and fur rendering on wgpu.
 #[derive(Debug, Parser)]
@@ -133,8 +139,68 @@ fn run(command: &Command) -> Result<(), CliError> {
     }
 }
 
+/// Exits at once with `code`, without running exit handlers: the GPU driver's teardown
+/// would race the frame the main thread is rendering (and crash).
+fn exit_now(code: i32) -> ! {
+    #[cfg(unix)]
+    // SAFETY: `_exit` ends the process; it touches no memory of ours.
+    unsafe {
+        libc::_exit(code)
+    }
+    #[cfg(not(unix))]
+    std::process::exit(code)
+}
+
+/// Whether `dir` is a usable XDG runtime folder: a folder (not a link) of ours that
+/// only we can enter (mode 700).
+#[cfg(unix)]
+fn is_private_dir(dir: &std::path::Path) -> bool {
+    use std::os::unix::fs::MetadataExt;
+    // SAFETY: getuid has no preconditions and cannot fail.
+    let uid = unsafe { libc::getuid() };
+    std::fs::symlink_metadata(dir)
+        .is_ok_and(|m| m.is_dir() && m.uid() == uid && m.mode() & 0o077 == 0)
+}
+
+/// Points XDG_RUNTIME_DIR at a private folder when it is unset or not usable, so
+/// Mesa's drivers do not print "XDG_RUNTIME_DIR is invalid or not set" on every run:
+/// `$TMPDIR/pelage-runtime-<uid>`, created with mode 700 (or, when that name is taken
+/// by something else, one with the process id). Must run before any thread starts.
+#[cfg(unix)]
+fn ensure_runtime_dir() {
+    use std::os::unix::fs::DirBuilderExt;
+    if std::env::var_os("XDG_RUNTIME_DIR").is_some_and(|d| is_private_dir(d.as_ref())) {
+        return;
+    }
+    // SAFETY: getuid has no preconditions and cannot fail.
+    let uid = unsafe { libc::getuid() };
+    let base = std::env::temp_dir();
+    for name in [
+        format!("pelage-runtime-{uid}"),
+        format!("pelage-runtime-{uid}-{}", std::process::id()),
+    ] {
+        let dir = base.join(name);
+        let _ = std::fs::DirBuilder::new().mode(0o700).create(&dir);
+        if is_private_dir(&dir) {
+            // SAFETY: called first thing in main, before any other thread exists.
+            unsafe { std::env::set_var("XDG_RUNTIME_DIR", &dir) };
+            return;
+        }
+    }
+}
+
 fn main() -> ExitCode {
+    #[cfg(unix)]
+    ensure_runtime_dir();
     let cli = Cli::parse();
+    // On SIGINT, SIGTERM or SIGHUP, remove the temporary of any output being written
+    // (the target keeps its old content) and exit with 130, as a shell reports Ctrl-C.
+    // Without a handler (it could not be installed) a later run sweeps the leftovers.
+    let _ = ctrlc::set_handler(|| {
+        pelage::remove_pending_temporaries();
+        eprintln!("interrupted: removed unfinished outputs");
+        exit_now(130);
+    });
     match run(&cli.command) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {

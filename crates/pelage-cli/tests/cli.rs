@@ -456,3 +456,319 @@ fn render_blond_chiang_tiny() {
     ]);
     assert_not_blank(&png, 64, 48);
 }
+
+/// The smallest render, to `out`.
+fn tiny_render(out: &str) -> Output {
+    pelage(&["render", "--size", "32x24", "--strands", "200", "-o", out])
+}
+
+/// Names in `dir` of this crate's temporaries (`.pelage-<pid>-<n>.tmp`) or of the
+/// old scheme (`*.tmp<pid>`).
+fn temporaries(dir: &Path) -> Vec<String> {
+    std::fs::read_dir(dir)
+        .map(|entries| {
+            entries
+                .flatten()
+                .map(|e| e.file_name().to_string_lossy().into_owned())
+                .filter(|n| n.starts_with(".pelage-") || n.contains(".tmp"))
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
+#[cfg(unix)]
+#[test]
+fn output_to_dev_null_writes_through_and_keeps_the_device() {
+    use std::os::unix::fs::FileTypeExt;
+    let out = tiny_render("/dev/null");
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let meta = std::fs::symlink_metadata("/dev/null").unwrap();
+    assert!(meta.file_type().is_char_device(), "/dev/null was replaced");
+}
+
+#[cfg(target_os = "linux")]
+#[test]
+fn output_to_dev_full_fails_naming_the_path() {
+    use std::os::unix::fs::FileTypeExt;
+    let stderr = fails(&[
+        "render",
+        "--size",
+        "32x24",
+        "--strands",
+        "200",
+        "-o",
+        "/dev/full",
+    ]);
+    assert!(stderr.contains("cannot write /dev/full"), "{stderr}");
+    assert!(stderr.contains("No space left"), "{stderr}");
+    let meta = std::fs::symlink_metadata("/dev/full").unwrap();
+    assert!(meta.file_type().is_char_device(), "/dev/full was replaced");
+}
+
+#[cfg(unix)]
+#[test]
+fn output_through_a_symlink_writes_its_target_and_keeps_the_link() {
+    let dir = Scratch::new("symlink");
+    let target = dir.file("real.png", "old");
+    let link = dir.0.join("link.png");
+    std::os::unix::fs::symlink("real.png", &link).unwrap();
+    let out = tiny_render(&link.to_string_lossy());
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(
+        std::fs::symlink_metadata(&link)
+            .unwrap()
+            .file_type()
+            .is_symlink()
+    );
+    assert_not_blank(&target, 32, 24);
+    // A dangling link gets its target created.
+    let dangling = dir.0.join("dangling.png");
+    std::os::unix::fs::symlink("new.png", &dangling).unwrap();
+    let out = tiny_render(&dangling.to_string_lossy());
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(
+        std::fs::symlink_metadata(&dangling)
+            .unwrap()
+            .file_type()
+            .is_symlink()
+    );
+    assert_not_blank(&dir.0.join("new.png"), 32, 24);
+    assert!(temporaries(&dir.0).is_empty(), "{:?}", temporaries(&dir.0));
+}
+
+#[test]
+fn a_255_byte_file_name_is_written() {
+    let dir = Scratch::new("long_name");
+    let png = dir.0.join(format!("{}.png", "a".repeat(251)));
+    let out = tiny_render(&png.to_string_lossy());
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert_not_blank(&png, 32, 24);
+    assert!(temporaries(&dir.0).is_empty(), "{:?}", temporaries(&dir.0));
+}
+
+#[test]
+fn a_folder_as_output_is_refused_naming_it() {
+    let dir = Scratch::new("folder_out");
+    let stderr = fails(&[
+        "render",
+        "--size",
+        "32x24",
+        "--strands",
+        "200",
+        "-o",
+        &dir.0.to_string_lossy(),
+    ]);
+    assert!(stderr.contains(&*dir.0.to_string_lossy()), "{stderr}");
+    assert!(dir.0.is_dir());
+}
+
+#[cfg(target_os = "linux")]
+#[test]
+fn stale_temporaries_of_dead_processes_are_swept() {
+    let dir = Scratch::new("stale");
+    // A process that is gone: its pid, once it has been reaped.
+    let mut child = Command::new("true").spawn().unwrap();
+    let dead = child.id();
+    child.wait().unwrap();
+    let stale = dir.file(&format!(".pelage-{dead}-0.tmp"), "half a gif");
+    let fresh = dir.file(&format!(".pelage-{dead}-1.tmp"), "being written?");
+    let live = dir.file(&format!(".pelage-{}-0.tmp", std::process::id()), "ours");
+    let other = dir.file("notes.tmp", "not ours");
+    let old = std::time::SystemTime::now() - std::time::Duration::from_secs(3600);
+    for path in [&stale, &live, &other] {
+        std::fs::File::options()
+            .write(true)
+            .open(path)
+            .unwrap()
+            .set_modified(old)
+            .unwrap();
+    }
+    let out = tiny_render(&dir.0.join("frame.png").to_string_lossy());
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(!stale.exists(), "a dead process's old temporary is left");
+    assert!(fresh.exists(), "a temporary modified a moment ago is kept");
+    assert!(live.exists(), "a live process's temporary is kept");
+    assert!(other.exists(), "a file of another pattern is kept");
+}
+
+/// Starts a long `animate` into `dir`, waits for its GIF temporary, sends `signal`,
+/// and asserts it exits 130 leaving no temporary and no GIF.
+#[cfg(unix)]
+fn interrupted_animate_leaves_nothing(name: &str, signal: &str) {
+    let dir = Scratch::new(name);
+    let mut command = Command::new(env!("CARGO_BIN_EXE_pelage"));
+    command.args([
+        "animate",
+        "--frames",
+        "100000",
+        "--size",
+        "32x24",
+        "--strands",
+        "200",
+        "--shadow",
+        "none",
+        "--out",
+    ]);
+    command.arg(&dir.0);
+    command
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped());
+    if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
+        command.env("XDG_RUNTIME_DIR", std::env::temp_dir());
+    }
+    let child = command.spawn().unwrap();
+    let started = std::time::Instant::now();
+    // Wait for a couple of frames, so a frame and the GIF are being written.
+    while !dir.0.join("frame_0002.png").exists() {
+        assert!(
+            started.elapsed().as_secs() < 120,
+            "no frames after 2 minutes"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    assert!(
+        !temporaries(&dir.0).is_empty(),
+        "the GIF is written to a temporary"
+    );
+    let killed = Command::new("kill")
+        .args([signal, &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(killed.success());
+    let out = child.wait_with_output().unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(130),
+        "{:?} {}",
+        out.status,
+        text(&out.stderr)
+    );
+    assert!(
+        temporaries(&dir.0).is_empty(),
+        "left {:?}",
+        temporaries(&dir.0)
+    );
+    assert!(
+        !dir.0.join("wind.gif").exists(),
+        "a partial GIF was renamed into place"
+    );
+}
+
+#[cfg(unix)]
+#[test]
+fn sigint_while_animating_leaves_no_temporary() {
+    interrupted_animate_leaves_nothing("sigint", "-INT");
+}
+
+#[cfg(unix)]
+#[test]
+fn sigterm_while_animating_leaves_no_temporary() {
+    interrupted_animate_leaves_nothing("sigterm", "-TERM");
+}
+
+#[test]
+fn frames_beyond_the_maximum_exit_2() {
+    for frames in ["1000001", "4294967295"] {
+        exits_2(
+            &["animate", "--frames", frames],
+            &["--frames", "1..=1000000"],
+        );
+    }
+}
+
+#[test]
+fn a_frame_range_renders_the_same_frames_as_the_full_run() {
+    let full = Scratch::new("range_full");
+    let part = Scratch::new("range_part");
+    let args = [
+        "animate",
+        "--size",
+        "32x24",
+        "--strands",
+        "200",
+        "--frames",
+        "6",
+        "--out",
+    ];
+    let run = |dir: &Scratch, range: &[&str]| {
+        let mut a: Vec<&str> = args.to_vec();
+        let out = dir.0.to_string_lossy().into_owned();
+        a.push(&out);
+        a.extend_from_slice(range);
+        ok(&a)
+    };
+    run(&full, &[]);
+    let stdout = run(&part, &["--range", "2..4"]);
+    assert!(stdout.contains("wrote 2 frames"), "{stdout}");
+    let mut names: Vec<String> = std::fs::read_dir(&part.0)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(names, ["frame_0002.png", "frame_0003.png", "wind.gif"]);
+    for name in ["frame_0002.png", "frame_0003.png"] {
+        let a = std::fs::read(full.0.join(name)).unwrap();
+        let b = std::fs::read(part.0.join(name)).unwrap();
+        assert!(a == b, "{name} differs from the full run's");
+    }
+}
+
+#[test]
+fn bad_frame_ranges_exit_2_naming_the_option() {
+    for range in ["3..3", "4..2", "2..7", "a..3", "3", "1..x"] {
+        exits_2(
+            &["animate", "--frames", "6", "--range", range],
+            &["--range", range],
+        );
+    }
+}
+
+#[cfg(unix)]
+#[test]
+fn a_scene_file_from_dev_zero_stops_at_the_limit() {
+    exits_2(
+        &["render", "--scene", "/dev/zero", "-o", "/dev/null"],
+        &["/dev/zero", "16 MiB", "scene files"],
+    );
+}
+
+#[test]
+fn a_bad_wgpu_backend_is_named() {
+    let out = Command::new(env!("CARGO_BIN_EXE_pelage"))
+        .args(["info"])
+        .env("WGPU_BACKEND", "nonsense")
+        .output()
+        .unwrap();
+    let stderr = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("WGPU_BACKEND=\"nonsense\""), "{stderr}");
+    assert!(
+        !stderr.contains("lavapipe") && !stderr.contains("Backends("),
+        "{stderr}"
+    );
+}
+
+#[cfg(unix)]
+#[test]
+fn no_xdg_runtime_dir_warning_without_the_variable() {
+    for xdg in [None, Some("/nonexistent/pelage-xdg")] {
+        let mut command = Command::new(env!("CARGO_BIN_EXE_pelage"));
+        command.args([
+            "render",
+            "--size",
+            "32x24",
+            "--strands",
+            "200",
+            "-o",
+            "/dev/null",
+        ]);
+        match xdg {
+            None => command.env_remove("XDG_RUNTIME_DIR"),
+            Some(dir) => command.env("XDG_RUNTIME_DIR", dir),
+        };
+        let out = command.output().unwrap();
+        let stderr = text(&out.stderr);
+        assert!(out.status.success(), "{stderr}");
+        assert!(!stderr.contains("XDG_RUNTIME_DIR"), "{xdg:?}: {stderr}");
+    }
+}

@@ -48,7 +48,8 @@ pub struct Gpu {
 impl Gpu {
     /// Create an instance, adapter and device of our own, with no window.
     ///
-    /// Respects `WGPU_BACKEND` (e.g. `vulkan` or `gl`), prefers a high
+    /// Respects `WGPU_BACKEND` (e.g. `vulkan` or `gl`; a value naming no
+    /// backend is [`GpuError::BadBackend`]), prefers a high
     /// performance adapter and falls back to a software one (lavapipe or
     /// llvmpipe). Requests only the optional features (timestamps, float32 blending) the adapter has,
     /// and the adapter's own limits (so 128 MiB storage bindings are usable).
@@ -68,6 +69,12 @@ impl Gpu {
             return Err(GpuError::NoAdapter {
                 tried: "this build of wgpu has no backend for this platform".into(),
             });
+        }
+        if let Some(value) = std::env::var_os("WGPU_BACKEND") {
+            let value = value.to_string_lossy().into_owned();
+            if wgpu::Backends::from_comma_list(&value).is_empty() {
+                return Err(GpuError::BadBackend { value });
+            }
         }
         let desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
         let backends = desc.backends;
@@ -267,5 +274,35 @@ fn from_wgpu(e: wgpu::Error) -> GpuError {
         wgpu::Error::Internal { description, .. } => {
             GpuError::Validation(format!("internal error: {description}"))
         }
+    }
+}
+
+/// The names of `features`, as wgpu spells them (`SHADER_INT64_ATOMIC_ALL_OPS`),
+/// joined with ` | `, for messages (their `Debug` form is a nested struct); "none"
+/// when empty.
+pub fn feature_names(features: wgpu::Features) -> String {
+    let names: Vec<&str> = features.iter_names().map(|(name, _)| name).collect();
+    if names.is_empty() {
+        "none".into()
+    } else {
+        names.join(" | ")
+    }
+}
+
+#[cfg(test)]
+mod feature_name_tests {
+    use super::feature_names;
+
+    #[test]
+    fn features_are_named_not_dumped() {
+        assert_eq!(
+            feature_names(wgpu::Features::SHADER_INT64_ATOMIC_ALL_OPS),
+            "SHADER_INT64_ATOMIC_ALL_OPS"
+        );
+        assert_eq!(
+            feature_names(wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::FLOAT32_BLENDABLE),
+            "TIMESTAMP_QUERY | FLOAT32_BLENDABLE"
+        );
+        assert_eq!(feature_names(wgpu::Features::empty()), "none");
     }
 }

@@ -19,6 +19,15 @@ pub enum GpuError {
         /// What was tried and what each attempt answered.
         tried: String,
     },
+    /// `WGPU_BACKEND` names no backend wgpu knows.
+    #[error(
+        "WGPU_BACKEND={value:?} names no backend; use one or more of vulkan, gl, metal, dx12 \
+         (comma-separated), or unset it to try every backend"
+    )]
+    BadBackend {
+        /// The variable's value.
+        value: String,
+    },
     /// The adapter refused to create a device.
     #[error("the adapter refused to create a device: {0}")]
     RequestDevice(String),

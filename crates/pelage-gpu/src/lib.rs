@@ -23,7 +23,7 @@ pub mod timer;
 
 pub use binding::{BoundResource, ShaderBinding};
 pub use buffers::{UniformBuffer, storage_buffer, zeroed_storage};
-pub use context::{Gpu, WANTED_FEATURES};
+pub use context::{Gpu, WANTED_FEATURES, feature_names};
 pub use error::{GpuError, Result};
 pub use pipelines::{bind_buffers, bind_numbered, compute_pipeline, dispatch_size};
 pub use readback::{TextureData, read_buffer, read_buffer_range, read_texture};

@@ -8,8 +8,11 @@
 //!   front marked and marker area encoding a third quantity, written as a
 //!   self-contained SVG or as a PNG. The PNG is rasterised here with a
 //!   built-in bitmap font: no system fonts, no C libraries, works headless.
-//! - [`write_file_atomically`]: every file is written to a temporary name and
-//!   renamed, so an interrupted run never leaves a half-written result.
+//! - [`write_file_atomically`] and [`AtomicFile`]: every file is written to a
+//!   short temporary name and renamed, so an interrupted run never leaves a
+//!   half-written result (devices are written through, symbolic links
+//!   followed); the one atomic writer of pelage, also used by `pelage_scene`
+//!   and the facade.
 
 #![deny(missing_docs)]
 
@@ -23,7 +26,10 @@ mod table;
 
 pub use chart::{ScatterChart, ScatterPoint};
 pub use error::LabError;
-pub use fs::write_file_atomically;
+pub use fs::{
+    AtomicFile, WriteError, remove_pending_temporaries, remove_stale_temporaries,
+    write_bytes_atomically, write_file_atomically,
+};
 pub use pareto::pareto_front;
 pub use sheet::contact_sheet;
 pub use table::Table;

@@ -376,3 +376,41 @@ fn atomic_write_leaves_no_temporary() {
     assert_eq!(names.len(), 1);
     assert!(write_file_atomically(Path::new("/"), b"x").is_err());
 }
+
+#[test]
+fn atomic_write_takes_a_255_byte_name_and_leaves_nothing_else() {
+    let dir = scratch("atomic_long");
+    let path = dir.join(format!("{}.csv", "n".repeat(251)));
+    write_file_atomically(&path, b"long").unwrap();
+    assert_eq!(std::fs::read(&path).unwrap(), b"long");
+    assert_eq!(std::fs::read_dir(&*dir).unwrap().count(), 1);
+}
+
+#[cfg(unix)]
+#[test]
+fn atomic_write_follows_links_and_writes_through_devices() {
+    use std::os::unix::fs::FileTypeExt;
+    let dir = scratch("atomic_link");
+    std::fs::write(dir.join("real.csv"), b"old").unwrap();
+    std::os::unix::fs::symlink("real.csv", dir.join("link.csv")).unwrap();
+    write_file_atomically(&dir.join("link.csv"), b"new").unwrap();
+    assert!(
+        std::fs::symlink_metadata(dir.join("link.csv"))
+            .unwrap()
+            .file_type()
+            .is_symlink()
+    );
+    assert_eq!(std::fs::read(dir.join("real.csv")).unwrap(), b"new");
+    write_file_atomically(Path::new("/dev/null"), b"gone").unwrap();
+    assert!(
+        std::fs::symlink_metadata("/dev/null")
+            .unwrap()
+            .file_type()
+            .is_char_device()
+    );
+    #[cfg(target_os = "linux")]
+    {
+        let e = write_file_atomically(Path::new("/dev/full"), b"x").unwrap_err();
+        assert!(e.to_string().contains("/dev/full"), "{e}");
+    }
+}

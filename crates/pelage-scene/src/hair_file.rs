@@ -474,12 +474,14 @@ impl HairFile {
     }
 
     /// Reads and parses the `.hair` file at `path` (see [`HairFile::read`]).
+    /// At most [`MAX_GROOM_FILE_BYTES`](crate::MAX_GROOM_FILE_BYTES) are read.
     pub fn read_path(path: &Path) -> Result<HairFile, HairFileError> {
-        let bytes = std::fs::read(path).map_err(|source| HairFileError::Io {
-            action: "read",
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let bytes = crate::limits::read_capped(path, crate::MAX_GROOM_FILE_BYTES, "groom files")
+            .map_err(|source| HairFileError::Io {
+                action: "read",
+                path: path.to_path_buf(),
+                source,
+            })?;
         HairFile::read(&bytes)
     }
 
@@ -751,44 +753,17 @@ impl HairFile {
         Ok(out)
     }
 
-    /// Encodes the file and writes it to `path` atomically: the bytes go to
-    /// a temporary file next to it (the same name plus `.tmp`), which is
-    /// flushed and then renamed over `path`. An interrupted or failed write
-    /// leaves any existing file at `path` untouched.
+    /// Encodes the file and writes it to `path` atomically with
+    /// [`crate::atomic_file::AtomicFile`]: the bytes go to a short temporary file in
+    /// the same folder, which is flushed and then renamed over `path` (a
+    /// symbolic link is followed, a device written through). An interrupted
+    /// or failed write leaves any existing file at `path` untouched.
     pub fn write_path(&self, path: &Path) -> Result<(), HairFileError> {
-        use std::io::Write;
-
         let bytes = self.write()?;
-        let io = |action, path: &Path| {
-            let path = path.to_path_buf();
-            move |source| HairFileError::Io {
-                action,
-                path,
-                source,
-            }
-        };
-        let mut name = path
-            .file_name()
-            .ok_or_else(|| {
-                io("write", path)(std::io::Error::new(
-                    std::io::ErrorKind::InvalidInput,
-                    "the path does not name a file",
-                ))
-            })?
-            .to_os_string();
-        name.push(".tmp");
-        let tmp = path.with_file_name(name);
-        let result = (|| {
-            let mut file = std::fs::File::create(&tmp).map_err(io("create", &tmp))?;
-            file.write_all(&bytes).map_err(io("write", &tmp))?;
-            file.sync_all().map_err(io("flush", &tmp))?;
-            drop(file);
-            std::fs::rename(&tmp, path).map_err(io("rename the temporary file onto", path))
-        })();
-        if result.is_err() {
-            // Best effort: do not leave the half-written temporary behind.
-            let _ = std::fs::remove_file(&tmp);
-        }
-        result
+        crate::atomic_file::write_bytes_atomically(path, &bytes).map_err(|e| HairFileError::Io {
+            action: e.action,
+            path: e.path,
+            source: e.source,
+        })
     }
 }

@@ -4,10 +4,12 @@
 //! Everything here is plain CPU data with serde support; nothing here knows
 //! about the GPU. The stage crates turn these types into GPU buffers.
 
+pub mod atomic_file;
 pub mod camera;
 pub mod groom;
 pub mod hair_file;
 pub mod light;
+pub mod limits;
 pub mod lod;
 pub mod mesh;
 pub mod obj;
@@ -22,6 +24,7 @@ pub use camera::Camera;
 pub use groom::{Groom, GroomError, GroomSource, Resampled};
 pub use hair_file::{HairFile, HairFileError};
 pub use light::{DirectionalLight, Light, MAX_LIGHTS, PointLight};
+pub use limits::{MAX_GROOM_FILE_BYTES, MAX_OBJ_FILE_BYTES, MAX_SCENE_FILE_BYTES};
 pub use lod::{LodParams, Transition};
 pub use mesh::{Mesh, MeshError, MeshReport};
 pub use obj::{ObjError, load_obj, parse_obj};

@@ -46,7 +46,7 @@ pub enum ObjError {
     },
     /// A face refers to an element that does not exist.
     #[error(
-        "{source_name}, line {line}: face index {index} refers to a {kind} that does not exist ({count} {kind}s are defined; OBJ indices start at 1 and negative ones count back from the last one defined so far)"
+        "{source_name}, line {line}: face index {index} refers to a {kind} that does not exist ({count} {} defined; OBJ indices start at 1 and negative ones count back from the last one defined so far)", counted(*.count, .kind)
     )]
     FaceIndexOutOfRange {
         /// The file path, or `"in-memory OBJ text"`.
@@ -93,17 +93,29 @@ pub enum ObjError {
 
 const IN_MEMORY: &str = "in-memory OBJ text";
 
+/// "1 vertex is", "3 vertices are", "2 normals are": `count` elements of `kind`.
+fn counted(count: usize, kind: &str) -> String {
+    match (count, kind) {
+        (1, _) => format!("{kind} is"),
+        (_, "vertex") => "vertices are".to_string(),
+        _ => format!("{kind}s are"),
+    }
+}
+
 /// Loads the OBJ file at `path` into one validated mesh (all objects merged).
 ///
 /// Normals come from the file when every vertex of every face has one (they
 /// are normalised); otherwise, or when a file normal is zero or not finite,
 /// all normals are recomputed with [`Mesh::recompute_normals`]. Material
-/// libraries are not read.
+/// libraries are not read. At most [`MAX_OBJ_FILE_BYTES`](crate::MAX_OBJ_FILE_BYTES)
+/// are read.
 pub fn load_obj(path: &Path) -> Result<Mesh, ObjError> {
-    let bytes = std::fs::read(path).map_err(|source| ObjError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let bytes = crate::limits::read_capped(path, crate::MAX_OBJ_FILE_BYTES, "OBJ files").map_err(
+        |source| ObjError::Io {
+            path: path.to_path_buf(),
+            source,
+        },
+    )?;
     let source_name = format!("OBJ file {}", path.display());
     let text = std::str::from_utf8(&bytes).map_err(|e| ObjError::NotText {
         source_name: source_name.clone(),

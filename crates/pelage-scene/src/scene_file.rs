@@ -217,11 +217,20 @@ impl SceneFile {
     }
 
     /// Reads and parses `path`; relative OBJ and groom paths are made relative to the
-    /// file's folder.
+    /// file's folder. At most [`MAX_SCENE_FILE_BYTES`](crate::MAX_SCENE_FILE_BYTES) are
+    /// read.
     pub fn load(path: &Path) -> Result<Self, SceneFileError> {
-        let text = std::fs::read_to_string(path).map_err(|source| SceneFileError::Io {
+        let io = |source| SceneFileError::Io {
             path: path.to_path_buf(),
             source,
+        };
+        let bytes = crate::limits::read_capped(path, crate::MAX_SCENE_FILE_BYTES, "scene files")
+            .map_err(io)?;
+        let text = String::from_utf8(bytes).map_err(|e| {
+            io(std::io::Error::new(
+                std::io::ErrorKind::InvalidData,
+                format!("not UTF-8 text (at byte {})", e.utf8_error().valid_up_to()),
+            ))
         })?;
         let mut file = Self::parse_named(&text, path)?;
         let relative = |p: &mut PathBuf| {

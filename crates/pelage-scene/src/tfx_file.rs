@@ -410,14 +410,16 @@ impl TfxFile {
         Ok(file)
     }
 
-    /// Reads and parses the `.tfx` file at `path` (see [`TfxFile::read`]).
+    /// Reads and parses the `.tfx` file at `path` (see [`TfxFile::read`]); at
+    /// most [`MAX_GROOM_FILE_BYTES`](crate::MAX_GROOM_FILE_BYTES) are read.
     pub fn load(path: impl AsRef<Path>) -> Result<TfxFile, TfxFileError> {
         let path = path.as_ref();
-        let bytes = std::fs::read(path).map_err(|source| TfxFileError::Io {
-            action: "read",
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let bytes = crate::limits::read_capped(path, crate::MAX_GROOM_FILE_BYTES, "groom files")
+            .map_err(|source| TfxFileError::Io {
+                action: "read",
+                path: path.to_path_buf(),
+                source,
+            })?;
         TfxFile::read(&bytes)
     }
 

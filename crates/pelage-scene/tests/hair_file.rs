@@ -469,3 +469,29 @@ fn corrupted_bytes_never_panic() {
         }
     }
 }
+
+#[test]
+fn concurrent_writes_of_one_path_do_not_race() {
+    // The old fixed `<name>.tmp` was shared by every writer: one thread's rename took
+    // another's temporary, and the other's rename then failed.
+    let dir = std::env::temp_dir().join(format!("pelage-scene-race-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("shared.hair");
+    let hair = full();
+    std::thread::scope(|s| {
+        for _ in 0..8 {
+            s.spawn(|| {
+                for _ in 0..20 {
+                    hair.write_path(&path).unwrap();
+                }
+            });
+        }
+    });
+    assert_eq!(HairFile::read_path(&path).unwrap(), hair);
+    assert_eq!(
+        std::fs::read_dir(&dir).unwrap().count(),
+        1,
+        "temporaries left"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}

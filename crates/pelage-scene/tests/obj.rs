@@ -211,3 +211,14 @@ fn invalid_mesh_is_reported() {
     let text = "v 0 0 1e39\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
     assert!(parse_obj(text).is_err());
 }
+
+#[test]
+fn face_index_errors_count_in_plain_english() {
+    let err = parse_obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n").unwrap_err();
+    assert!(
+        err.to_string().contains("(3 vertices are defined;"),
+        "{err}"
+    );
+    let err = parse_obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//1 3//2\n").unwrap_err();
+    assert!(err.to_string().contains("(1 normal is defined;"), "{err}");
+}

@@ -1,0 +1,70 @@
+//! The most bytes each kind of input file may have: reading stops there, so a
+//! path to `/dev/zero` or a runaway file fails with an error naming the file and
+//! the limit instead of filling memory.
+
+use std::io::{self, Read};
+use std::path::Path;
+
+/// Scene files (TOML): 16 MiB.
+pub const MAX_SCENE_FILE_BYTES: u64 = 16 << 20;
+/// OBJ meshes: 2 GiB.
+pub const MAX_OBJ_FILE_BYTES: u64 = 2 << 30;
+/// Groom files (`.hair`, `.tfx`): 2 GiB.
+pub const MAX_GROOM_FILE_BYTES: u64 = 2 << 30;
+
+/// `limit` in words: "16 MiB", "2 GiB".
+fn size_words(limit: u64) -> String {
+    if limit >= 1 << 30 && limit.is_multiple_of(1 << 30) {
+        format!("{} GiB", limit >> 30)
+    } else if limit >= 1 << 20 && limit.is_multiple_of(1 << 20) {
+        format!("{} MiB", limit >> 20)
+    } else {
+        format!("{limit} bytes")
+    }
+}
+
+/// Reads all of `path`, at most `limit` bytes; more is an error (of kind
+/// `InvalidData`) that says the limit for `kind` ("scene files", ...). The
+/// callers' errors name the path.
+pub(crate) fn read_capped(path: &Path, limit: u64, kind: &str) -> io::Result<Vec<u8>> {
+    let file = std::fs::File::open(path)?;
+    let expected = file.metadata().map(|m| m.len()).unwrap_or(0);
+    let mut bytes = Vec::with_capacity(expected.min(limit) as usize + 1);
+    file.take(limit + 1).read_to_end(&mut bytes)?;
+    if bytes.len() as u64 > limit {
+        return Err(io::Error::new(
+            io::ErrorKind::InvalidData,
+            format!(
+                "larger than {}, the limit for {kind} (is it a device or a stream?)",
+                size_words(limit)
+            ),
+        ));
+    }
+    Ok(bytes)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn reads_stop_at_the_limit() {
+        let e = read_capped(Path::new("/dev/zero"), 1000, "test files").unwrap_err();
+        assert_eq!(e.kind(), io::ErrorKind::InvalidData);
+        assert!(
+            e.to_string()
+                .contains("larger than 1000 bytes, the limit for test files")
+        );
+        assert_eq!(size_words(MAX_SCENE_FILE_BYTES), "16 MiB");
+        assert_eq!(size_words(MAX_OBJ_FILE_BYTES), "2 GiB");
+    }
+
+    #[test]
+    fn a_file_at_the_limit_is_read() {
+        let path = std::env::temp_dir().join(format!("pelage-limits-{}", std::process::id()));
+        std::fs::write(&path, [7u8; 100]).unwrap();
+        assert_eq!(read_capped(&path, 100, "x").unwrap().len(), 100);
+        assert!(read_capped(&path, 99, "x").is_err());
+        std::fs::remove_file(&path).unwrap();
+    }
+}
