@@ -137,8 +137,9 @@ fn require_feature(gpu: &Gpu, method: &str, feature: wgpu::Features) -> crate::R
         return Ok(());
     }
     Err(crate::ShadeError::Unsupported(format!(
-        "{method} needs the device feature {feature:?}, which this adapter ({}) lacks; \
+        "{method} needs the device feature {}, which this adapter ({}) lacks; \
          use the a_buffer, dbk or wboit method instead (they need no 64-bit atomics)",
+        pelage_gpu::feature_names(feature),
         gpu.describe()
     )))
 }
