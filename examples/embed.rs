@@ -23,7 +23,9 @@ use std::path::PathBuf;
 use glam::Vec3;
 use pelage::gpu::{Gpu, wgpu};
 use pelage::scene::{Camera, HairParams, Light, Mesh, ShadeParams, VoxelParams};
-use pelage::shade::{COLOR_FORMAT, DEPTH_FORMAT, HairInputs, TargetViews, Visibility};
+use pelage::shade::{
+    COLOR_FORMAT, DEPTH_FORMAT, HairInputs, TargetFormat, TargetViews, Visibility,
+};
 use pelage::shadow::{LightVisibility, ShadowMethod, VoxelShadow};
 use pelage::strands::{GrowStrands, MeshBuffers, StrandStage};
 use wgpu::util::DeviceExt;
@@ -179,6 +181,9 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
                 buffer: &visibility,
                 stride,
             }),
+            // The engine's targets: single-sampled, pelage's default formats.
+            target: TargetFormat::default(),
+            draw_mesh: true,
         },
         WIDTH,
         HEIGHT,
@@ -294,7 +299,13 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
             .write_buffer(&normals, 0, bytemuck::cast_slice(&floats(&rest.normals)));
         strands.set_time(&gpu.queue, t)?;
         voxel.set_light(&gpu.queue, &lights[0].as_directional(Vec3::ZERO))?;
-        pass.set_frame(&gpu.queue, &camera, &lights, WIDTH, HEIGHT)?;
+        pass.set_frame(
+            &gpu.queue,
+            &camera.matrices(WIDTH, HEIGHT),
+            &lights,
+            WIDTH,
+            HEIGHT,
+        )?;
         let view_proj = camera.view_projection(WIDTH as f32 / HEIGHT as f32);
         gpu.queue.write_buffer(
             &camera_buffer,
@@ -349,6 +360,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
                 color: &color_view,
                 resolve: None,
                 depth: &depth_view,
+                depth_sampled: None,
                 width: WIDTH,
                 height: HEIGHT,
                 load: true,

@@ -2,7 +2,9 @@
 
 use pelage_gpu::{Gpu, GpuTimer, wgpu};
 use pelage_scene::{Camera, HairParams, Light, Mesh, Resampled, ShadeParams, ShadowParams};
-use pelage_shade::{HairInputs, HairPass, OitStats, Targets, Visibility};
+use pelage_shade::{
+    HairInputs, HairPass, OitStats, TargetFormat, TargetViews, Targets, Visibility,
+};
 use pelage_shadow::{LightVisibility, ShadowMethod};
 use pelage_strands::{GroomStrands, GrowStrands, MeshBuffers, StrandStage};
 
@@ -139,8 +141,28 @@ pub struct Renderer {
 
 impl Renderer {
     /// Uploads the mesh, samples the roots (or uploads the groom), builds every pipeline
-    /// and a `width` x `height` target.
+    /// and a `width` x `height` target in the default formats
+    /// ([`TargetFormat::for_params`]: sRGB colour, 32-bit depth, the shade sample count).
     pub fn new(gpu: &Gpu, scene: &Scene, width: u32, height: u32) -> crate::Result<Self> {
+        Self::with_format(
+            gpu,
+            scene,
+            width,
+            height,
+            &TargetFormat::for_params(&scene.shade),
+        )
+    }
+
+    /// [`Renderer::new`] with targets of `format`: an HDR colour (`Rgba16Float`, linear
+    /// light, for the caller's tone mapping), another depth format, reverse-Z (the
+    /// renderer then projects with [`Camera::matrices_reverse_z`]).
+    pub fn with_format(
+        gpu: &Gpu,
+        scene: &Scene,
+        width: u32,
+        height: u32,
+        format: &TargetFormat,
+    ) -> crate::Result<Self> {
         let mesh_buffers = MeshBuffers::upload(gpu, &scene.mesh)?;
         let strands: Box<dyn StrandStage> = match &scene.groom {
             Some(groom) => Box::new(GroomStrands::new(gpu, groom, &scene.hair)?),
@@ -199,7 +221,7 @@ impl Renderer {
             .shade
             .validate()
             .map_err(pelage_shade::ShadeError::from)?;
-        let targets = Targets::new(gpu, width, height, scene.shade.samples())?;
+        let targets = Targets::with_format(gpu, width, height, format)?;
         let hair = pelage_shade::build(
             gpu,
             &HairInputs {
@@ -211,6 +233,8 @@ impl Renderer {
                 visibility: visibility
                     .as_ref()
                     .map(|buffer| Visibility { buffer, stride }),
+                target: targets.format,
+                draw_mesh: true,
             },
             width,
             height,
@@ -234,6 +258,7 @@ impl Renderer {
     /// Picks the level of detail for `camera` (see [`LodLevel::for_view`]) and writes the
     /// per-frame uniforms of every stage for time `t` and `camera`.
     fn prepare(&mut self, gpu: &Gpu, t: f32, camera: &Camera) -> crate::Result<()> {
+        camera.validate()?;
         let (width, height) = (self.targets.width, self.targets.height);
         let level = self
             .strands
@@ -244,8 +269,17 @@ impl Renderer {
         for ((shadow, _), light) in self.shadows.iter().zip(&self.lights) {
             shadow.set_light(&gpu.queue, &light.as_directional(self.shadow_target))?;
         }
-        self.hair
-            .set_frame(&gpu.queue, camera, &self.lights, width, height)?;
+        self.hair.set_frame(
+            &gpu.queue,
+            &if self.targets.format.reverse_z {
+                camera.matrices_reverse_z(width, height)
+            } else {
+                camera.matrices(width, height)
+            },
+            &self.lights,
+            width,
+            height,
+        )?;
         Ok(())
     }
 
@@ -260,7 +294,11 @@ impl Renderer {
         }
         let (color, resolve) = self.targets.color_views();
         let depth = self.targets.depth_view();
-        let views = self.targets.views(&color, resolve.as_ref(), &depth);
+        let depth_sampled = self.targets.depth_sampled_view();
+        let views = TargetViews {
+            depth_sampled: depth_sampled.as_ref(),
+            ..self.targets.views(&color, resolve.as_ref(), &depth)
+        };
         self.hair
             .encode(gpu, &mut encoder, &views, self.timer.as_mut())?;
         if let Some(timer) = &self.timer {
@@ -302,15 +340,50 @@ impl Renderer {
             })?;
             stages.push(("shadow".to_string(), ms));
         }
-        let views = self.targets.views(&color, resolve.as_ref(), &depth);
+        let depth_sampled = self.targets.depth_sampled_view();
+        let views = TargetViews {
+            depth_sampled: depth_sampled.as_ref(),
+            ..self.targets.views(&color, resolve.as_ref(), &depth)
+        };
         let shade = time_alone(gpu, repeats, |e| self.hair.encode(gpu, e, &views, None))?;
         stages.push(("shade".to_string(), shade));
         Ok(stages)
     }
 
-    /// The last rendered image (sRGB RGBA8).
+    /// The last rendered image as sRGB RGBA8: an `Rgba8UnormSrgb` target as it is, a
+    /// `Bgra8UnormSrgb` one swizzled, an `Rgba16Float` one clamped to [0, 1] and
+    /// sRGB-encoded (no tone mapping beyond the clamp); other formats are an error (bind
+    /// [`Renderer::color_texture`] instead).
     pub fn image(&self, gpu: &Gpu) -> crate::Result<image::RgbaImage> {
-        let data = self.targets.read_color(gpu)?;
+        let mut data = self.targets.read_color(gpu)?;
+        data.data = match self.targets.format.color {
+            wgpu::TextureFormat::Rgba8UnormSrgb => data.data,
+            wgpu::TextureFormat::Bgra8UnormSrgb => {
+                for px in data.data.chunks_exact_mut(4) {
+                    px.swap(0, 2);
+                }
+                data.data
+            }
+            wgpu::TextureFormat::Rgba16Float => data
+                .data
+                .chunks_exact(2)
+                .enumerate()
+                .map(|(i, h)| {
+                    let v =
+                        pelage_gpu::f16_to_f32(u16::from_le_bytes([h[0], h[1]])).clamp(0.0, 1.0);
+                    if i % 4 == 3 {
+                        (v * 255.0).round() as u8
+                    } else {
+                        linear_to_srgb8(v)
+                    }
+                })
+                .collect(),
+            other => {
+                return Err(crate::Error::Gpu(pelage_gpu::GpuError::Map(format!(
+                    "no conversion to RGBA8 for a {other:?} target; read Renderer::color_texture yourself"
+                ))));
+            }
+        };
         image::RgbaImage::from_raw(data.width, data.height, data.data).ok_or_else(|| {
             crate::Error::Gpu(pelage_gpu::GpuError::Map(
                 "colour readback has the wrong size for its image".into(),
@@ -357,17 +430,31 @@ impl Renderer {
         Ok(self.hair.stats(gpu)?)
     }
 
+    /// The formats of the renderer's targets.
+    pub fn target_format(&self) -> &TargetFormat {
+        &self.targets.format
+    }
+
     /// The mesh buffers every stage reads.
     pub fn mesh_buffers(&self) -> &MeshBuffers {
         &self.mesh_buffers
     }
 
-    /// The final single-sample colour target ([`pelage_shade::COLOR_FORMAT`], the
-    /// renderer's width x height, usable as `TEXTURE_BINDING` and `COPY_SRC`): bind it to
+    /// The final single-sample colour target (the renderer's [`TargetFormat`], width x height, usable as `TEXTURE_BINDING` and `COPY_SRC`): bind it to
     /// draw the last frame on screen without reading it back.
     pub fn color_texture(&self) -> &wgpu::Texture {
         &self.targets.color
     }
+}
+
+/// Linear light in [0, 1] as an 8-bit sRGB value (the sRGB transfer function).
+fn linear_to_srgb8(v: f32) -> u8 {
+    let s = if v <= 0.003_130_8 {
+        12.92 * v
+    } else {
+        1.055 * v.powf(1.0 / 2.4) - 0.055
+    };
+    (s * 255.0).round() as u8
 }
 
 /// Median wall-clock milliseconds of `repeats` submissions of what `encode` records, each waited for.

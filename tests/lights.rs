@@ -93,24 +93,50 @@ fn four_lights_and_the_key_plus_back_preset_render() {
 #[test]
 fn a_point_light_falls_off_with_distance() {
     let gpu = gpu();
-    let brightness = |distance: f32| {
-        let s = scene(vec![Light::Point(PointLight {
+    // Linear light from an HDR target, nothing but the point light: no ambient, no
+    // shadows (the shadow grid would be aimed anew from each position), so what the
+    // hair and mesh reflect is the light's irradiance at them, times the same BRDF.
+    let linear_sum = |intensity: f32, distance: f32| {
+        let mut s = scene(vec![Light::Point(PointLight {
             position: Vec3::new(2.2, 0.9, 2.9).normalize() * distance,
             color: Vec3::ONE,
-            intensity: 4.0 * distance * distance,
+            intensity,
         })]);
-        let mut renderer = Renderer::new(&gpu, &s, 96, 72).unwrap();
+        s.shade.ambient = 0.0;
+        s.shadow = pelage::scene::ShadowParams::None;
+        let format = pelage::shade::TargetFormat {
+            color: pelage::gpu::wgpu::TextureFormat::Rgba16Float,
+            ..pelage::shade::TargetFormat::for_params(&s.shade)
+        };
+        let mut renderer = Renderer::with_format(&gpu, &s, 96, 72, &format).unwrap();
         renderer.render(&gpu, 0.0, &s.camera).unwrap();
-        let img = renderer.image(&gpu).unwrap();
-        img.as_raw().iter().map(|&v| u64::from(v)).sum::<u64>()
+        let data = pelage::gpu::read_texture(&gpu, renderer.color_texture()).unwrap();
+        let halves: &[u16] = bytemuck::cast_slice(&data.data);
+        halves
+            .chunks_exact(4)
+            .map(|p| {
+                p[..3]
+                    .iter()
+                    .map(|&h| f64::from(pelage::gpu::f16_to_f32(h)))
+                    .sum::<f64>()
+            })
+            .sum::<f64>()
     };
-    // Intensity scaled with distance squared: the irradiance at the scene stays about
-    // the same, so the images do too (within a few percent; the light's angle changes a little).
-    let (near, far) = (brightness(3.0), brightness(6.0));
-    let ratio = near as f64 / far as f64;
-    println!("near {near}, far {far}, ratio {ratio:.3}");
+    // The same light at 20 and 40 units from the hair (about 0.8 units in radius): at half
+    // the distance, four times the light. The background's share comes out with a
+    // black light.
+    let intensity = 400.0;
+    let background = linear_sum(0.0, 20.0);
+    let near = linear_sum(intensity, 20.0) - background;
+    let far = linear_sum(intensity, 40.0) - background;
+    let ratio = near / far;
+    println!("near {near:.2}, far {far:.2}, background {background:.2}, ratio {ratio:.3}");
+    assert!(far > 0.0, "the far light lit nothing");
+    // The hair's depth along the light moves each point's distance by up to 4% (2% at
+    // 40 units), nearer points weigh more: the ratio of sums lies within a few percent
+    // of 4 (4.25 at 10 and 20 units, measured).
     assert!(
-        (ratio - 1.0).abs() < 0.1,
+        (ratio - 4.0).abs() < 0.25,
         "inverse-square falloff is off: {ratio}"
     );
 }

@@ -26,7 +26,7 @@ pub use buffers::{UniformBuffer, storage_buffer, zeroed_storage};
 pub use context::{Gpu, WANTED_FEATURES, feature_names};
 pub use error::{GpuError, Result};
 pub use pipelines::{bind_buffers, bind_numbered, compute_pipeline, dispatch_size};
-pub use readback::{TextureData, read_buffer, read_buffer_range, read_texture};
+pub use readback::{TextureData, f16_to_f32, read_buffer, read_buffer_range, read_texture};
 pub use shaders::{SOURCES, ShaderError, ShaderLibrary};
 pub use timer::{GpuTimer, TimerReport};
 

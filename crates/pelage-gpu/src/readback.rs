@@ -209,3 +209,16 @@ pub(crate) fn map_read(gpu: &Gpu, buffer: &wgpu::Buffer, range: Range<u64>) -> R
     gpu.check()?;
     bytes
 }
+
+/// The value of an IEEE 754 half float (the texels of an `Rgba16Float` readback).
+pub fn f16_to_f32(h: u16) -> f32 {
+    let sign = if h & 0x8000 != 0 { -1.0 } else { 1.0 };
+    let exponent = i32::from((h >> 10) & 0x1f);
+    let mantissa = f32::from(h & 0x3ff);
+    sign * match exponent {
+        0 => mantissa * 2f32.powi(-24),
+        31 if mantissa == 0.0 => f32::INFINITY,
+        31 => f32::NAN,
+        e => (1.0 + mantissa / 1024.0) * 2f32.powi(e - 15),
+    }
+}

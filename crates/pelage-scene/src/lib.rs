@@ -20,7 +20,7 @@ pub mod shading;
 pub mod tfx_file;
 pub mod transparency;
 
-pub use camera::Camera;
+pub use camera::{Camera, CameraMatrices};
 pub use groom::{Groom, GroomError, GroomSource, Resampled};
 pub use hair_file::{HairFile, HairFileError};
 pub use light::{DirectionalLight, Light, MAX_LIGHTS, PointLight};

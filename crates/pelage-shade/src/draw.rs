@@ -5,12 +5,12 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicU32, Ordering};
 
 use pelage_gpu::{Gpu, GpuTimer, ShaderBinding, ShaderLibrary, UniformBuffer, bind_buffers, wgpu};
-use pelage_scene::{Camera, HairParams, Light, ParamError, ShadeParams};
+use pelage_scene::{CameraMatrices, HairParams, Light, ParamError, ShadeParams};
 use pelage_strands::{LayoutCell, MeshBuffers, StrandBuffers, StrandLayout};
 
 use crate::hair_model::HairModel;
 use crate::ribbons::{FrameUniforms, MeshStyle, RibbonStyle};
-use crate::targets::{COLOR_FORMAT, DEPTH_FORMAT};
+use crate::targets::TargetFormat;
 
 /// The inputs every method is built from.
 #[derive(Clone, Copy, Debug)]
@@ -28,6 +28,12 @@ pub struct HairInputs<'a> {
     pub shadow: Option<&'a ShaderBinding>,
     /// Stage 2's per-vertex light visibility for the hair; `None` lights every vertex fully.
     pub visibility: Option<Visibility<'a>>,
+    /// The formats of the targets the method will draw into (the caller's).
+    pub target: TargetFormat,
+    /// Whether the method draws `mesh` (flat coloured, shadowed by the key light) before
+    /// the hair; `false` for an engine that draws its own mesh into the targets first
+    /// (then pass [`TargetViews::load`]). The strands still grow from `mesh`.
+    pub draw_mesh: bool,
 }
 
 /// Light reaching each strand vertex, per light: light i's value for vertex v at float
@@ -43,22 +49,32 @@ pub struct Visibility<'a> {
 /// The views a method renders into, owned by the caller.
 #[derive(Clone, Copy, Debug)]
 pub struct TargetViews<'a> {
-    /// Colour to render into: multisampled when the method uses MSAA (see
-    /// [`ShadeParams::samples`]), in [`COLOR_FORMAT`].
+    /// Colour to render into, in [`HairInputs::target`]'s colour format and sample count.
     pub color: &'a wgpu::TextureView,
     /// The single-sample target `color` resolves into when it is multisampled.
     pub resolve: Option<&'a wgpu::TextureView>,
-    /// Depth ([`DEPTH_FORMAT`], same sample count as `color`); the transparency
-    /// methods also bind it as a texture, so it needs `TEXTURE_BINDING` usage.
+    /// Depth, in [`HairInputs::target`]'s depth format and sample count; the
+    /// transparency methods also bind it as a texture, so it needs `TEXTURE_BINDING` usage.
     pub depth: &'a wgpu::TextureView,
+    /// The depth aspect of `depth` alone, for the transparency methods to sample: needed
+    /// when the depth format has a stencil (a view with `TextureAspect::DepthOnly`);
+    /// `None` samples `depth` itself.
+    pub depth_sampled: Option<&'a wgpu::TextureView>,
     /// Size of the targets in pixels.
     pub width: u32,
     /// Size of the targets in pixels.
     pub height: u32,
     /// Keep what the targets hold and draw over it, depth tested against it (an engine
     /// that drew its own content first); `false` clears colour to the background and
-    /// depth to 1.
+    /// depth to the far plane.
     pub load: bool,
+}
+
+impl TargetViews<'_> {
+    /// The depth view to sample (see [`TargetViews::depth_sampled`]).
+    pub fn depth_to_sample(&self) -> &wgpu::TextureView {
+        self.depth_sampled.unwrap_or(self.depth)
+    }
 }
 
 /// One render pipeline with its bind groups (index = group; `None` = unused).
@@ -131,6 +147,10 @@ pub(crate) struct Common {
     pub style_value: RibbonStyle,
     pub redirects: Vec<(&'static str, &'static str)>,
     pub samples: u32,
+    /// The targets' formats.
+    pub target: TargetFormat,
+    /// Whether `mesh_draw` is drawn.
+    pub draw_mesh: bool,
     pub model: HairModel,
     /// Floats per light in the visibility buffer (0: none).
     pub visibility_stride: u32,
@@ -154,8 +174,22 @@ impl Common {
             strands,
             shadow,
             visibility,
+            target,
+            draw_mesh,
         } = *inputs;
         params.validate()?;
+        target.validate(gpu)?;
+        if target.samples != samples {
+            return Err(ParamError {
+                name: "target.samples".into(),
+                value: target.samples.to_string(),
+                reason: format!(
+                    "this method draws {samples}-sample targets (the transparency methods draw single-sampled, \
+                     opaque hair the shade sample_count); give targets of {samples} sample(s)"
+                ),
+            }
+            .into());
+        }
         hair.growth.validate()?;
         // Every segment at full detail must fit one draw.
         let hair_vertices = u64::from(strands.strand_count) * u64::from(strands.segments) * 6;
@@ -170,7 +204,13 @@ impl Common {
         let frame = UniformBuffer::new(
             gpu,
             "pelage frame",
-            &FrameUniforms::new(&Camera::default(), &[Light::default()], params, 1, 1, 0)?,
+            &FrameUniforms::new(
+                &pelage_scene::Camera::default().matrices(1, 1),
+                &[Light::default()],
+                params,
+                1,
+                0,
+            )?,
         )?;
         let style_value = RibbonStyle {
             segments: strands.layout.get().segments,
@@ -231,8 +271,8 @@ impl Common {
                     module: &mesh_module,
                     vertex: "vs_main",
                     fragment: Some("fs_main"),
-                    targets: &[Some(COLOR_FORMAT.into())],
-                    depth: Some(depth_state(true, wgpu::CompareFunction::Less)),
+                    targets: &[Some(target.color.into())],
+                    depth: Some(depth_state(&target, true)),
                     samples,
                     cull: Some(wgpu::Face::Back),
                 },
@@ -267,6 +307,8 @@ impl Common {
             style_value,
             redirects,
             samples,
+            target,
+            draw_mesh,
             model,
             visibility_stride,
             visibility: visibility_buffer,
@@ -344,19 +386,32 @@ impl Common {
     pub fn set_frame(
         &self,
         queue: &wgpu::Queue,
-        camera: &Camera,
+        camera: &CameraMatrices,
         lights: &[Light],
         width: u32,
         height: u32,
     ) -> crate::Result<()> {
-        let u = FrameUniforms::new(
-            camera,
-            lights,
-            &self.params,
-            width,
-            height,
-            self.visibility_stride,
-        )?;
+        if width == 0 || height == 0 {
+            return Err(ParamError::new(
+                "target size",
+                (width, height),
+                "both sides must be at least 1 pixel",
+            )
+            .into());
+        }
+        if camera.reverse_z() != self.target.reverse_z {
+            return Err(ParamError {
+                name: "camera.projection".into(),
+                value: if camera.reverse_z() { "reverse-Z" } else { "standard depth" }.into(),
+                reason: format!(
+                    "the targets were declared with reverse_z = {}; make the projection and TargetFormat::reverse_z agree",
+                    self.target.reverse_z
+                ),
+            }
+            .into());
+        }
+        let u = FrameUniforms::new(camera, lights, &self.params, height, self.visibility_stride)?;
+
         self.frame.write(queue, &u)?;
         let layout = self.layout.get();
         self.style.write(
@@ -372,7 +427,8 @@ impl Common {
     }
 
     /// Records the mesh pass: clears colour (to the background) and depth unless
-    /// `target.load`, then draws the mesh.
+    /// `target.load`, then draws the mesh (unless built without it). Records nothing
+    /// when there is neither a clear nor a mesh to draw.
     pub fn encode_mesh(
         &self,
         encoder: &mut wgpu::CommandEncoder,
@@ -380,6 +436,10 @@ impl Common {
         resolve: Option<&wgpu::TextureView>,
         timer: Option<&mut GpuTimer>,
     ) {
+        if target.load && !self.draw_mesh {
+            return;
+        }
+        let far = self.target.far_depth();
         let bg = self.params.background;
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some(self.mesh_draw.label),
@@ -407,7 +467,7 @@ impl Common {
                     load: if target.load {
                         wgpu::LoadOp::Load
                     } else {
-                        wgpu::LoadOp::Clear(1.0)
+                        wgpu::LoadOp::Clear(far)
                     },
                     store: wgpu::StoreOp::Store,
                 }),
@@ -417,7 +477,9 @@ impl Common {
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        self.mesh_draw.record(&mut pass, None);
+        if self.draw_mesh {
+            self.mesh_draw.record(&mut pass, None);
+        }
     }
 }
 
@@ -441,12 +503,12 @@ fn contract_group(
     b.bind_group(device, label, &pipeline.get_bind_group_layout(b.group))
 }
 
-/// Depth state: test with `compare`, write when `write`.
-pub(crate) fn depth_state(write: bool, compare: wgpu::CompareFunction) -> wgpu::DepthStencilState {
+/// Depth state for `target`'s depth format and direction: test nearer, write when `write`.
+pub(crate) fn depth_state(target: &TargetFormat, write: bool) -> wgpu::DepthStencilState {
     wgpu::DepthStencilState {
-        format: DEPTH_FORMAT,
+        format: target.depth,
         depth_write_enabled: Some(write),
-        depth_compare: Some(compare),
+        depth_compare: Some(target.depth_compare()),
         stencil: Default::default(),
         bias: Default::default(),
     }
@@ -454,9 +516,9 @@ pub(crate) fn depth_state(write: bool, compare: wgpu::CompareFunction) -> wgpu::
 
 /// Premultiplied "over": what a resolve pass writes, `(colour, 1 - transmittance)`,
 /// lands as `colour + transmittance * destination`.
-pub(crate) fn over_target() -> wgpu::ColorTargetState {
+pub(crate) fn over_target(target: &TargetFormat) -> wgpu::ColorTargetState {
     wgpu::ColorTargetState {
-        format: COLOR_FORMAT,
+        format: target.color,
         blend: Some(wgpu::BlendState::PREMULTIPLIED_ALPHA_BLENDING),
         write_mask: wgpu::ColorWrites::ALL,
     }

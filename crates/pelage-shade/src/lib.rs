@@ -27,7 +27,7 @@ pub use models::{
 };
 pub use pelage_scene::ShadeParams;
 pub use ribbons::{FrameLight, FrameUniforms, MeshStyle, RibbonStyle};
-pub use targets::{COLOR_FORMAT, DEPTH_FORMAT, Targets};
+pub use targets::{COLOR_FORMAT, DEPTH_FORMAT, TargetFormat, Targets};
 
 /// What can go wrong in stage 3.
 #[derive(Debug, thiserror::Error)]

@@ -2,7 +2,7 @@
 
 use encase::ShaderType;
 use glam::{Mat4, Vec3, Vec4};
-use pelage_scene::{Camera, Light, MAX_LIGHTS, ShadeParams};
+use pelage_scene::{CameraMatrices, Light, MAX_LIGHTS, ShadeParams};
 
 /// One light as the shaders see it (`FrameLight` in `wgsl/shade/frame.wgsl`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, ShaderType)]
@@ -59,13 +59,12 @@ pub struct MeshStyle {
 }
 
 impl FrameUniforms {
-    /// Frame uniforms for `camera` and `lights` on a `width` x `height` target, with the
+    /// Frame uniforms for `camera` and `lights` on a target `height` pixels tall, with the
     /// hair's visibility buffer holding `visibility_stride` floats per light (0: none).
     pub fn new(
-        camera: &Camera,
+        camera: &CameraMatrices,
         lights: &[Light],
         params: &ShadeParams,
-        width: u32,
         height: u32,
         visibility_stride: u32,
     ) -> crate::Result<Self> {
@@ -84,11 +83,10 @@ impl FrameUniforms {
                 },
             };
         }
-        let height = height.max(1) as f32;
         Ok(Self {
-            view_proj: camera.view_projection(width.max(1) as f32 / height),
-            eye: camera.eye,
-            pixel_scale: 2.0 * (camera.fov_y * 0.5).tan() / height,
+            view_proj: camera.view_projection(),
+            eye: camera.eye(),
+            pixel_scale: camera.pixel_scale(height),
             ambient: params.ambient,
             light_count: lights.len().min(MAX_LIGHTS) as u32,
             visibility_stride,

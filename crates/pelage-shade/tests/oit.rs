@@ -9,7 +9,7 @@ use pelage_reference::oit::{Fragment, composite_sorted, linear_to_srgb8, srgb8_t
 use pelage_scene::{
     Camera, HairParams, Light, Mesh, ShadeParams, Transparency, WboitWeight, WindParams,
 };
-use pelage_shade::{ABuffer, HairInputs, HairPass, OitStats, Targets};
+use pelage_shade::{ABuffer, HairInputs, HairPass, OitStats, TargetFormat, Targets};
 use pelage_strands::{GrowStrands, MeshBuffers, StrandStage};
 
 const W: u32 = 128;
@@ -77,6 +77,8 @@ fn inputs<'a>(s: &'a Scene, params: &'a ShadeParams) -> HairInputs<'a> {
         strands: s.strands.buffers(),
         shadow: None,
         visibility: None,
+        target: TargetFormat::for_params(params),
+        draw_mesh: true,
     }
 }
 
@@ -91,7 +93,13 @@ fn params(t: Transparency) -> ShadeParams {
 fn render_with(gpu: &Gpu, s: &Scene, method: &dyn HairPass, samples: u32) -> (Vec<u8>, OitStats) {
     let targets = Targets::new(gpu, W, H, samples).unwrap();
     method
-        .set_frame(&gpu.queue, &s.camera, &[Light::default()], W, H)
+        .set_frame(
+            &gpu.queue,
+            &s.camera.matrices(W, H),
+            &[Light::default()],
+            W,
+            H,
+        )
         .unwrap();
     let (color, resolve) = targets.color_views();
     let depth = targets.depth_view();
@@ -128,7 +136,13 @@ fn exact(gpu: &Gpu, s: &Scene) -> Exact {
     let targets = Targets::new(gpu, W, H, 1).unwrap();
     let abuffer = ABuffer::new(gpu, &inputs(s, &p), 256.0, 64, W, H).unwrap();
     abuffer
-        .set_frame(&gpu.queue, &s.camera, &[Light::default()], W, H)
+        .set_frame(
+            &gpu.queue,
+            &s.camera.matrices(W, H),
+            &[Light::default()],
+            W,
+            H,
+        )
         .unwrap();
     let capture = abuffer.capture(gpu, &targets).unwrap();
     assert_eq!(

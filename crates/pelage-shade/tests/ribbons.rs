@@ -3,7 +3,7 @@
 use glam::Vec3;
 use pelage_gpu::Gpu;
 use pelage_scene::{Camera, HairParams, Light, Mesh, RootParams, ShadeParams, WindParams};
-use pelage_shade::{HairInputs, HairPass, Opaque, Targets};
+use pelage_shade::{HairInputs, HairPass, Opaque, TargetFormat, Targets};
 use pelage_strands::{GrowStrands, MeshBuffers, StrandStage};
 
 const SIZE: u32 = 128;
@@ -67,12 +67,20 @@ fn render(gpu: &Gpu, mesh: &Mesh, hair: &HairParams, camera: &Camera) -> Vec<u8>
         strands: strands.buffers(),
         shadow: None,
         visibility: None,
+        target: TargetFormat::for_params(&params),
+        draw_mesh: true,
     };
     let pass = Opaque::new(gpu, &inputs).unwrap();
     let targets = Targets::new(gpu, SIZE, SIZE, params.sample_count).unwrap();
     strands.set_time(&gpu.queue, 0.0).unwrap();
-    pass.set_frame(&gpu.queue, camera, &[Light::default()], SIZE, SIZE)
-        .unwrap();
+    pass.set_frame(
+        &gpu.queue,
+        &camera.matrices(SIZE, SIZE),
+        &[Light::default()],
+        SIZE,
+        SIZE,
+    )
+    .unwrap();
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
     strands.encode(&mut encoder, None);
     let (color, resolve) = targets.color_views();

@@ -20,7 +20,8 @@ struct OitTile {
     weight: u32,
     // DBK: thickness of the blended layer behind the nearest hair (view units).
     depth_shift: f32,
-    _pad: f32,
+    // 1 when depth is reversed (nearer is larger: the camera's reverse-Z), else 0.
+    reverse_z: u32,
 }
 
 // Index of the pixel under `frag` (its @builtin(position)) in the slice's buffers.

@@ -30,7 +30,9 @@ fn wboit_weight(a: f32, z: f32, d: f32) -> f32 {
             return a * clamp(0.03 / (1e-5 + pow(z / 200.0, 4.0)), 1e-2, 3e3);
         }
         case 3u: {
-            return a * max(1e-2, 3e3 * pow(1.0 - d, 3.0));
+            // d runs from 0 at the near plane to 1 at the far one, whichever way depth is stored.
+            let from_near = select(d, 1.0 - d, tile.reverse_z != 0u);
+            return a * max(1e-2, 3e3 * pow(1.0 - from_near, 3.0));
         }
         default: {
             return a;

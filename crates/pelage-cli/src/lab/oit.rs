@@ -25,7 +25,7 @@ use pelage::gpu::{Gpu, GpuTimer};
 use pelage::scene::{
     Camera, HairParams, Light, Mesh, ShadeParams, Transparency, WboitWeight, WindParams,
 };
-use pelage::shade::{ABuffer, HairInputs, HairPass, Targets};
+use pelage::shade::{ABuffer, HairInputs, HairPass, TargetFormat, Targets};
 use pelage::strands::{GrowStrands, MeshBuffers, StrandStage};
 use pelage_lab::{ScatterChart, ScatterPoint, Table, pareto_front};
 use pelage_reference::flip::{DEFAULT_PIXELS_PER_DEGREE, LinearImage, flip, rmse_linear};
@@ -174,6 +174,8 @@ fn render_method(
         strands: grown.strands.buffers(),
         shadow: None,
         visibility: None,
+        target: TargetFormat::for_params(shade),
+        draw_mesh: true,
     };
     let method = pelage::shade::build(gpu, &inputs, width, height)?;
     let targets = Targets::new(gpu, width, height, shade.samples())?;
@@ -184,7 +186,7 @@ fn render_method(
     for i in 0..frames {
         method.set_frame(
             &gpu.queue,
-            &camera_at(&case.camera, i),
+            &camera_at(&case.camera, i).matrices(width, height),
             &light,
             width,
             height,
@@ -237,6 +239,8 @@ fn exact(
         strands: grown.strands.buffers(),
         shadow: None,
         visibility: None,
+        target: TargetFormat::for_params(shade),
+        draw_mesh: true,
     };
     let targets = Targets::new(gpu, width, height, 1)?;
     let light = [Light::default()];
@@ -244,7 +248,13 @@ fn exact(
     let mut nodes_per_pixel = 32.0f32;
     loop {
         let abuffer = ABuffer::new(gpu, &inputs, nodes_per_pixel, 64, width, height)?;
-        abuffer.set_frame(&gpu.queue, &case.camera, &light, width, height)?;
+        abuffer.set_frame(
+            &gpu.queue,
+            &case.camera.matrices(width, height),
+            &light,
+            width,
+            height,
+        )?;
         let capture = abuffer.capture(gpu, &targets)?;
         let stats = abuffer.stats(gpu)?;
         if stats.dropped > 0 {
@@ -466,6 +476,8 @@ pub fn run(opts: &LabOpts) -> Result<(), Box<dyn std::error::Error>> {
                 strands: grown.strands.buffers(),
                 shadow: None,
                 visibility: None,
+                target: TargetFormat::for_params(&params),
+                draw_mesh: true,
             };
             let method = pelage::shade::build(&gpu, &inputs, w, h)?;
             memory.push(vec![

@@ -90,6 +90,7 @@ impl ABuffer {
         .validate()?;
         let common = Common::new(gpu, inputs, 1, inputs.params.min_pixels.max(1.0))?;
         let base = OitTile {
+            reverse_z: u32::from(inputs.target.reverse_z),
             width,
             k: resolve_k,
             ..Default::default()
@@ -118,6 +119,7 @@ impl ABuffer {
         )?;
         sliced.add_resolve_pass(
             gpu,
+            &inputs.target,
             &module,
             "shade: a-buffer resolve",
             "fs_resolve",
@@ -168,7 +170,7 @@ impl ABuffer {
                 mip_level_count: 1,
                 sample_count: 1,
                 dimension: wgpu::TextureDimension::D2,
-                format: crate::COLOR_FORMAT,
+                format: targets.color.format(),
                 usage: wgpu::TextureUsages::COPY_DST | wgpu::TextureUsages::COPY_SRC,
                 view_formats: &[],
             });

@@ -33,6 +33,7 @@ impl Dbk {
         .validate()?;
         let common = Common::new(gpu, inputs, 1, inputs.params.min_pixels.max(1.0))?;
         let base = OitTile {
+            reverse_z: u32::from(inputs.target.reverse_z),
             width,
             k: resolve_k,
             depth_shift,
@@ -75,6 +76,7 @@ impl Dbk {
         )?;
         sliced.add_resolve_pass(
             gpu,
+            &inputs.target,
             &module,
             "shade: dbk resolve",
             "fs_resolve",

@@ -36,6 +36,7 @@ impl KBuffer {
         let slot_bytes = 8 * u64::from(k);
         let rows = rows_per_slice(gpu, "k-buffer slots", width, height, slot_bytes)?;
         let base = OitTile {
+            reverse_z: u32::from(inputs.target.reverse_z),
             width,
             k,
             ..Default::default()
@@ -69,6 +70,7 @@ impl KBuffer {
         )?;
         sliced.add_resolve_pass(
             gpu,
+            &inputs.target,
             &module,
             "shade: k-buffer resolve",
             "fs_resolve",

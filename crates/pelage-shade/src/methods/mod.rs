@@ -30,7 +30,7 @@ pub use sliced::OitTile;
 pub use wboit::Wboit;
 
 use pelage_gpu::{Gpu, GpuTimer, wgpu};
-use pelage_scene::{Camera, Light, Transparency};
+use pelage_scene::{CameraMatrices, Light, Transparency};
 
 use crate::draw::{HairInputs, TargetViews};
 
@@ -56,7 +56,7 @@ pub trait HairPass: std::fmt::Debug {
     fn set_frame(
         &self,
         queue: &wgpu::Queue,
-        camera: &Camera,
+        camera: &CameraMatrices,
         lights: &[Light],
         width: u32,
         height: u32,

@@ -1,14 +1,13 @@
 //! The opaque method: depth-tested ribbons, alpha ignored (`shade/ribbons.wgsl`).
 
 use pelage_gpu::{Gpu, GpuTimer, wgpu};
-use pelage_scene::{Camera, Light};
+use pelage_scene::{CameraMatrices, Light};
 
 use super::HairPass;
-use crate::COLOR_FORMAT;
 use crate::draw::{Common, Draw, HairInputs, HairPipe, TargetViews, depth_state};
 
 /// The mesh, then the hair as opaque ribbons, depth tested; the only method that uses
-/// MSAA (`ShadeParams::sample_count`).
+/// MSAA (the targets' sample count; `ShadeParams::sample_count` for the facade's own).
 #[derive(Debug)]
 pub struct Opaque {
     common: Common,
@@ -16,10 +15,11 @@ pub struct Opaque {
 }
 
 impl Opaque {
-    /// Builds the pipelines for targets of `ShadeParams::sample_count` samples.
+    /// Builds the pipelines for targets of [`HairInputs::target`]'s formats and sample
+    /// count (any the device supports: MSAA hides the ribbons' aliasing).
     pub fn new(gpu: &Gpu, inputs: &HairInputs<'_>) -> crate::Result<Self> {
         let params = inputs.params;
-        let common = Common::new(gpu, inputs, params.sample_count, params.min_pixels)?;
+        let common = Common::new(gpu, inputs, inputs.target.samples, params.min_pixels)?;
         let module = common.module(gpu, "shade/ribbons.wgsl")?;
         let hair = common.hair_draw(
             gpu,
@@ -28,8 +28,8 @@ impl Opaque {
                 module: &module,
                 label: "shade: hair",
                 fragment: "fs_main",
-                targets: &[Some(COLOR_FORMAT.into())],
-                depth: depth_state(true, wgpu::CompareFunction::Less),
+                targets: &[Some(inputs.target.color.into())],
+                depth: depth_state(&inputs.target, true),
                 shades: true,
             },
         )?;
@@ -45,7 +45,7 @@ impl HairPass for Opaque {
     fn set_frame(
         &self,
         queue: &wgpu::Queue,
-        camera: &Camera,
+        camera: &CameraMatrices,
         lights: &[Light],
         width: u32,
         height: u32,

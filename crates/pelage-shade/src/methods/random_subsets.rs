@@ -33,6 +33,7 @@ impl RandomSubsets {
         let slot_bytes = 8 * u64::from(k);
         let rows = rows_per_slice(gpu, "random subset slots", width, height, slot_bytes)?;
         let base = OitTile {
+            reverse_z: u32::from(inputs.target.reverse_z),
             width,
             k,
             ..Default::default()
@@ -60,6 +61,7 @@ impl RandomSubsets {
         )?;
         sliced.add_resolve_pass(
             gpu,
+            &inputs.target,
             &module,
             "shade: subsets resolve",
             "fs_resolve",

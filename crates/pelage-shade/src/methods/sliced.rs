@@ -4,6 +4,8 @@
 use encase::ShaderType;
 use pelage_gpu::{Gpu, GpuError, GpuTimer, wgpu};
 
+use crate::targets::TargetFormat;
+
 use crate::draw::{
     Common, Draw, HairInputs, HairPipe, RasterDesc, TargetViews, Vertices, depth_state,
     over_target, raster_pipeline,
@@ -26,8 +28,8 @@ pub struct OitTile {
     pub weight: u32,
     /// DBK layer thickness.
     pub depth_shift: f32,
-    /// Padding.
-    pub _pad: f32,
+    /// 1 when depth is reversed (nearer is larger), else 0.
+    pub reverse_z: u32,
 }
 
 /// How a pass of a sliced method attaches the targets.
@@ -179,10 +181,10 @@ impl Sliced {
     ) -> crate::Result<()> {
         let (targets, depth) = match kind {
             PassKind::OpaqueHair => (
-                vec![Some(crate::COLOR_FORMAT.into())],
-                depth_state(true, wgpu::CompareFunction::Less),
+                vec![Some(ctx.inputs.target.color.into())],
+                depth_state(&ctx.inputs.target, true),
             ),
-            _ => (Vec::new(), depth_state(false, wgpu::CompareFunction::Less)),
+            _ => (Vec::new(), depth_state(&ctx.inputs.target, false)),
         };
         let draw = ctx.common.hair_draw(
             ctx.gpu,
@@ -208,6 +210,7 @@ impl Sliced {
     pub fn add_resolve_pass(
         &mut self,
         gpu: &Gpu,
+        target: &TargetFormat,
         module: &wgpu::ShaderModule,
         label: &'static str,
         fragment: &str,
@@ -221,7 +224,7 @@ impl Sliced {
                     module,
                     vertex: "vs_fullscreen",
                     fragment: Some(fragment),
-                    targets: &[Some(over_target())],
+                    targets: &[Some(over_target(target))],
                     depth: None,
                     samples: 1,
                     cull: None,
@@ -285,7 +288,7 @@ impl Sliced {
                         .filter_map(|&binding| {
                             let resource = match binding {
                                 0 => self.tile_binding(slice),
-                                1 => wgpu::BindingResource::TextureView(target.depth),
+                                1 => wgpu::BindingResource::TextureView(target.depth_to_sample()),
                                 _ => self.buffer(binding)?.as_entire_binding(),
                             };
                             Some(wgpu::BindGroupEntry { binding, resource })
@@ -404,7 +407,7 @@ macro_rules! sliced_hair_pass {
             fn set_frame(
                 &self,
                 queue: &pelage_gpu::wgpu::Queue,
-                camera: &pelage_scene::Camera,
+                camera: &pelage_scene::CameraMatrices,
                 lights: &[pelage_scene::Light],
                 width: u32,
                 height: u32,

@@ -1,7 +1,7 @@
 //! Weighted blended OIT (McGuire and Bavoil 2013) (`shade/oit/wboit.wgsl`).
 
 use pelage_gpu::{Gpu, GpuTimer, wgpu};
-use pelage_scene::{Camera, Light, WboitWeight};
+use pelage_scene::{CameraMatrices, Light, WboitWeight};
 
 use super::HairPass;
 use super::sliced::{OitTile, Sliced};
@@ -72,7 +72,7 @@ impl Wboit {
                 label: "shade: wboit accumulate",
                 fragment: "fs_accum",
                 targets: &targets,
-                depth: depth_state(false, wgpu::CompareFunction::Less),
+                depth: depth_state(&inputs.target, false),
                 shades: true,
             },
         )?;
@@ -84,12 +84,20 @@ impl Wboit {
             WboitWeight::Constant => 4,
         };
         let base = OitTile {
+            reverse_z: u32::from(inputs.target.reverse_z),
             width,
             weight: weight_index,
             ..Default::default()
         };
         let mut resolve = Sliced::new(gpu, base, height, height)?;
-        resolve.add_resolve_pass(gpu, &module, "shade: wboit resolve", "fs_resolve", &[0])?;
+        resolve.add_resolve_pass(
+            gpu,
+            &inputs.target,
+            &module,
+            "shade: wboit resolve",
+            "fs_resolve",
+            &[0],
+        )?;
         let (accumulation, revealage, bind_accum, bind_resolve) = gpu.scoped(|device| {
             let texture = |label: &str, format| {
                 device.create_texture(&wgpu::TextureDescriptor {
@@ -160,7 +168,7 @@ impl HairPass for Wboit {
     fn set_frame(
         &self,
         queue: &wgpu::Queue,
-        camera: &Camera,
+        camera: &CameraMatrices,
         lights: &[Light],
         width: u32,
         height: u32,
