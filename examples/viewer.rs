@@ -28,7 +28,7 @@ use std::time::Instant;
 
 use egui::{CollapsingHeader, Slider};
 use glam::Vec3;
-use pelage::gpu::{Gpu, ShaderLibrary, wgpu};
+use pelage::gpu::{Gpu, ShaderSources, wgpu};
 use pelage::scene::sigma_a_from_color;
 use pelage::scene::{
     Absorption, ChiangParams, MAX_MELANIN, ShadowParams, Transparency, WindParams,
@@ -42,6 +42,11 @@ use winit::window::{Window, WindowId};
 
 /// The wind time wraps around after this many seconds.
 const T_MAX: f32 = 60.0;
+
+/// The viewer's own shader (`examples/wgsl/present/blit.wgsl`); tests/shaders.rs checks
+/// that folder.
+static VIEWER_SHADERS: ShaderSources =
+    pelage::gpu::wgsl_sources!(in "examples/wgsl"; "present/blit.wgsl");
 
 struct Args {
     scene: Option<PathBuf>,
@@ -253,9 +258,11 @@ impl Gfx {
         config.view_formats = if format == srgb { vec![] } else { vec![srgb] };
         surface.configure(&device, &config);
 
+        let shaders = VIEWER_SHADERS.library();
+        shaders.validate("present/blit.wgsl")?;
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("blit"),
-            source: wgpu::ShaderSource::Wgsl(ShaderLibrary::source("present/blit.wgsl")?.into()),
+            source: wgpu::ShaderSource::Wgsl(shaders.compose("present/blit.wgsl")?.into()),
         });
         let blit = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some("blit"),

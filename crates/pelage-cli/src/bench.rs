@@ -23,7 +23,7 @@
 
 use std::time::Instant;
 
-use pelage::gpu::{Gpu, GpuTimer, ShaderLibrary, compute_pipeline, dispatch_size, wgpu};
+use pelage::gpu::{Gpu, GpuTimer, ShaderSources, compute_pipeline, dispatch_size, wgpu};
 use pelage::scene::Resampled;
 use pelage::scene::{
     ChiangParams, DirectionalLight, ShadingModel, ShadowParams, Transparency, VoxelParams,
@@ -36,6 +36,10 @@ use pelage_lab::{ScatterChart, ScatterPoint, Table};
 
 use crate::lab::LabOpts;
 use crate::progress;
+
+/// The benchmark's kernels (`wgsl/bench/*.wgsl`).
+static SHADERS: ShaderSources =
+    pelage::gpu::wgsl_sources!("bench/copy.wgsl", "bench/strand_writes.wgsl",);
 
 type Error = Box<dyn std::error::Error>;
 
@@ -57,7 +61,7 @@ impl Copy {
         let usage = wgpu::BufferUsages::STORAGE;
         let source = pelage::gpu::zeroed_storage(gpu, "bench copy source", bytes, usage)?;
         let target = pelage::gpu::zeroed_storage(gpu, "bench copy target", bytes, usage)?;
-        let module = ShaderLibrary::module(gpu, "bench/copy.wgsl")?;
+        let module = SHADERS.library().module(gpu, "bench/copy.wgsl")?;
         let (pipeline, group) = gpu.scoped(|device| {
             let pipeline = compute_pipeline(device, "bench copy", &module, "main");
             let group = pelage::gpu::bind_buffers(
@@ -107,7 +111,7 @@ impl StrandWrites {
             "bench per strand",
             &glam::UVec4::new(per_strand, 0, 0, 0),
         )?;
-        let module = ShaderLibrary::module(gpu, "bench/strand_writes.wgsl")?;
+        let module = SHADERS.library().module(gpu, "bench/strand_writes.wgsl")?;
         let (pipeline, group) = gpu.scoped(|device| {
             let pipeline = compute_pipeline(device, "bench strand writes", &module, "main");
             let group = pelage::gpu::bind_buffers(
@@ -715,4 +719,16 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
         started.elapsed().as_secs_f64()
     );
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn every_shader_is_listed_and_validates() {
+        let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/wgsl");
+        let count = super::SHADERS
+            .check_against_dir(dir)
+            .unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(count, 2);
+    }
 }

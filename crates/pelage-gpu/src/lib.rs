@@ -2,8 +2,10 @@
 //!
 //! - [`Gpu`]: a device and queue, headless or brought by an engine, whose
 //!   errors come back as [`GpuError`] instead of panics;
-//! - [`ShaderLibrary`]: every file under `wgsl/`, embedded, `#import`-composed
-//!   and naga-validated;
+//! - [`ShaderLibrary`]: the WGSL each crate embeds from its `wgsl/` folder
+//!   ([`ShaderSources`], [`wgsl_sources!`]), `#import`-composed across crates and
+//!   naga-validated; this crate's own [`SHADERS`] are `shared/*.wgsl` and the shadow
+//!   contract;
 //! - typed buffers laid out by encase ([`storage_buffer`], [`UniformBuffer`]);
 //! - [`GpuTimer`]: per-pass GPU time from timestamp queries;
 //! - [`ShaderBinding`]: a WGSL contract implementation plus its resources, handed
@@ -27,7 +29,9 @@ pub use context::{Gpu, WANTED_FEATURES, feature_names};
 pub use error::{GpuError, Result};
 pub use pipelines::{bind_buffers, bind_numbered, compute_pipeline, dispatch_size};
 pub use readback::{TextureData, f16_to_f32, read_buffer, read_buffer_range, read_texture};
-pub use shaders::{SOURCES, ShaderError, ShaderLibrary};
+pub use shaders::{
+    Redirect, SHADERS, ShaderError, ShaderLibrary, ShaderSources, SourcesCheckError,
+};
 pub use timer::{GpuTimer, TimerReport};
 
 pub use encase;

@@ -4,8 +4,8 @@
 //! what to install.
 
 use pelage_gpu::{
-    Gpu, GpuError, GpuTimer, ShaderLibrary, UniformBuffer, read_buffer, read_buffer_range,
-    read_texture, storage_buffer, wgpu, zeroed_storage,
+    Gpu, GpuError, GpuTimer, SHADERS, UniformBuffer, read_buffer, read_buffer_range, read_texture,
+    storage_buffer, wgpu, zeroed_storage,
 };
 
 fn gpu() -> Gpu {
@@ -297,7 +297,8 @@ fn storage_size_limit_is_checked() {
 #[test]
 fn library_shaders_compile_on_the_device() {
     let gpu = gpu();
-    for name in ShaderLibrary::names() {
-        ShaderLibrary::module(&gpu, name).unwrap_or_else(|e| panic!("{e}"));
+    let library = SHADERS.library();
+    for name in SHADERS.names() {
+        library.module(&gpu, name).unwrap_or_else(|e| panic!("{e}"));
     }
 }

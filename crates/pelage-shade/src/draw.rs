@@ -4,7 +4,7 @@
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU32, Ordering};
 
-use pelage_gpu::{Gpu, GpuTimer, ShaderBinding, ShaderLibrary, UniformBuffer, bind_buffers, wgpu};
+use pelage_gpu::{Gpu, GpuTimer, Redirect, ShaderBinding, UniformBuffer, bind_buffers, wgpu};
 use pelage_scene::{CameraMatrices, HairParams, Light, ParamError, ShadeParams};
 use pelage_strands::{LayoutCell, MeshBuffers, StrandBuffers, StrandLayout};
 
@@ -145,7 +145,7 @@ pub(crate) struct Common {
     pub layout: LayoutCell,
     /// The ribbon style as created; `set_frame` rewrites its segment count.
     pub style_value: RibbonStyle,
-    pub redirects: Vec<(&'static str, &'static str)>,
+    pub redirects: Vec<Redirect>,
     pub samples: u32,
     /// The targets' formats.
     pub target: TargetFormat,
@@ -257,12 +257,15 @@ impl Common {
             ),
         };
         let model = HairModel::new(gpu, &params.model)?;
-        let redirects: Vec<(&'static str, &'static str)> = shadow
+        let redirects: Vec<Redirect> = shadow
             .iter()
             .map(|b| b.redirect())
             .chain(model.redirect())
             .collect();
-        let mesh_module = ShaderLibrary::module_redirected(gpu, "shade/mesh.wgsl", &redirects)?;
+        let mesh_module =
+            crate::SHADERS
+                .library()
+                .module_redirected(gpu, "shade/mesh.wgsl", &redirects)?;
         let mesh_draw = gpu.scoped(|device| {
             let pipeline = raster_pipeline(
                 device,
@@ -374,11 +377,9 @@ impl Common {
 
     /// The shader `name` with the shadow contract redirected to this frame's method.
     pub fn module(&self, gpu: &Gpu, name: &str) -> crate::Result<wgpu::ShaderModule> {
-        Ok(ShaderLibrary::module_redirected(
-            gpu,
-            name,
-            &self.redirects,
-        )?)
+        Ok(crate::SHADERS
+            .library()
+            .module_redirected(gpu, name, &self.redirects)?)
     }
 
     /// Writes the frame uniforms, and takes stage 1's current layout (the strands and

@@ -116,6 +116,7 @@ impl HairModel {
             binding: ShaderBinding {
                 contract: CONTRACT,
                 module,
+                sources: &crate::SHADERS,
                 group: 2,
                 resources,
             },
@@ -146,7 +147,7 @@ impl HairModel {
     }
 
     /// Redirects for a hair pass: the model's, unless it is the contract's default.
-    pub(crate) fn redirect(&self) -> Option<(&'static str, &'static str)> {
+    pub(crate) fn redirect(&self) -> Option<pelage_gpu::Redirect> {
         (self.binding.module != CONTRACT).then(|| self.binding.redirect())
     }
 }

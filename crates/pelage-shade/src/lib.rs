@@ -29,6 +29,42 @@ pub use pelage_scene::ShadeParams;
 pub use ribbons::{FrameLight, FrameUniforms, MeshStyle, RibbonStyle};
 pub use targets::{COLOR_FORMAT, DEPTH_FORMAT, TargetFormat, Targets};
 
+/// The shaders of stage 3 (`wgsl/shade/*.wgsl`), importing pelage-gpu's (the shared
+/// files and the shadow contract `shadow/none.wgsl`). A shadow method's lookup comes in
+/// through its [`ShaderBinding`](pelage_gpu::ShaderBinding), with its own crate's sources.
+pub static SHADERS: pelage_gpu::ShaderSources = pelage_gpu::wgsl_sources!(
+    uses [&pelage_gpu::SHADERS];
+    "shade/frame.wgsl",
+    "shade/hair.wgsl",
+    "shade/hair_model.wgsl",
+    "shade/mesh.wgsl",
+    "shade/models/chiang.wgsl",
+    "shade/models/chiang_eval.wgsl",
+    "shade/models/chiang_model.wgsl",
+    "shade/models/chiang_tables.wgsl",
+    "shade/models/eval.wgsl",
+    "shade/models/fibre.wgsl",
+    "shade/models/kajiya_kay.wgsl",
+    "shade/models/marschner.wgsl",
+    "shade/models/marschner_lut.wgsl",
+    "shade/models/marschner_lut_lookup.wgsl",
+    "shade/models/marschner_lut_model.wgsl",
+    "shade/models/marschner_model.wgsl",
+    "shade/models/sadeghi.wgsl",
+    "shade/models/sadeghi_model.wgsl",
+    "shade/oit/a_buffer.wgsl",
+    "shade/oit/bindings.wgsl",
+    "shade/oit/common.wgsl",
+    "shade/oit/dbk.wgsl",
+    "shade/oit/k_buffer.wgsl",
+    "shade/oit/ppll.wgsl",
+    "shade/oit/random_subsets.wgsl",
+    "shade/oit/slots.wgsl",
+    "shade/oit/tail.wgsl",
+    "shade/oit/wboit.wgsl",
+    "shade/ribbons.wgsl",
+);
+
 /// What can go wrong in stage 3.
 #[derive(Debug, thiserror::Error)]
 pub enum ShadeError {

@@ -45,7 +45,7 @@
 
 use encase::ShaderType;
 use glam::Vec3;
-use pelage_gpu::{Gpu, ShaderLibrary, UniformBuffer, compute_pipeline, wgpu, zeroed_storage};
+use pelage_gpu::{Gpu, UniformBuffer, compute_pipeline, wgpu, zeroed_storage};
 use pelage_scene::{
     Absorption, ChiangParams, KajiyaKayParams, MarschnerParams, ParamError, SadeghiParams,
     chiang_color_scale,
@@ -292,7 +292,9 @@ impl MarschnerLut {
             &MarschnerUniforms::from_params(params),
         )?;
         let info_buffer = UniformBuffer::new(gpu, "pelage marschner lut info", &info)?;
-        let module = ShaderLibrary::module(gpu, "shade/models/marschner_lut.wgsl")?;
+        let module = crate::SHADERS
+            .library()
+            .module(gpu, "shade/models/marschner_lut.wgsl")?;
         let pipeline = gpu.scoped(|device| {
             compute_pipeline(device, "pelage marschner lut build", &module, "build")
         })?;
@@ -567,7 +569,9 @@ impl ChiangTables {
         let dual_bytes = u64::from(Self::THETA * Self::SIGMA * 2) * TEXEL_BYTES;
         let n = zeroed_storage(gpu, "pelage chiang N", n_bytes, usage)?;
         let dual = zeroed_storage(gpu, "pelage chiang dual", dual_bytes, usage)?;
-        let module = ShaderLibrary::module(gpu, "shade/models/chiang_tables.wgsl")?;
+        let module = crate::SHADERS
+            .library()
+            .module(gpu, "shade/models/chiang_tables.wgsl")?;
         // One explicit layout for both entry points (each uses only some of the bindings,
         // so layouts derived from them would differ).
         let (pipelines, group) = gpu.scoped(|device| {

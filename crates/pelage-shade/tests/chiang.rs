@@ -9,8 +9,8 @@ use std::f64::consts::PI;
 use encase::ShaderType;
 use glam::{DVec3, Vec3};
 use pelage_gpu::{
-    Gpu, ShaderLibrary, UniformBuffer, bind_buffers, compute_pipeline, dispatch_size, read_buffer,
-    storage_buffer, wgpu, zeroed_storage,
+    Gpu, UniformBuffer, bind_buffers, compute_pipeline, dispatch_size, read_buffer, storage_buffer,
+    wgpu, zeroed_storage,
 };
 use pelage_scene::ChiangParams;
 use pelage_shade::ChiangTables;
@@ -66,7 +66,10 @@ fn tables(gpu: &Gpu, params: &ChiangParams) -> ChiangTables {
 
 /// Evaluates every case in `mode` with `tables` and reads back the radiances.
 fn eval(gpu: &Gpu, tables: &ChiangTables, mode: u32, cases: &[Case]) -> Vec<Vec3> {
-    let module = ShaderLibrary::module(gpu, "shade/models/chiang_eval.wgsl").unwrap();
+    let module = pelage_shade::SHADERS
+        .library()
+        .module(gpu, "shade/models/chiang_eval.wgsl")
+        .unwrap();
     let pipeline = compute_pipeline(&gpu.device, "eval chiang", &module, "main");
     let vecs: Vec<glam::Vec4> = cases
         .iter()

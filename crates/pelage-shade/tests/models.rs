@@ -8,8 +8,8 @@ use std::f64::consts::PI;
 use encase::ShaderType;
 use glam::{DVec3, Vec3};
 use pelage_gpu::{
-    Gpu, ShaderLibrary, UniformBuffer, bind_buffers, compute_pipeline, dispatch_size, read_buffer,
-    storage_buffer, wgpu, zeroed_storage,
+    Gpu, UniformBuffer, bind_buffers, compute_pipeline, dispatch_size, read_buffer, storage_buffer,
+    wgpu, zeroed_storage,
 };
 use pelage_reference::shading::{kajiya_kay, marschner_radiance, sadeghi_radiance};
 use pelage_scene::{KajiyaKayParams, MarschnerParams, SadeghiParams};
@@ -119,7 +119,10 @@ struct Eval {
 
 impl Eval {
     fn new(gpu: &Gpu, cases: &[Case]) -> Eval {
-        let module = ShaderLibrary::module(gpu, "shade/models/eval.wgsl").unwrap();
+        let module = pelage_shade::SHADERS
+            .library()
+            .module(gpu, "shade/models/eval.wgsl")
+            .unwrap();
         let pipeline = compute_pipeline(&gpu.device, "eval models", &module, "main");
         let vecs: Vec<glam::Vec4> = cases
             .iter()

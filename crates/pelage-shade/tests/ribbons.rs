@@ -150,34 +150,3 @@ fn mesh_in_front_hides_the_hair() {
         "hair shows through the mesh"
     );
 }
-
-#[test]
-fn shading_passes_compose_with_every_shadow_implementation() {
-    // Every file that implements the shadow contract (`light_visibility`), by naming convention.
-    let implementations: Vec<&str> = pelage_gpu::ShaderLibrary::names()
-        .filter(|n| {
-            *n == "shadow/none.wgsl" || (n.starts_with("shadow/") && n.ends_with("_lookup.wgsl"))
-        })
-        .collect();
-    assert!(
-        implementations.contains(&"shadow/voxel_lookup.wgsl"),
-        "{implementations:?}"
-    );
-    for pass in [
-        "shade/mesh.wgsl",
-        "shade/ribbons.wgsl",
-        "shade/oit/wboit.wgsl",
-        "shade/oit/k_buffer.wgsl",
-        "shade/oit/a_buffer.wgsl",
-        "shade/oit/dbk.wgsl",
-        "shade/oit/random_subsets.wgsl",
-    ] {
-        for implementation in &implementations {
-            pelage_gpu::ShaderLibrary::validate_redirected(
-                pass,
-                &[("shadow/none.wgsl", implementation)],
-            )
-            .unwrap_or_else(|e| panic!("{pass} with {implementation}: {e}"));
-        }
-    }
-}

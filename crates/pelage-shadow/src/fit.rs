@@ -4,8 +4,7 @@
 use encase::ShaderType;
 use glam::Vec3;
 use pelage_gpu::{
-    Gpu, GpuTimer, ShaderLibrary, UniformBuffer, bind_numbered, compute_pipeline, wgpu,
-    zeroed_storage,
+    Gpu, GpuTimer, UniformBuffer, bind_numbered, compute_pipeline, wgpu, zeroed_storage,
 };
 use pelage_scene::{DirectionalLight, GrowthParams};
 use pelage_strands::{StrandBuffers, StrandLayout};
@@ -140,7 +139,9 @@ impl LightFit {
         let usage = wgpu::BufferUsages::STORAGE;
         let bounds = zeroed_storage(gpu, "pelage light bounds", 24, usage)?;
         let grid = zeroed_storage(gpu, "pelage light grid", LightGrid::min_size().get(), usage)?;
-        let module = ShaderLibrary::module(gpu, "shadow/light_fit.wgsl")?;
+        let module = crate::SHADERS
+            .library()
+            .module(gpu, "shadow/light_fit.wgsl")?;
         let (pipelines, groups) = gpu.scoped(|device| {
             let pipelines = [
                 compute_pipeline(device, "pelage light fit", &module, "fit"),

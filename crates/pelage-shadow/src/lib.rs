@@ -33,12 +33,32 @@ pub use visibility::LightVisibility;
 pub use voxel::VoxelShadow;
 
 use glam::Vec3;
-use pelage_gpu::{Gpu, GpuTimer, ShaderBinding, wgpu};
+use pelage_gpu::{Gpu, GpuTimer, ShaderBinding, ShaderSources, wgpu};
 use pelage_scene::{DirectionalLight, GrowthParams, ShadowParams};
 use pelage_strands::{MeshBuffers, StrandBuffers};
 
+/// The shaders of stage 2 (`wgsl/shadow/*.wgsl`), importing pelage-gpu's.
+pub static SHADERS: ShaderSources = pelage_gpu::wgsl_sources!(
+    uses [&pelage_gpu::SHADERS];
+    "shadow/adsm_lookup.wgsl",
+    "shadow/dom_lookup.wgsl",
+    "shadow/hair_light.wgsl",
+    "shadow/light_common.wgsl",
+    "shadow/light_fit.wgsl",
+    "shadow/map_bindings.wgsl",
+    "shadow/map_common.wgsl",
+    "shadow/map_lookup.wgsl",
+    "shadow/mesh_depth.wgsl",
+    "shadow/mesh_shadow.wgsl",
+    "shadow/probe.wgsl",
+    "shadow/voxel_lookup.wgsl",
+    "shadow/voxel_scan.wgsl",
+    "shadow/voxel_splat.wgsl",
+);
+
 /// The WGSL file every shading pass imports for `light_visibility(p)`; a method's
-/// [`ShaderBinding`] redirects it to the method's lookup.
+/// [`ShaderBinding`] redirects it to the method's lookup. It is one of
+/// [`pelage_gpu::SHADERS`], so the shading stage finds it without this crate.
 pub const CONTRACT: &str = "shadow/none.wgsl";
 
 /// One shadow method, as the frame pipeline drives it.

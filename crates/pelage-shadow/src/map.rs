@@ -4,9 +4,7 @@
 
 use encase::ShaderType;
 use glam::{Vec3, Vec4};
-use pelage_gpu::{
-    BoundResource, Gpu, GpuTimer, ShaderBinding, ShaderLibrary, UniformBuffer, bind_numbered, wgpu,
-};
+use pelage_gpu::{BoundResource, Gpu, GpuTimer, ShaderBinding, UniformBuffer, bind_numbered, wgpu};
 use pelage_scene::{
     AdsmParams, DeepOpacityParams, DirectionalLight, GrowthParams, LayerSpacing, MapParams,
     OpacityFormat, ShadowMapParams,
@@ -133,7 +131,9 @@ impl LightMap {
         let fit = LightFit::new(gpu, base, strands)?;
         let uniforms = UniformBuffer::new(gpu, "pelage light map uniforms", &values)?;
         let mesh_map = MeshShadowMap::new(gpu, mesh, map.mesh_map_size, map.pcf_radius, reach)?;
-        let module = ShaderLibrary::module(gpu, "shadow/hair_light.wgsl")?;
+        let module = crate::SHADERS
+            .library()
+            .module(gpu, "shadow/hair_light.wgsl")?;
         let size = map.size;
 
         let built = gpu.scoped(|device| {
@@ -352,6 +352,7 @@ impl LightMap {
         ShaderBinding {
             contract: crate::CONTRACT,
             module,
+            sources: &crate::SHADERS,
             group: 1,
             resources,
         }

@@ -3,7 +3,7 @@
 
 use encase::ShaderType;
 use glam::{Mat4, Vec3};
-use pelage_gpu::{BoundResource, Gpu, GpuTimer, ShaderLibrary, UniformBuffer, bind_buffers, wgpu};
+use pelage_gpu::{BoundResource, Gpu, GpuTimer, UniformBuffer, bind_buffers, wgpu};
 use pelage_scene::DirectionalLight;
 use pelage_strands::MeshBuffers;
 
@@ -59,7 +59,9 @@ impl MeshShadowMap {
             .into());
         }
         let uniforms = UniformBuffer::new(gpu, "pelage mesh shadow", &Self::disabled_uniforms())?;
-        let module = ShaderLibrary::module(gpu, "shadow/mesh_depth.wgsl")?;
+        let module = crate::SHADERS
+            .library()
+            .module(gpu, "shadow/mesh_depth.wgsl")?;
         let (view, sampler, draw) = gpu.scoped(|device| {
             let texture = device.create_texture(&wgpu::TextureDescriptor {
                 label: Some("pelage mesh shadow map"),

@@ -1,8 +1,6 @@
 //! Measuring a shadow method: its `light_visibility` at given points (`wgsl/shadow/probe.wgsl`).
 
-use pelage_gpu::{
-    Gpu, ShaderBinding, ShaderLibrary, bind_buffers, compute_pipeline, dispatch_size, wgpu,
-};
+use pelage_gpu::{Gpu, ShaderBinding, bind_buffers, compute_pipeline, dispatch_size, wgpu};
 
 /// Evaluates a method's shadow contract at arbitrary points, for tests and labs.
 ///
@@ -17,8 +15,11 @@ pub struct TransmittanceProbe {
 impl TransmittanceProbe {
     /// A probe of the method behind `binding`.
     pub fn new(gpu: &Gpu, binding: &ShaderBinding) -> crate::Result<Self> {
-        let module =
-            ShaderLibrary::module_redirected(gpu, "shadow/probe.wgsl", &[binding.redirect()])?;
+        let module = crate::SHADERS.library().module_redirected(
+            gpu,
+            "shadow/probe.wgsl",
+            &[binding.redirect()],
+        )?;
         let (pipeline, shadow_group) = gpu.scoped(|device| {
             let pipeline = compute_pipeline(device, "pelage transmittance probe", &module, "main");
             let layout = pipeline.get_bind_group_layout(binding.group);

@@ -2,8 +2,7 @@
 //! vertex (`wgsl/shadow/probe.wgsl`), into that light's slice of a visibility buffer.
 
 use pelage_gpu::{
-    Gpu, GpuTimer, ShaderBinding, ShaderLibrary, compute_pipeline, dispatch_size, wgpu,
-    zeroed_storage,
+    Gpu, GpuTimer, ShaderBinding, compute_pipeline, dispatch_size, wgpu, zeroed_storage,
 };
 use pelage_strands::StrandBuffers;
 
@@ -70,8 +69,11 @@ impl LightVisibility {
             }
             .into());
         }
-        let module =
-            ShaderLibrary::module_redirected(gpu, "shadow/probe.wgsl", &[binding.redirect()])?;
+        let module = crate::SHADERS.library().module_redirected(
+            gpu,
+            "shadow/probe.wgsl",
+            &[binding.redirect()],
+        )?;
         let label = format!("shadow: light {index} visibility");
         let (pipeline, own, shadow) = gpu.scoped(|device| {
             let pipeline = compute_pipeline(device, &label, &module, "main");

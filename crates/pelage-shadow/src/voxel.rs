@@ -2,8 +2,8 @@
 
 use glam::Vec3;
 use pelage_gpu::{
-    BoundResource, Gpu, GpuTimer, ShaderBinding, ShaderLibrary, bind_buffers, compute_pipeline,
-    dispatch_size, wgpu, zeroed_storage,
+    BoundResource, Gpu, GpuTimer, ShaderBinding, bind_buffers, compute_pipeline, dispatch_size,
+    wgpu, zeroed_storage,
 };
 use pelage_scene::{DirectionalLight, GrowthParams, Splat, VoxelParams};
 use pelage_strands::{MeshBuffers, StrandBuffers};
@@ -78,8 +78,12 @@ impl VoxelShadow {
             reach,
         )?;
 
-        let splat_module = ShaderLibrary::module(gpu, "shadow/voxel_splat.wgsl")?;
-        let scan_module = ShaderLibrary::module(gpu, "shadow/voxel_scan.wgsl")?;
+        let splat_module = crate::SHADERS
+            .library()
+            .module(gpu, "shadow/voxel_splat.wgsl")?;
+        let scan_module = crate::SHADERS
+            .library()
+            .module(gpu, "shadow/voxel_scan.wgsl")?;
         let (splat, splat_group, scan, scan_group) = gpu.scoped(|device| {
             let splat = compute_pipeline(device, "pelage voxel splat", &splat_module, "main");
             let splat_group = bind_buffers(
@@ -207,6 +211,7 @@ impl ShadowMethod for VoxelShadow {
         ShaderBinding {
             contract: crate::CONTRACT,
             module: "shadow/voxel_lookup.wgsl",
+            sources: &crate::SHADERS,
             group: 1,
             resources,
         }

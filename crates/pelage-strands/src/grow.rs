@@ -4,8 +4,8 @@
 use encase::ShaderType;
 use glam::Vec3;
 use pelage_gpu::{
-    Gpu, GpuTimer, ShaderLibrary, UniformBuffer, bind_buffers, compute_pipeline, dispatch_size,
-    storage_buffer, wgpu, zeroed_storage,
+    Gpu, GpuTimer, UniformBuffer, bind_buffers, compute_pipeline, dispatch_size, storage_buffer,
+    wgpu, zeroed_storage,
 };
 use pelage_scene::{Camera, HairParams, HairType, Mesh, SurfaceInterpolation, WindParams};
 
@@ -318,7 +318,7 @@ impl StrandPass {
         // What later stages read: the roots with this frame's LOD width.
         let roots_buffer = storage_buffer(gpu, "pelage strand roots", roots, storage)?;
         let vertices = zeroed_storage(gpu, "pelage strand vertices", vertex_bytes, storage)?;
-        let module = ShaderLibrary::module(gpu, shader)?;
+        let module = crate::SHADERS.library().module(gpu, shader)?;
         let (pipeline, bind_group) = gpu.scoped(|device| {
             let pipeline = compute_pipeline(device, label, &module, "main");
             let mut entries = vec![&uniforms.buffer];

@@ -35,8 +35,17 @@ pub use lod::{
 pub use mesh_buffers::MeshBuffers;
 pub use roots::{StrandRoot, hash_to_unit, pcg_hash, sample_roots};
 
-use pelage_gpu::GpuError;
+use pelage_gpu::{GpuError, ShaderSources};
 use pelage_scene::{MeshError, ParamError};
+
+/// The shaders of stage 1 (`wgsl/strands/*.wgsl`), importing pelage-gpu's.
+pub static SHADERS: ShaderSources = pelage_gpu::wgsl_sources!(
+    uses [&pelage_gpu::SHADERS];
+    "strands/force.wgsl",
+    "strands/groom.wgsl",
+    "strands/grow.wgsl",
+    "strands/lod.wgsl",
+);
 
 /// What can go wrong in stage 1.
 #[derive(Debug, thiserror::Error)]
