@@ -83,6 +83,7 @@ impl ABuffer {
         width: u32,
         height: u32,
     ) -> crate::Result<Self> {
+        super::refuse_reverse_z(inputs, "a_buffer")?;
         pelage_scene::Transparency::ABuffer {
             nodes_per_pixel,
             resolve_k,

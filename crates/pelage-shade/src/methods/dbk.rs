@@ -25,6 +25,7 @@ impl Dbk {
         width: u32,
         height: u32,
     ) -> crate::Result<Self> {
+        super::refuse_reverse_z(inputs, "dbk")?;
         pelage_scene::Transparency::Dbk {
             depth_shift,
             nodes_per_pixel,

@@ -26,6 +26,7 @@ impl KBuffer {
         width: u32,
         height: u32,
     ) -> crate::Result<Self> {
+        super::refuse_reverse_z(inputs, "k_buffer")?;
         pelage_scene::Transparency::KBuffer { k }.validate()?;
         require_feature(
             gpu,

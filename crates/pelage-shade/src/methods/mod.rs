@@ -143,3 +143,17 @@ fn require_feature(gpu: &Gpu, method: &str, feature: wgpu::Features) -> crate::R
         gpu.describe()
     )))
 }
+
+/// Errors when `inputs` asks for reversed depth: the methods that test fragments against
+/// the opaque depth in the shader (k-buffer, A-buffer, DBK, random subsets) compare one
+/// way only. (Reading the direction from the slice uniform there crashes lavapipe, Mesa
+/// 22.3, when it runs the DBK and random-subsets passes.)
+fn refuse_reverse_z(inputs: &HairInputs<'_>, method: &str) -> crate::Result<()> {
+    if !inputs.target.reverse_z {
+        return Ok(());
+    }
+    Err(crate::ShadeError::Unsupported(format!(
+        "{method} does not draw into reverse-Z targets yet; use opaque or wboit, \
+         or standard depth (TargetFormat::reverse_z = false)"
+    )))
+}

@@ -23,6 +23,7 @@ impl RandomSubsets {
         width: u32,
         height: u32,
     ) -> crate::Result<Self> {
+        super::refuse_reverse_z(inputs, "random_subsets")?;
         pelage_scene::Transparency::RandomSubsets { k }.validate()?;
         require_feature(
             gpu,

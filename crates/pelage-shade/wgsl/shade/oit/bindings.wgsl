@@ -12,8 +12,7 @@
 // with storage writes may run its side effects before a late depth test rejects it.
 fn in_front_of_opaque(frag: vec4<f32>) -> bool {
     let d = textureLoad(opaque_depth, vec2<i32>(frag.xy), 0);
-    if (tile.reverse_z != 0u) {
-        return frag.z > d;
-    }
+    // Standard depth only: the methods importing this refuse reverse-Z targets
+    // (reading OitTile::reverse_z here crashes lavapipe in the DBK and subsets passes).
     return frag.z < d;
 }
