@@ -239,7 +239,8 @@ fn exact(
         strands: grown.strands.buffers(),
         shadow: None,
         visibility: None,
-        target: TargetFormat::for_params(shade),
+        // The reference A-buffer draws single-sampled, whatever the case's own method.
+        target: TargetFormat::default(),
         draw_mesh: true,
     };
     let targets = Targets::new(gpu, width, height, 1)?;
