@@ -142,25 +142,35 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         bytemuck::cast_slice(&floats(&rest.normals)),
     );
     let indices = make("engine indices", bytemuck::cast_slice(&rest.indices));
+    // The box the skinned mesh stays in: the rest pose breathes by up to 6% in x and y.
+    let bounds = {
+        let (lo, hi) = rest.bounds();
+        let breath = Vec3::new(1.06, 1.06, 1.0);
+        (lo.min(lo * breath), hi.max(hi * breath))
+    };
     let mesh = MeshBuffers::from_buffers(
         positions.clone(),
         normals.clone(),
         indices,
         rest.positions.len() as u32,
         (rest.indices.len() / 3) as u32,
+        bounds,
     )?;
 
     // pelage's stages, one by one, on the engine's device.
     let mut hair = HairParams::default();
     hair.roots.count = 12_000;
-    let strands = GrowStrands::new(&gpu, &rest, &mesh, &hair)?;
+    let mut strands = GrowStrands::new(&gpu, &rest, &mesh, &hair)?;
     let b = strands.buffers();
-    let reach = {
-        let (lo, hi) = rest.bounds();
-        let r = Vec3::splat(hair.growth.length * 2.5);
-        (lo - r, hi + r)
-    };
-    let voxel = VoxelShadow::new(&gpu, &VoxelParams::default(), &hair.growth, b, &mesh, reach)?;
+    // Everything later stages need to know about the strands travels with them (counts,
+    // widths, the box they can reach), so a shadow sizes itself from `b` and the mesh.
+    let voxel = VoxelShadow::new(
+        &gpu,
+        &VoxelParams::default(),
+        b,
+        &mesh,
+        pelage::shadow::reach(b, &mesh),
+    )?;
     let stride =
         LightVisibility::stride_for(u64::from(b.strand_count) * u64::from(b.segments + 1))?;
     let visibility = LightVisibility::buffer(&gpu, 1, stride)?;
@@ -173,7 +183,6 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         &gpu,
         &HairInputs {
             params: &shade,
-            hair: &hair,
             mesh: &mesh,
             strands: b,
             shadow: Some(&voxel.binding()),
@@ -280,6 +289,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     });
     let tip_every = 40;
     let tip_count = b.strand_count / tip_every;
+    let per_strand = b.segments + 1;
 
     let camera = Camera::default();
     let lights = [Light::default()];
@@ -297,10 +307,17 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
             .write_buffer(&positions, 0, bytemuck::cast_slice(&floats(&skinned)));
         gpu.queue
             .write_buffer(&normals, 0, bytemuck::cast_slice(&floats(&rest.normals)));
-        strands.set_time(&gpu.queue, t)?;
-        voxel.set_light(&gpu.queue, &lights[0].as_directional(Vec3::ZERO))?;
-        pass.set_frame(
+        // Stage 1 first: the frame it returns prepares and records every later stage.
+        let strand_frame = strands.prepare(&gpu.queue, t)?;
+        voxel.prepare(
             &gpu.queue,
+            &strand_frame,
+            &lights[0].as_directional(Vec3::ZERO),
+        )?;
+        hand_over.prepare(&strand_frame);
+        pass.prepare(
+            &gpu.queue,
+            &strand_frame,
             &camera.matrices(WIDTH, HEIGHT),
             &lights,
             WIDTH,
@@ -312,7 +329,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
             0,
             bytemuck::bytes_of(&EngineCamera {
                 view_proj: view_proj.to_cols_array(),
-                per_strand: b.segments + 1,
+                per_strand,
                 tips: tip_every,
                 _pad: [0; 2],
             }),
@@ -350,12 +367,13 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
             rp.draw(0..3, 0..1);
         }
         // 2. pelage, into the same encoder and targets.
-        strands.encode(&mut encoder, None);
-        voxel.encode(&mut encoder, None);
-        hand_over.encode(&mut encoder, None);
+        strands.encode(&mut encoder, &strand_frame, None)?;
+        voxel.encode(&mut encoder, &strand_frame, None)?;
+        hand_over.encode(&mut encoder, &strand_frame, None)?;
         pass.encode(
             &gpu,
             &mut encoder,
+            &strand_frame,
             &TargetViews {
                 color: &color_view,
                 resolve: None,

@@ -6,7 +6,7 @@ use pelage_shade::{
     HairInputs, HairPass, OitStats, TargetFormat, TargetViews, Targets, Visibility,
 };
 use pelage_shadow::{LightVisibility, ShadowMethod};
-use pelage_strands::{GroomStrands, GrowStrands, MeshBuffers, StrandStage};
+use pelage_strands::{GroomStrands, GrowStrands, MeshBuffers, StrandFrame, StrandStage};
 
 /// Everything a frame is made of.
 #[derive(Clone, Debug)]
@@ -82,8 +82,8 @@ impl Scene {
     }
 
     /// A world box holding the mesh and everything that can grow on it: the mesh's
-    /// bounds grown by the longest strand (length, jitter and length map) and its width;
-    /// with a groom, the mesh's bounds and the groom's reach
+    /// bounds and [`GrowStrands::reach_of`]; with a groom, the mesh's bounds and the
+    /// groom's reach
     /// ([`GroomStrands::reach_of`]; the rest bounds alone when its parameters are bad,
     /// which the renderer then refuses).
     pub fn reach(&self) -> (glam::Vec3, glam::Vec3) {
@@ -93,15 +93,8 @@ impl Scene {
                 GroomStrands::reach_of(groom, &self.hair).unwrap_or_else(|_| groom.bounds());
             return (lo.min(glo), hi.max(ghi));
         }
-        let g = &self.hair.growth;
-        let map_max = self
-            .hair
-            .roots
-            .length_scale
-            .as_ref()
-            .map_or(1.0, |m| m.iter().copied().fold(0.0f32, f32::max));
-        let reach = g.length * (1.0 + g.length_jitter) * map_max + g.width;
-        (lo - glam::Vec3::splat(reach), hi + glam::Vec3::splat(reach))
+        let (glo, ghi) = GrowStrands::reach_of(&self.mesh, &self.hair);
+        (lo.min(glo), hi.max(ghi))
     }
 }
 
@@ -137,6 +130,8 @@ pub struct Renderer {
     /// Per-vertex light visibility, `stride` floats per light (none without shadows).
     visibility: Option<wgpu::Buffer>,
     stride: u32,
+    /// The frame stage 1 last prepared, which every stage records.
+    frame: Option<StrandFrame>,
 }
 
 impl Renderer {
@@ -173,11 +168,10 @@ impl Renderer {
                 &scene.hair,
             )?),
         };
-        // What the strands amount to (a groom's count, segments and width), which the
-        // later stages size themselves by.
-        let hair = strands.params().clone();
         Light::validate_all(&scene.lights).map_err(pelage_shade::ShadeError::from)?;
-        let reach = scene.reach();
+        // Every later stage sizes itself from what stage 1 hands over: the strand
+        // buffers carry their counts, widths and reach.
+        let reach = pelage_shadow::reach(strands.buffers(), &mesh_buffers);
         let vertices =
             u64::from(strands.buffers().strand_count) * u64::from(strands.buffers().segments + 1);
         let stride = LightVisibility::stride_for(vertices)?;
@@ -195,14 +189,8 @@ impl Renderer {
             let Some(buffer) = &visibility else {
                 break;
             };
-            let Some(shadow) = pelage_shadow::build(
-                gpu,
-                &scene.shadow,
-                &hair.growth,
-                strands.buffers(),
-                &mesh_buffers,
-                reach,
-            )?
+            let Some(shadow) =
+                pelage_shadow::build(gpu, &scene.shadow, strands.buffers(), &mesh_buffers)?
             else {
                 break;
             };
@@ -226,7 +214,6 @@ impl Renderer {
             gpu,
             &HairInputs {
                 params: &scene.shade,
-                hair: &hair,
                 mesh: &mesh_buffers,
                 strands: strands.buffers(),
                 shadow: binding.as_ref(),
@@ -252,25 +239,33 @@ impl Renderer {
             reach,
             visibility,
             stride,
+            frame: None,
         })
     }
 
     /// Picks the level of detail for `camera` (see [`LodLevel::for_view`]) and writes the
-    /// per-frame uniforms of every stage for time `t` and `camera`.
-    fn prepare(&mut self, gpu: &Gpu, t: f32, camera: &Camera) -> crate::Result<()> {
+    /// per-frame uniforms of every stage for time `t` and `camera`: stage 1 first, whose
+    /// [`StrandFrame`] every later stage is prepared and recorded with.
+    fn prepare(&mut self, gpu: &Gpu, t: f32, camera: &Camera) -> crate::Result<StrandFrame> {
         camera.validate()?;
         let (width, height) = (self.targets.width, self.targets.height);
         let level = self
             .strands
             .level_for_view(self.reach, camera, width, height);
         self.strands.set_lod(level)?;
-        // Stage 1 first: it publishes the strand layout the later stages draw.
-        self.strands.set_time(&gpu.queue, t)?;
-        for ((shadow, _), light) in self.shadows.iter().zip(&self.lights) {
-            shadow.set_light(&gpu.queue, &light.as_directional(self.shadow_target))?;
+        let frame = self.strands.prepare(&gpu.queue, t)?;
+        self.frame = Some(frame);
+        for ((shadow, hand_over), light) in self.shadows.iter().zip(&self.lights) {
+            shadow.prepare(
+                &gpu.queue,
+                &frame,
+                &light.as_directional(self.shadow_target),
+            )?;
+            hand_over.prepare(&frame);
         }
-        self.hair.set_frame(
+        self.hair.prepare(
             &gpu.queue,
+            &frame,
             &if self.targets.format.reverse_z {
                 camera.matrices_reverse_z(width, height)
             } else {
@@ -280,17 +275,18 @@ impl Renderer {
             width,
             height,
         )?;
-        Ok(())
+        Ok(frame)
     }
 
     /// Grows the strands for time `t`, shadows them and draws them from `camera`; waits for the GPU.
     pub fn render(&mut self, gpu: &Gpu, t: f32, camera: &Camera) -> crate::Result<FrameStats> {
-        self.prepare(gpu, t, camera)?;
+        let frame = self.prepare(gpu, t, camera)?;
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
-        self.strands.encode(&mut encoder, self.timer.as_mut());
+        self.strands
+            .encode(&mut encoder, &frame, self.timer.as_mut())?;
         for (shadow, hand_over) in &self.shadows {
-            shadow.encode(&mut encoder, self.timer.as_mut());
-            hand_over.encode(&mut encoder, self.timer.as_mut());
+            shadow.encode(&mut encoder, &frame, self.timer.as_mut())?;
+            hand_over.encode(&mut encoder, &frame, self.timer.as_mut())?;
         }
         let (color, resolve) = self.targets.color_views();
         let depth = self.targets.depth_view();
@@ -300,7 +296,7 @@ impl Renderer {
             ..self.targets.views(&color, resolve.as_ref(), &depth)
         };
         self.hair
-            .encode(gpu, &mut encoder, &views, self.timer.as_mut())?;
+            .encode(gpu, &mut encoder, &frame, &views, self.timer.as_mut())?;
         if let Some(timer) = &self.timer {
             timer.resolve(&mut encoder);
         }
@@ -324,19 +320,22 @@ impl Renderer {
         camera: &Camera,
         repeats: usize,
     ) -> crate::Result<Vec<(String, f64)>> {
-        self.prepare(gpu, t, camera)?;
+        let frame = self.prepare(gpu, t, camera)?;
         let (color, resolve) = self.targets.color_views();
         let depth = self.targets.depth_view();
         let mut stages = vec![(
             "strands".to_string(),
-            time_alone(gpu, repeats, |e| self.strands.encode(e, None))?,
+            time_alone(gpu, repeats, |e| {
+                Ok(self.strands.encode(e, &frame, None)?)
+            })?,
         )];
         if !self.shadows.is_empty() {
             let ms = time_alone(gpu, repeats, |e| {
                 for (shadow, hand_over) in &self.shadows {
-                    shadow.encode(e, None);
-                    hand_over.encode(e, None);
+                    shadow.encode(e, &frame, None)?;
+                    hand_over.encode(e, &frame, None)?;
                 }
+                Ok(())
             })?;
             stages.push(("shadow".to_string(), ms));
         }
@@ -345,7 +344,9 @@ impl Renderer {
             depth_sampled: depth_sampled.as_ref(),
             ..self.targets.views(&color, resolve.as_ref(), &depth)
         };
-        let shade = time_alone(gpu, repeats, |e| self.hair.encode(gpu, e, &views, None))?;
+        let shade = time_alone(gpu, repeats, |e| {
+            Ok(self.hair.encode(gpu, e, &frame, &views, None)?)
+        })?;
         stages.push(("shade".to_string(), shade));
         Ok(stages)
     }
@@ -407,7 +408,10 @@ impl Renderer {
             .chunks_exact(4)
             .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
             .collect();
-        let vertices = self.strands.buffers().layout.get().vertices() as usize;
+        let vertices = self
+            .frame
+            .map_or_else(|| self.strands.buffers().full_layout(), |f| f.layout)
+            .vertices() as usize;
         Ok(floats
             .chunks(self.stride as usize)
             .take(self.shadows.len())
@@ -458,18 +462,15 @@ fn linear_to_srgb8(v: f32) -> u8 {
 }
 
 /// Median wall-clock milliseconds of `repeats` submissions of what `encode` records, each waited for.
-fn time_alone<R>(
+fn time_alone(
     gpu: &Gpu,
     repeats: usize,
-    encode: impl Fn(&mut wgpu::CommandEncoder) -> R,
-) -> crate::Result<f64>
-where
-    R: IntoUnitResult,
-{
+    encode: impl Fn(&mut wgpu::CommandEncoder) -> crate::Result<()>,
+) -> crate::Result<f64> {
     let mut times = Vec::with_capacity(repeats.max(1));
     for _ in 0..repeats.max(1) {
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
-        encode(&mut encoder).into_unit_result()?;
+        encode(&mut encoder)?;
         let command = encoder.finish();
         let started = std::time::Instant::now();
         gpu.submit_and_wait([command])?;
@@ -477,21 +478,4 @@ where
     }
     times.sort_by(f64::total_cmp);
     Ok(times[times.len() / 2])
-}
-
-/// What an encoding closure may return: nothing, or a stage's result.
-trait IntoUnitResult {
-    fn into_unit_result(self) -> crate::Result<()>;
-}
-
-impl IntoUnitResult for () {
-    fn into_unit_result(self) -> crate::Result<()> {
-        Ok(())
-    }
-}
-
-impl IntoUnitResult for pelage_shade::Result<()> {
-    fn into_unit_result(self) -> crate::Result<()> {
-        Ok(self?)
-    }
 }

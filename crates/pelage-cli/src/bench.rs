@@ -141,10 +141,10 @@ impl StrandWrites {
 }
 
 /// The strands `grow` grows at t = 0, read back as a groom of the same strands and segments.
-fn grown_groom(gpu: &Gpu, grow: &GrowStrands) -> Result<Resampled, Error> {
-    grow.set_time(&gpu.queue, 0.0)?;
+fn grown_groom(gpu: &Gpu, grow: &mut GrowStrands) -> Result<Resampled, Error> {
+    let frame = grow.prepare(&gpu.queue, 0.0)?;
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
-    grow.encode(&mut encoder, None);
+    grow.encode(&mut encoder, &frame, None)?;
     gpu.submit_and_wait([encoder.finish()])?;
     let bytes = pelage::gpu::read_buffer(gpu, &grow.buffers().vertices)?;
     let points = bytes
@@ -267,17 +267,9 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
         let gpu = Gpu::headless()?;
         let s = scene(strands, 8);
         let mesh = MeshBuffers::upload(&gpu, &s.mesh)?;
-        let grow = GrowStrands::new(&gpu, &s.mesh, &mesh, &s.hair)?;
+        let mut grow = GrowStrands::new(&gpu, &s.mesh, &mesh, &s.hair)?;
         let b = grow.buffers();
-        let voxel = VoxelShadow::new(
-            &gpu,
-            &VoxelParams::default(),
-            &s.hair.growth,
-            b,
-            &mesh,
-            s.reach(),
-        )?;
-        voxel.set_light(&gpu.queue, &light)?;
+        let voxel = VoxelShadow::new(&gpu, &VoxelParams::default(), b, &mesh, s.reach())?;
         let copy = Copy::new(&gpu, b.vertices.size().max(16 << 20))?;
         let scratch = pelage::gpu::zeroed_storage(
             &gpu,
@@ -286,9 +278,11 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
             wgpu::BufferUsages::STORAGE,
         )?;
         let writes = StrandWrites::new(&gpu, &scratch, b.strand_count, b.segments + 1)?;
+        let (vertices, roots, volume) = (b.vertices.size(), b.roots.size(), voxel.volume().size());
         let times = time_frames(&gpu, frames, |encoder, mut timer, frame| {
-            grow.set_time(&gpu.queue, frame as f32 / 24.0)?;
-            grow.encode(encoder, timer.as_deref_mut());
+            let frame = grow.prepare(&gpu.queue, frame as f32 / 24.0)?;
+            voxel.prepare(&gpu.queue, &frame, &light)?;
+            grow.encode(encoder, &frame, timer.as_deref_mut())?;
             voxel.encode_density(encoder, timer.as_deref_mut());
             voxel.encode_scan(encoder, timer.as_deref_mut());
             writes.encode(encoder, timer.as_deref_mut());
@@ -298,7 +292,6 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
         let copy_ms = get(&times, "copy");
         let copy_rate = 2.0 * copy.bytes as f64 / copy_ms;
         let mesh_bytes = mesh.positions.size() + mesh.normals.size() + mesh.indices.size();
-        let (vertices, roots, volume) = (b.vertices.size(), b.roots.size(), voxel.volume().size());
         let stages = [
             (
                 "strands: grow",
@@ -345,9 +338,10 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
         // stage is arithmetic rather than memory traffic.
         let mut calm = s.hair.clone();
         calm.wind = WindParams::calm();
-        let still = GrowStrands::new(&gpu, &s.mesh, &mesh, &calm)?;
+        let mut still = GrowStrands::new(&gpu, &s.mesh, &mesh, &calm)?;
+        let still_frame = still.prepare(&gpu.queue, 0.0)?;
         let still_times = time_frames(&gpu, frames, |encoder, timer, _| {
-            still.encode(encoder, timer);
+            still.encode(encoder, &still_frame, timer)?;
             Ok(())
         })?;
         rows.push(compute_row(
@@ -358,11 +352,11 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
         ));
         // The same strands as a groom file would bring them (grown once, read back),
         // bent by the same wind every frame: the other stage 1 method.
-        let groom = grown_groom(&gpu, &grow)?;
-        let bent = GroomStrands::new(&gpu, &groom, &s.hair)?;
+        let groom = grown_groom(&gpu, &mut grow)?;
+        let mut bent = GroomStrands::new(&gpu, &groom, &s.hair)?;
         let groom_times = time_frames(&gpu, frames, |encoder, timer, frame| {
-            bent.set_time(&gpu.queue, frame as f32 / 24.0)?;
-            bent.encode(encoder, timer);
+            let frame = bent.prepare(&gpu.queue, frame as f32 / 24.0)?;
+            bent.encode(encoder, &frame, timer)?;
             Ok(())
         })?;
         rows.push(compute_row(

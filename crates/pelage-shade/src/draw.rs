@@ -5,8 +5,8 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicU32, Ordering};
 
 use pelage_gpu::{Gpu, GpuTimer, Redirect, ShaderBinding, UniformBuffer, bind_buffers, wgpu};
-use pelage_scene::{CameraMatrices, HairParams, Light, ParamError, ShadeParams};
-use pelage_strands::{LayoutCell, MeshBuffers, StrandBuffers, StrandLayout};
+use pelage_scene::{CameraMatrices, Light, ParamError, ShadeParams};
+use pelage_strands::{MeshBuffers, PreparedFrame, StrandBuffers, StrandFrame, StrandLayout};
 
 use crate::hair_model::HairModel;
 use crate::ribbons::{FrameUniforms, MeshStyle, RibbonStyle};
@@ -17,11 +17,10 @@ use crate::targets::TargetFormat;
 pub struct HairInputs<'a> {
     /// How to draw and shade.
     pub params: &'a ShadeParams,
-    /// The hair (width, tip width, opacity).
-    pub hair: &'a HairParams,
     /// Stage 1's mesh buffers (the opaque surface).
     pub mesh: &'a MeshBuffers,
-    /// Stage 1's strands.
+    /// Stage 1's strands (their widths and opacity come with them, in
+    /// [`StrandBuffers::style`]).
     pub strands: &'a StrandBuffers,
     /// Stage 2's implementation of the shadow contract (`shadow/none.wgsl`) for the key
     /// light (light 0), which shadows the mesh; `None` draws the mesh unshadowed.
@@ -92,7 +91,7 @@ pub(crate) enum Vertices {
     /// Always this many.
     Fixed(u32),
     /// As many as the hair ribbons of the strands stage 1 grew this frame, as
-    /// [`Common::set_frame`] last saw them.
+    /// [`Common::prepare`] last saw them.
     Hair(Arc<AtomicU32>),
 }
 
@@ -141,9 +140,9 @@ pub(crate) struct Common {
     pub mesh_draw: Draw,
     /// Ribbon vertices of this frame's strands (written by `set_frame`).
     pub hair_vertices: Arc<AtomicU32>,
-    /// Stage 1's layout, read by `set_frame`.
-    pub layout: LayoutCell,
-    /// The ribbon style as created; `set_frame` rewrites its segment count.
+    /// The stage 1 frame `prepare` last wrote the uniforms for.
+    pub prepared: PreparedFrame,
+    /// The ribbon style as created; `prepare` rewrites its segment count.
     pub style_value: RibbonStyle,
     pub redirects: Vec<Redirect>,
     pub samples: u32,
@@ -169,7 +168,6 @@ impl Common {
     ) -> crate::Result<Self> {
         let HairInputs {
             params,
-            hair,
             mesh,
             strands,
             shadow,
@@ -190,7 +188,7 @@ impl Common {
             }
             .into());
         }
-        hair.growth.validate()?;
+        strands.style.validate()?;
         // Every segment at full detail must fit one draw.
         let hair_vertices = u64::from(strands.strand_count) * u64::from(strands.segments) * 6;
         u32::try_from(hair_vertices).map_err(|_| ParamError {
@@ -213,11 +211,11 @@ impl Common {
             )?,
         )?;
         let style_value = RibbonStyle {
-            segments: strands.layout.get().segments,
-            tip_width: hair.growth.tip_width,
+            segments: strands.segments,
+            tip_width: strands.style.tip_width,
             min_pixels,
             root_occlusion: params.root_occlusion,
-            opacity: hair.growth.opacity,
+            opacity: strands.style.opacity,
         };
         let style = UniformBuffer::new(gpu, "pelage ribbon style", &style_value)?;
         let mesh_style = UniformBuffer::new(
@@ -305,8 +303,8 @@ impl Common {
             frame,
             style,
             mesh_draw,
-            hair_vertices: Arc::new(AtomicU32::new(ribbon_vertices(strands.layout.get()))),
-            layout: strands.layout.clone(),
+            hair_vertices: Arc::new(AtomicU32::new(ribbon_vertices(strands.full_layout()))),
+            prepared: PreparedFrame::default(),
             style_value,
             redirects,
             samples,
@@ -382,11 +380,12 @@ impl Common {
             .module_redirected(gpu, name, &self.redirects)?)
     }
 
-    /// Writes the frame uniforms, and takes stage 1's current layout (the strands and
-    /// segments grown this frame) for the ribbon style and the hair draws.
-    pub fn set_frame(
+    /// Writes the frame uniforms, and takes the layout of `strands` (the strands and
+    /// segments stage 1 grows this frame) for the ribbon style and the hair draws.
+    pub fn prepare(
         &self,
         queue: &wgpu::Queue,
+        strands: &StrandFrame,
         camera: &CameraMatrices,
         lights: &[Light],
         width: u32,
@@ -414,7 +413,7 @@ impl Common {
         let u = FrameUniforms::new(camera, lights, &self.params, height, self.visibility_stride)?;
 
         self.frame.write(queue, &u)?;
-        let layout = self.layout.get();
+        let layout = strands.layout;
         self.style.write(
             queue,
             &RibbonStyle {
@@ -424,7 +423,13 @@ impl Common {
         )?;
         self.hair_vertices
             .store(ribbon_vertices(layout), Ordering::Release);
+        self.prepared.set(strands);
         Ok(())
+    }
+
+    /// Errors unless the last [`Common::prepare`] was for `strands`.
+    pub fn check(&self, method: &str, strands: &StrandFrame) -> crate::Result<()> {
+        Ok(self.prepared.check(method, strands)?)
     }
 
     /// Records the mesh pass: clears colour (to the background) and depth unless

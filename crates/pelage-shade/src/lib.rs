@@ -74,6 +74,9 @@ pub enum ShadeError {
     /// The GPU refused something.
     #[error(transparent)]
     Gpu(#[from] pelage_gpu::GpuError),
+    /// A pass was recorded for another stage 1 frame than it was prepared for.
+    #[error(transparent)]
+    FrameOrder(#[from] pelage_strands::FrameOrderError),
     /// The adapter lacks a feature the method needs.
     #[error("{0}")]
     Unsupported(String),

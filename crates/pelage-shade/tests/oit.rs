@@ -10,7 +10,7 @@ use pelage_scene::{
     Camera, HairParams, Light, Mesh, ShadeParams, Transparency, WboitWeight, WindParams,
 };
 use pelage_shade::{ABuffer, HairInputs, HairPass, OitStats, TargetFormat, Targets};
-use pelage_strands::{GrowStrands, MeshBuffers, StrandStage};
+use pelage_strands::{GrowStrands, MeshBuffers, StrandFrame, StrandStage};
 
 const W: u32 = 128;
 const H: u32 = 96;
@@ -21,10 +21,11 @@ fn gpu() -> Gpu {
 
 struct Scene {
     mesh: Mesh,
-    hair: HairParams,
     camera: Camera,
     buffers: MeshBuffers,
     strands: GrowStrands,
+    /// The frame the strands were grown in.
+    frame: StrandFrame,
 }
 
 /// The creature with `strands` strands of `opacity`, grown at t = 0.
@@ -55,24 +56,23 @@ fn grown(gpu: &Gpu, mesh: Mesh, mut hair: HairParams, opacity: f32, camera: Came
     hair.wind = WindParams::calm();
     hair.growth.opacity = opacity;
     let buffers = MeshBuffers::upload(gpu, &mesh).unwrap();
-    let grown = GrowStrands::new(gpu, &mesh, &buffers, &hair).unwrap();
-    grown.set_time(&gpu.queue, 0.0).unwrap();
+    let mut grown = GrowStrands::new(gpu, &mesh, &buffers, &hair).unwrap();
+    let frame = grown.prepare(&gpu.queue, 0.0).unwrap();
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
-    grown.encode(&mut encoder, None);
+    grown.encode(&mut encoder, &frame, None).unwrap();
     gpu.submit_and_wait([encoder.finish()]).unwrap();
     Scene {
         mesh,
-        hair,
         camera,
         buffers,
         strands: grown,
+        frame,
     }
 }
 
 fn inputs<'a>(s: &'a Scene, params: &'a ShadeParams) -> HairInputs<'a> {
     HairInputs {
         params,
-        hair: &s.hair,
         mesh: &s.buffers,
         strands: s.strands.buffers(),
         shadow: None,
@@ -93,8 +93,9 @@ fn params(t: Transparency) -> ShadeParams {
 fn render_with(gpu: &Gpu, s: &Scene, method: &dyn HairPass, samples: u32) -> (Vec<u8>, OitStats) {
     let targets = Targets::new(gpu, W, H, samples).unwrap();
     method
-        .set_frame(
+        .prepare(
             &gpu.queue,
+            &s.frame,
             &s.camera.matrices(W, H),
             &[Light::default()],
             W,
@@ -108,6 +109,7 @@ fn render_with(gpu: &Gpu, s: &Scene, method: &dyn HairPass, samples: u32) -> (Ve
         .encode(
             gpu,
             &mut encoder,
+            &s.frame,
             &targets.views(&color, resolve.as_ref(), &depth),
             None,
         )
@@ -136,8 +138,9 @@ fn exact(gpu: &Gpu, s: &Scene) -> Exact {
     let targets = Targets::new(gpu, W, H, 1).unwrap();
     let abuffer = ABuffer::new(gpu, &inputs(s, &p), 256.0, 64, W, H).unwrap();
     abuffer
-        .set_frame(
+        .prepare(
             &gpu.queue,
+            &s.frame,
             &s.camera.matrices(W, H),
             &[Light::default()],
             W,

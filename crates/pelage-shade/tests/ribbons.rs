@@ -58,11 +58,10 @@ fn shade_params() -> ShadeParams {
 /// Renders `mesh` with its hair from `camera`; returns the red channel of every pixel.
 fn render(gpu: &Gpu, mesh: &Mesh, hair: &HairParams, camera: &Camera) -> Vec<u8> {
     let mesh_buffers = MeshBuffers::upload(gpu, mesh).unwrap();
-    let strands = GrowStrands::new(gpu, mesh, &mesh_buffers, hair).unwrap();
+    let mut strands = GrowStrands::new(gpu, mesh, &mesh_buffers, hair).unwrap();
     let params = shade_params();
     let inputs = HairInputs {
         params: &params,
-        hair,
         mesh: &mesh_buffers,
         strands: strands.buffers(),
         shadow: None,
@@ -72,9 +71,10 @@ fn render(gpu: &Gpu, mesh: &Mesh, hair: &HairParams, camera: &Camera) -> Vec<u8>
     };
     let pass = Opaque::new(gpu, &inputs).unwrap();
     let targets = Targets::new(gpu, SIZE, SIZE, params.sample_count).unwrap();
-    strands.set_time(&gpu.queue, 0.0).unwrap();
-    pass.set_frame(
+    let frame = strands.prepare(&gpu.queue, 0.0).unwrap();
+    pass.prepare(
         &gpu.queue,
+        &frame,
         &camera.matrices(SIZE, SIZE),
         &[Light::default()],
         SIZE,
@@ -82,12 +82,13 @@ fn render(gpu: &Gpu, mesh: &Mesh, hair: &HairParams, camera: &Camera) -> Vec<u8>
     )
     .unwrap();
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
-    strands.encode(&mut encoder, None);
+    strands.encode(&mut encoder, &frame, None).unwrap();
     let (color, resolve) = targets.color_views();
     let depth = targets.depth_view();
     pass.encode(
         gpu,
         &mut encoder,
+        &frame,
         &targets.views(&color, resolve.as_ref(), &depth),
         None,
     )

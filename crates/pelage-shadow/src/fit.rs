@@ -6,8 +6,8 @@ use glam::Vec3;
 use pelage_gpu::{
     Gpu, GpuTimer, UniformBuffer, bind_numbered, compute_pipeline, wgpu, zeroed_storage,
 };
-use pelage_scene::{DirectionalLight, GrowthParams};
-use pelage_strands::{StrandBuffers, StrandLayout};
+use pelage_scene::DirectionalLight;
+use pelage_strands::{PreparedFrame, StrandBuffers, StrandFrame, StrandLayout};
 
 use crate::LightSpace;
 
@@ -73,15 +73,10 @@ pub struct LightGrid {
 }
 
 impl LightGridUniforms {
-    /// The uniforms for `strands` grown with `growth`, on a grid of `resolution` cells no
-    /// smaller than `min_cell`; the voxel-only fields (`splat`, `bias_voxels`, the fixed
-    /// point) take neutral values for the caller to override.
-    pub fn for_hair(
-        growth: &GrowthParams,
-        strands: &StrandBuffers,
-        resolution: [u32; 3],
-        min_cell: f32,
-    ) -> Self {
+    /// The uniforms for `strands` (padded by their widest width), on a grid of
+    /// `resolution` cells no smaller than `min_cell`; the voxel-only fields (`splat`,
+    /// `bias_voxels`, the fixed point) take neutral values for the caller to override.
+    pub fn for_hair(strands: &StrandBuffers, resolution: [u32; 3], min_cell: f32) -> Self {
         Self {
             axis_x: Vec3::X,
             resolution_x: resolution[0],
@@ -93,9 +88,9 @@ impl LightGridUniforms {
             segments: strands.segments,
             strand_count: strands.strand_count,
             splat: 0,
-            padding: growth.width,
-            opacity: growth.opacity,
-            tip_width: growth.tip_width,
+            padding: strands.style.max_width,
+            opacity: strands.style.opacity,
+            tip_width: strands.style.tip_width,
             bias_voxels: 0.0,
             fixed_scale: 1.0,
             inv_fixed_scale: 1.0,
@@ -121,10 +116,10 @@ impl LightGridUniforms {
 #[derive(Debug)]
 pub struct LightFit {
     base: LightGridUniforms,
-    /// Stage 1's layout, read at every `set_light`.
-    layout: pelage_strands::LayoutCell,
     /// The layout the uniforms were last written for (packed strands << 32 | segments).
     drawn: std::sync::atomic::AtomicU64,
+    /// The stage 1 frame they were written for.
+    prepared: PreparedFrame,
     uniforms: UniformBuffer<LightGridUniforms>,
     bounds: wgpu::Buffer,
     grid: wgpu::Buffer,
@@ -164,11 +159,10 @@ impl LightFit {
             ];
             (pipelines, groups)
         })?;
-        let drawn = strands.layout.get();
         Ok(Self {
             base,
-            layout: strands.layout.clone(),
-            drawn: std::sync::atomic::AtomicU64::new(drawn.to_bits()),
+            drawn: std::sync::atomic::AtomicU64::new(strands.full_layout().to_bits()),
+            prepared: PreparedFrame::default(),
             uniforms,
             bounds,
             grid,
@@ -177,10 +171,16 @@ impl LightFit {
         })
     }
 
-    /// Aims the grid along `light` and takes stage 1's current [`StrandLayout`] (the
-    /// strands and segments grown this frame); both take effect at the next `encode`.
-    pub fn set_light(&self, queue: &wgpu::Queue, light: &DirectionalLight) -> crate::Result<()> {
-        let layout = self.layout.get();
+    /// Aims the grid along `light` and takes `strands`' [`StrandLayout`] (the strands
+    /// and segments grown this frame); both take effect at the next `encode`, which
+    /// must be for the same frame ([`LightFit::check`]).
+    pub fn prepare(
+        &self,
+        queue: &wgpu::Queue,
+        strands: &StrandFrame,
+        light: &DirectionalLight,
+    ) -> crate::Result<()> {
+        let layout = strands.layout;
         let uniforms = LightGridUniforms {
             vertex_count: u32::try_from(layout.vertices()).unwrap_or(u32::MAX),
             segments: layout.segments,
@@ -190,10 +190,17 @@ impl LightFit {
         self.uniforms.write(queue, &uniforms)?;
         self.drawn
             .store(layout.to_bits(), std::sync::atomic::Ordering::Release);
+        self.prepared.set(strands);
         Ok(())
     }
 
-    /// The strands and segments the last `set_light` took: what every pass of this
+    /// Errors unless the last [`LightFit::prepare`] was for `strands` (`stage` names the
+    /// method in the error).
+    pub fn check(&self, stage: &str, strands: &StrandFrame) -> crate::Result<()> {
+        Ok(self.prepared.check(stage, strands)?)
+    }
+
+    /// The strands and segments the last `prepare` took: what every pass of this
     /// light draws or splats.
     pub fn drawn(&self) -> StrandLayout {
         StrandLayout::from_bits(self.drawn.load(std::sync::atomic::Ordering::Acquire))

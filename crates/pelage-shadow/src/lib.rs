@@ -1,7 +1,8 @@
 //! Stage 2 of pelage: how much light reaches each point of the hair.
 //!
-//! Every method implements [`ShadowMethod`]: it is aimed with `set_light`, records
-//! its passes into the caller's encoder with `encode` (no readback), and hands the
+//! Every method implements [`ShadowMethod`]: it is aimed with `prepare` for stage 1's
+//! [`StrandFrame`], records its passes into the caller's encoder with `encode` for the
+//! same frame (no readback), and hands the
 //! shading stage a [`ShaderBinding`] implementing the shadow contract
 //! (`wgsl/shadow/none.wgsl`: `light_visibility(p)`), so the shading pass never
 //! knows which method it got. The mesh casts its own shadow through a
@@ -34,8 +35,8 @@ pub use voxel::VoxelShadow;
 
 use glam::Vec3;
 use pelage_gpu::{Gpu, GpuTimer, ShaderBinding, ShaderSources, wgpu};
-use pelage_scene::{DirectionalLight, GrowthParams, ShadowParams};
-use pelage_strands::{MeshBuffers, StrandBuffers};
+use pelage_scene::{DirectionalLight, ShadowParams};
+use pelage_strands::{MeshBuffers, StrandBuffers, StrandFrame};
 
 /// The shaders of stage 2 (`wgsl/shadow/*.wgsl`), importing pelage-gpu's.
 pub static SHADERS: ShaderSources = pelage_gpu::wgsl_sources!(
@@ -61,43 +62,62 @@ pub static SHADERS: ShaderSources = pelage_gpu::wgsl_sources!(
 /// [`pelage_gpu::SHADERS`], so the shading stage finds it without this crate.
 pub const CONTRACT: &str = "shadow/none.wgsl";
 
-/// One shadow method, as the frame pipeline drives it.
+/// One shadow method, as the frame pipeline drives it: each frame `prepare` with stage
+/// 1's [`StrandFrame`], then `encode` with the same frame.
 pub trait ShadowMethod: std::fmt::Debug {
     /// A short description with its parameters, e.g. `voxel 128x128x128 trilinear`.
     fn name(&self) -> String;
-    /// Aims the method along `light`; takes effect at the next `encode`.
-    fn set_light(&self, queue: &wgpu::Queue, light: &DirectionalLight) -> Result<()>;
-    /// Records the method's passes for this frame.
-    fn encode(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&mut GpuTimer>);
+    /// Aims the method along `light` and takes the strands stage 1 grows in `strands`;
+    /// takes effect at the next `encode`.
+    fn prepare(
+        &self,
+        queue: &wgpu::Queue,
+        strands: &StrandFrame,
+        light: &DirectionalLight,
+    ) -> Result<()>;
+    /// Records the method's passes for `strands`, the frame of the last `prepare`
+    /// (another is a [`ShadowError::FrameOrder`]).
+    fn encode(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        strands: &StrandFrame,
+        timer: Option<&mut GpuTimer>,
+    ) -> Result<()>;
     /// The shadow contract's implementation, for the shading passes.
     fn binding(&self) -> ShaderBinding;
     /// Bytes of GPU memory the method holds.
     fn memory_bytes(&self) -> u64;
 }
 
-/// Builds the method `params` chooses (`None` for no shadows) for `strands`, grown with
-/// `growth`, on `mesh`; `reach` is the world box hair and mesh stay in.
+/// Builds the method `params` chooses (`None` for no shadows) for `strands` on `mesh`,
+/// covering [`reach`]`(strands, mesh)`.
 pub fn build(
     gpu: &Gpu,
     params: &ShadowParams,
-    growth: &GrowthParams,
     strands: &StrandBuffers,
     mesh: &MeshBuffers,
-    reach: (Vec3, Vec3),
 ) -> Result<Option<Box<dyn ShadowMethod>>> {
+    let reach = reach(strands, mesh);
     Ok(match params {
         ShadowParams::None => None,
-        ShadowParams::Voxel(p) => Some(Box::new(VoxelShadow::new(
-            gpu, p, growth, strands, mesh, reach,
-        )?)),
+        ShadowParams::Voxel(p) => Some(Box::new(VoxelShadow::new(gpu, p, strands, mesh, reach)?)),
         ShadowParams::DeepOpacity(p) => Some(Box::new(DeepOpacityMaps::new(
-            gpu, p, growth, strands, mesh, reach,
+            gpu, p, strands, mesh, reach,
         )?)),
-        ShadowParams::ShadowMap(p) => Some(Box::new(HairShadowMap::new(
-            gpu, p, growth, strands, mesh, reach,
-        )?)),
-        ShadowParams::Adsm(p) => Some(Box::new(Adsm::new(gpu, p, growth, strands, mesh, reach)?)),
+        ShadowParams::ShadowMap(p) => {
+            Some(Box::new(HairShadowMap::new(gpu, p, strands, mesh, reach)?))
+        }
+        ShadowParams::Adsm(p) => Some(Box::new(Adsm::new(gpu, p, strands, mesh, reach)?)),
     })
+}
+
+/// The world box a shadow covers: where the strands can reach
+/// ([`StrandBuffers::reach`]) and where the mesh stays ([`MeshBuffers::bounds`]).
+pub fn reach(strands: &StrandBuffers, mesh: &MeshBuffers) -> (Vec3, Vec3) {
+    (
+        strands.reach.0.min(mesh.bounds.0),
+        strands.reach.1.max(mesh.bounds.1),
+    )
 }
 
 /// What can go wrong in stage 2.
@@ -109,6 +129,9 @@ pub enum ShadowError {
     /// The GPU refused something.
     #[error(transparent)]
     Gpu(#[from] pelage_gpu::GpuError),
+    /// A pass was recorded for another stage 1 frame than it was prepared for.
+    #[error(transparent)]
+    FrameOrder(#[from] pelage_strands::FrameOrderError),
 }
 
 /// Result of stage 2.

@@ -6,10 +6,10 @@ use encase::ShaderType;
 use glam::{Vec3, Vec4};
 use pelage_gpu::{BoundResource, Gpu, GpuTimer, ShaderBinding, UniformBuffer, bind_numbered, wgpu};
 use pelage_scene::{
-    AdsmParams, DeepOpacityParams, DirectionalLight, GrowthParams, LayerSpacing, MapParams,
-    OpacityFormat, ShadowMapParams,
+    AdsmParams, DeepOpacityParams, DirectionalLight, LayerSpacing, MapParams, OpacityFormat,
+    ShadowMapParams,
 };
-use pelage_strands::{MeshBuffers, StrandBuffers};
+use pelage_strands::{MeshBuffers, StrandBuffers, StrandFrame};
 
 use crate::{LightFit, LightGridUniforms, MeshShadowMap, ShadowMethod};
 
@@ -90,12 +90,11 @@ impl LightMap {
         map: &MapParams,
         values: MapUniforms,
         layers: Option<OpacityFormat>,
-        growth: &GrowthParams,
         strands: &StrandBuffers,
         mesh: &MeshBuffers,
         reach: (Vec3, Vec3),
     ) -> crate::Result<Self> {
-        growth.validate()?;
+        strands.style.validate()?;
         let max = gpu.limits().max_texture_dimension_2d;
         if map.size > max {
             return Err(pelage_scene::ParamError {
@@ -123,10 +122,9 @@ impl LightMap {
             .into());
         }
         let base = LightGridUniforms::for_hair(
-            growth,
             strands,
             [map.size, map.size, 1],
-            0.25 * growth.width,
+            0.25 * strands.style.width,
         );
         let fit = LightFit::new(gpu, base, strands)?;
         let uniforms = UniformBuffer::new(gpu, "pelage light map uniforms", &values)?;
@@ -271,12 +269,23 @@ impl LightMap {
         })
     }
 
-    fn set_light(&self, queue: &wgpu::Queue, light: &DirectionalLight) -> crate::Result<()> {
-        self.fit.set_light(queue, light)?;
+    fn prepare(
+        &self,
+        queue: &wgpu::Queue,
+        strands: &StrandFrame,
+        light: &DirectionalLight,
+    ) -> crate::Result<()> {
+        self.fit.prepare(queue, strands, light)?;
         self.mesh_map.set_light(queue, light)
     }
 
-    fn encode(&self, encoder: &mut wgpu::CommandEncoder, mut timer: Option<&mut GpuTimer>) {
+    fn encode(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        strands: &StrandFrame,
+        mut timer: Option<&mut GpuTimer>,
+    ) -> crate::Result<()> {
+        self.fit.check("shadow: light map", strands)?;
         self.fit
             .encode(encoder, timer.as_deref_mut(), "shadow: fit");
         {
@@ -336,6 +345,7 @@ impl LightMap {
             pass.draw(0..self.drawn_vertices(), 0..1);
         }
         self.mesh_map.encode(encoder, timer);
+        Ok(())
     }
 
     fn binding(&self, module: &'static str) -> ShaderBinding {
@@ -377,12 +387,11 @@ pub struct DeepOpacityMaps {
 }
 
 impl DeepOpacityMaps {
-    /// Builds the maps for `strands` (grown with `growth`) on `mesh`; `reach` is the
+    /// Builds the maps for `strands` on `mesh`; `reach` is the
     /// world box hair and mesh stay in (the mesh map covers it).
     pub fn new(
         gpu: &Gpu,
         params: &DeepOpacityParams,
-        growth: &GrowthParams,
         strands: &StrandBuffers,
         mesh: &MeshBuffers,
         reach: (Vec3, Vec3),
@@ -414,7 +423,6 @@ impl DeepOpacityMaps {
             &params.map,
             values,
             Some(params.format),
-            growth,
             strands,
             mesh,
             reach,
@@ -443,12 +451,22 @@ impl ShadowMethod for DeepOpacityMaps {
         )
     }
 
-    fn set_light(&self, queue: &wgpu::Queue, light: &DirectionalLight) -> crate::Result<()> {
-        self.map.set_light(queue, light)
+    fn prepare(
+        &self,
+        queue: &wgpu::Queue,
+        strands: &StrandFrame,
+        light: &DirectionalLight,
+    ) -> crate::Result<()> {
+        self.map.prepare(queue, strands, light)
     }
 
-    fn encode(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&mut GpuTimer>) {
-        self.map.encode(encoder, timer);
+    fn encode(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        strands: &StrandFrame,
+        timer: Option<&mut GpuTimer>,
+    ) -> crate::Result<()> {
+        self.map.encode(encoder, strands, timer)
     }
 
     fn binding(&self) -> ShaderBinding {
@@ -469,11 +487,10 @@ pub struct HairShadowMap {
 }
 
 impl HairShadowMap {
-    /// Builds the map for `strands` (grown with `growth`) on `mesh`.
+    /// Builds the map for `strands` on `mesh`.
     pub fn new(
         gpu: &Gpu,
         params: &ShadowMapParams,
-        growth: &GrowthParams,
         strands: &StrandBuffers,
         mesh: &MeshBuffers,
         reach: (Vec3, Vec3),
@@ -483,7 +500,7 @@ impl HairShadowMap {
             bias: params.bias,
             ..MapUniforms::new(&params.map)
         };
-        let map = LightMap::new(gpu, &params.map, values, None, growth, strands, mesh, reach)?;
+        let map = LightMap::new(gpu, &params.map, values, None, strands, mesh, reach)?;
         Ok(Self {
             params: params.clone(),
             map,
@@ -502,12 +519,22 @@ impl ShadowMethod for HairShadowMap {
         )
     }
 
-    fn set_light(&self, queue: &wgpu::Queue, light: &DirectionalLight) -> crate::Result<()> {
-        self.map.set_light(queue, light)
+    fn prepare(
+        &self,
+        queue: &wgpu::Queue,
+        strands: &StrandFrame,
+        light: &DirectionalLight,
+    ) -> crate::Result<()> {
+        self.map.prepare(queue, strands, light)
     }
 
-    fn encode(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&mut GpuTimer>) {
-        self.map.encode(encoder, timer);
+    fn encode(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        strands: &StrandFrame,
+        timer: Option<&mut GpuTimer>,
+    ) -> crate::Result<()> {
+        self.map.encode(encoder, strands, timer)
     }
 
     fn binding(&self) -> ShaderBinding {
@@ -528,11 +555,10 @@ pub struct Adsm {
 }
 
 impl Adsm {
-    /// Builds the map for `strands` (grown with `growth`) on `mesh`.
+    /// Builds the map for `strands` on `mesh`.
     pub fn new(
         gpu: &Gpu,
         params: &AdsmParams,
-        growth: &GrowthParams,
         strands: &StrandBuffers,
         mesh: &MeshBuffers,
         reach: (Vec3, Vec3),
@@ -542,7 +568,7 @@ impl Adsm {
             fiber_spacing: params.fiber_spacing,
             ..MapUniforms::new(&params.map)
         };
-        let map = LightMap::new(gpu, &params.map, values, None, growth, strands, mesh, reach)?;
+        let map = LightMap::new(gpu, &params.map, values, None, strands, mesh, reach)?;
         Ok(Self {
             params: params.clone(),
             map,
@@ -562,12 +588,22 @@ impl ShadowMethod for Adsm {
         )
     }
 
-    fn set_light(&self, queue: &wgpu::Queue, light: &DirectionalLight) -> crate::Result<()> {
-        self.map.set_light(queue, light)
+    fn prepare(
+        &self,
+        queue: &wgpu::Queue,
+        strands: &StrandFrame,
+        light: &DirectionalLight,
+    ) -> crate::Result<()> {
+        self.map.prepare(queue, strands, light)
     }
 
-    fn encode(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&mut GpuTimer>) {
-        self.map.encode(encoder, timer);
+    fn encode(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        strands: &StrandFrame,
+        timer: Option<&mut GpuTimer>,
+    ) -> crate::Result<()> {
+        self.map.encode(encoder, strands, timer)
     }
 
     fn binding(&self) -> ShaderBinding {

@@ -4,7 +4,7 @@
 use pelage_gpu::{
     Gpu, GpuTimer, ShaderBinding, compute_pipeline, dispatch_size, wgpu, zeroed_storage,
 };
-use pelage_strands::StrandBuffers;
+use pelage_strands::{PreparedFrame, StrandBuffers, StrandFrame, StrandLayout};
 
 /// Light `index`'s visibility at every strand vertex, written each frame at floats
 /// `index * stride ..` of a buffer the hair pass reads (`pelage_shade::Visibility`).
@@ -13,8 +13,10 @@ pub struct LightVisibility {
     pipeline: wgpu::ComputePipeline,
     own: wgpu::BindGroup,
     shadow: Option<wgpu::BindGroup>,
-    /// Stage 1's layout: how many vertices this frame holds.
-    layout: pelage_strands::LayoutCell,
+    /// The layout of the frame last prepared (packed, see [`StrandLayout::to_bits`]).
+    layout: std::sync::atomic::AtomicU64,
+    /// That frame.
+    prepared: PreparedFrame,
     limits: wgpu::Limits,
     label: String,
 }
@@ -106,14 +108,33 @@ impl LightVisibility {
             pipeline,
             own,
             shadow,
-            layout: strands.layout.clone(),
+            layout: std::sync::atomic::AtomicU64::new(strands.full_layout().to_bits()),
+            prepared: PreparedFrame::default(),
             limits: gpu.limits().clone(),
             label,
         })
     }
 
-    /// Records the evaluation (after the shadow method's own passes).
-    pub fn encode(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&mut GpuTimer>) {
+    /// Takes the strands stage 1 grows in `strands`, for the next `encode`.
+    pub fn prepare(&self, strands: &StrandFrame) {
+        self.layout.store(
+            strands.layout.to_bits(),
+            std::sync::atomic::Ordering::Release,
+        );
+        self.prepared.set(strands);
+    }
+
+    /// Records the evaluation (after the shadow method's own passes) for `strands`,
+    /// the frame of the last `prepare`.
+    pub fn encode(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        strands: &StrandFrame,
+        timer: Option<&mut GpuTimer>,
+    ) -> crate::Result<()> {
+        self.prepared.check(&self.label, strands)?;
+        let layout =
+            StrandLayout::from_bits(self.layout.load(std::sync::atomic::Ordering::Acquire));
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some(&self.label),
             timestamp_writes: timer.and_then(|t| t.compute_pass(&self.label)),
@@ -124,7 +145,8 @@ impl LightVisibility {
             pass.set_bind_group(1, group, &[]);
         }
         // Only the vertices stage 1 grew this frame.
-        let groups = dispatch_size(&self.limits, self.layout.get().vertices(), 64);
+        let groups = dispatch_size(&self.limits, layout.vertices(), 64);
         pass.dispatch_workgroups(groups.0, groups.1, 1);
+        Ok(())
     }
 }

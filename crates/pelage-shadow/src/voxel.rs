@@ -5,8 +5,8 @@ use pelage_gpu::{
     BoundResource, Gpu, GpuTimer, ShaderBinding, bind_buffers, compute_pipeline, dispatch_size,
     wgpu, zeroed_storage,
 };
-use pelage_scene::{DirectionalLight, GrowthParams, Splat, VoxelParams};
-use pelage_strands::{MeshBuffers, StrandBuffers};
+use pelage_scene::{DirectionalLight, Splat, VoxelParams};
+use pelage_strands::{MeshBuffers, StrandBuffers, StrandFrame};
 
 use crate::{LightFit, LightGridUniforms, MeshShadowMap, ShadowMethod};
 
@@ -31,19 +31,18 @@ pub struct VoxelShadow {
 }
 
 impl VoxelShadow {
-    /// Allocates the grid and builds the passes for `strands` (grown with `growth`) on `mesh`.
+    /// Allocates the grid and builds the passes for `strands` on `mesh`.
     /// `reach` is the world box the hair and mesh stay in: the mesh map covers it,
     /// and `VoxelParams::voxel_size` derives the resolution from it.
     pub fn new(
         gpu: &Gpu,
         params: &VoxelParams,
-        growth: &GrowthParams,
         strands: &StrandBuffers,
         mesh: &MeshBuffers,
         reach: (Vec3, Vec3),
     ) -> crate::Result<Self> {
         params.validate()?;
-        growth.validate()?;
+        strands.style.validate()?;
         let resolution = params.resolution_for(reach);
         let [rx, ry, rz] = resolution;
         let voxels = u64::from(rx) * u64::from(ry) * u64::from(rz + 1);
@@ -61,7 +60,7 @@ impl VoxelShadow {
             inv_fixed_scale: 1.0 / fixed_scale,
             // A cell a few strand widths across is the finest that estimates density
             // (and a flat groom must not get an infinitely thin grid).
-            ..LightGridUniforms::for_hair(growth, strands, resolution, 4.0 * growth.width)
+            ..LightGridUniforms::for_hair(strands, resolution, 4.0 * strands.style.width)
         };
         let fit = LightFit::new(gpu, base, strands)?;
         let volume = zeroed_storage(
@@ -190,15 +189,27 @@ impl ShadowMethod for VoxelShadow {
         format!("voxel {x}x{y}x{z} {splat}")
     }
 
-    fn set_light(&self, queue: &wgpu::Queue, light: &DirectionalLight) -> crate::Result<()> {
-        self.fit.set_light(queue, light)?;
+    fn prepare(
+        &self,
+        queue: &wgpu::Queue,
+        strands: &StrandFrame,
+        light: &DirectionalLight,
+    ) -> crate::Result<()> {
+        self.fit.prepare(queue, strands, light)?;
         self.mesh_map.set_light(queue, light)
     }
 
-    fn encode(&self, encoder: &mut wgpu::CommandEncoder, mut timer: Option<&mut GpuTimer>) {
+    fn encode(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        strands: &StrandFrame,
+        mut timer: Option<&mut GpuTimer>,
+    ) -> crate::Result<()> {
+        self.fit.check("shadow: voxel", strands)?;
         self.encode_density(encoder, timer.as_deref_mut());
         self.encode_scan(encoder, timer.as_deref_mut());
         self.mesh_map.encode(encoder, timer);
+        Ok(())
     }
 
     fn binding(&self) -> ShaderBinding {

@@ -4,7 +4,6 @@
 mod common;
 
 use common::*;
-use glam::Vec3;
 use pelage_gpu::Gpu;
 use pelage_scene::{
     AdsmParams, DeepOpacityParams, HairParams, LayerSpacing, MapParams, Mesh, OpacityFormat,
@@ -20,22 +19,10 @@ fn map(size: u32, pcf_radius: u32) -> MapParams {
     }
 }
 
-fn method(
-    gpu: &Gpu,
-    r: &Reference,
-    hair: &HairParams,
-    params: &ShadowParams,
-) -> Box<dyn ShadowMethod> {
-    pelage_shadow::build(
-        gpu,
-        params,
-        &hair.growth,
-        r.strands.buffers(),
-        &r.mesh_buffers,
-        (Vec3::ZERO, Vec3::ONE),
-    )
-    .unwrap()
-    .unwrap()
+fn method(gpu: &Gpu, r: &Reference, params: &ShadowParams) -> Box<dyn ShadowMethod> {
+    pelage_shadow::build(gpu, params, r.strands.buffers(), &r.mesh_buffers)
+        .unwrap()
+        .unwrap()
 }
 
 fn candidates() -> Vec<ShadowParams> {
@@ -94,7 +81,7 @@ fn every_map_method_tracks_the_reference() {
         );
         let mut rmse = Vec::new();
         for params in candidates() {
-            let m = method(&gpu, &r, &hair, &params);
+            let m = method(&gpu, &r, &params);
             let (e, p95) = error(&gpu, &r, m.as_ref());
             println!(
                 "  {:<52} RMSE {e:.4} p95 {p95:.4} memory {:.1} MB",

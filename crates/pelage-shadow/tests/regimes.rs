@@ -61,16 +61,9 @@ fn measure(
     methods
         .iter()
         .map(|params| {
-            let m = pelage_shadow::build(
-                gpu,
-                params,
-                &hair.growth,
-                r.strands.buffers(),
-                &r.mesh_buffers,
-                (Vec3::ZERO, Vec3::ONE),
-            )
-            .unwrap()
-            .unwrap();
+            let m = pelage_shadow::build(gpu, params, r.strands.buffers(), &r.mesh_buffers)
+                .unwrap()
+                .unwrap();
             let t = transmittance_from(gpu, m.as_ref(), r.strands.buffers(), light);
             let (rmse, _) = error(gpu, &r, m.as_ref());
             println!(

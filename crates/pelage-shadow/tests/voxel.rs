@@ -19,7 +19,13 @@ fn isolated(
     strands: &StrandBuffers,
     reach: (Vec3, Vec3),
 ) -> Result<VoxelShadow, pelage_shadow::ShadowError> {
-    VoxelShadow::new(gpu, params, growth, strands, &dummy_mesh(gpu), reach)
+    VoxelShadow::new(
+        gpu,
+        params,
+        &styled(strands, growth),
+        &dummy_mesh(gpu),
+        reach,
+    )
 }
 
 fn voxel_params(resolution: u32) -> VoxelParams {
@@ -99,11 +105,10 @@ fn scan_equals_cpu_scan_on_columns_of_every_length() {
 }
 
 /// RMSE and p95 of voxel transmittance against the reference.
-fn voxel_error(gpu: &Gpu, r: &Reference, hair: &HairParams, params: &VoxelParams) -> (f32, f32) {
+fn voxel_error(gpu: &Gpu, r: &Reference, params: &VoxelParams) -> (f32, f32) {
     let shadow = VoxelShadow::new(
         gpu,
         params,
-        &hair.growth,
         r.strands.buffers(),
         &r.mesh_buffers,
         (Vec3::ZERO, Vec3::ONE),
@@ -130,7 +135,7 @@ fn transmittance_matches_ray_tracing_and_improves_with_resolution() {
         );
         let mut previous = f32::INFINITY;
         for resolution in [32, 64, 128] {
-            let (rmse, p95) = voxel_error(&gpu, &r, &hair, &voxel_params(resolution));
+            let (rmse, p95) = voxel_error(&gpu, &r, &voxel_params(resolution));
             println!("{name} {resolution}^3: RMSE {rmse:.4}, p95 {p95:.4}");
             assert!(
                 rmse < previous,
@@ -216,7 +221,9 @@ fn a_thousand_strands_through_one_voxel_saturate_and_never_wrap() {
             (Vec3::ZERO, Vec3::ONE),
         )
         .unwrap();
-        shadow.set_light(&gpu.queue, &light()).unwrap();
+        shadow
+            .prepare(&gpu.queue, &full_frame(&buffers), &light())
+            .unwrap();
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         shadow.encode_density(&mut encoder, None);
         gpu.submit_and_wait([encoder.finish()]).unwrap();
@@ -260,7 +267,6 @@ fn long_hair_shadow(gpu: &Gpu, resolution: u32) -> (GrowStrands, VoxelShadow) {
     let shadow = VoxelShadow::new(
         gpu,
         &voxel_params(resolution),
-        &hair.growth,
         strands.buffers(),
         &mesh_buffers,
         (Vec3::ZERO, Vec3::ONE),
@@ -273,9 +279,10 @@ fn long_hair_shadow(gpu: &Gpu, resolution: u32) -> (GrowStrands, VoxelShadow) {
 fn the_grid_is_fitted_to_the_hair_on_the_gpu() {
     let gpu = gpu();
     let (strands, shadow) = long_hair_shadow(&gpu, 64);
-    shadow.set_light(&gpu.queue, &light()).unwrap();
+    let frame = strands.frame().unwrap();
+    shadow.prepare(&gpu.queue, &frame, &light()).unwrap();
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
-    shadow.encode(&mut encoder, None);
+    shadow.encode(&mut encoder, &frame, None).unwrap();
     gpu.submit_and_wait([encoder.finish()]).unwrap();
     let grid: Vec<f32> = bytemuck::cast_slice(&read_buffer(&gpu, shadow.grid()).unwrap()).to_vec();
     let (origin, cell) = (

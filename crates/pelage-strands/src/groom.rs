@@ -113,6 +113,7 @@ impl GroomStrands {
             "strands: groom",
             "strands/groom.wgsl",
             &params,
+            Self::reach_of(groom, hair)?,
             &roots,
             &[&rest_buffer, &rest_roots],
         )?;

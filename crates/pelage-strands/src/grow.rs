@@ -7,10 +7,12 @@ use pelage_gpu::{
     Gpu, GpuTimer, UniformBuffer, bind_buffers, compute_pipeline, dispatch_size, storage_buffer,
     wgpu, zeroed_storage,
 };
-use pelage_scene::{Camera, HairParams, HairType, Mesh, SurfaceInterpolation, WindParams};
+use pelage_scene::{
+    Camera, GrowthParams, HairParams, HairType, Mesh, ParamError, SurfaceInterpolation, WindParams,
+};
 
 use crate::{
-    LayoutCell, LodLevel, MeshBuffers, StrandLayout, StrandRoot, StrandsError, sample_roots,
+    LodLevel, MeshBuffers, StrandFrame, StrandLayout, StrandRoot, StrandsError, sample_roots,
 };
 
 /// Workgroup size of `grow.wgsl` and `groom.wgsl`.
@@ -126,7 +128,60 @@ impl GrowUniforms {
     }
 }
 
-/// What stage 1 produces, for later stages to bind without any readback.
+/// What the strands look like to the passes that draw or shadow them: fixed for the
+/// life of the stage 1 method (the level of detail widens strands through the drawn
+/// roots' `width`, not here).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StrandStyle {
+    /// Representative root width, world units: the grown width, or a groom's mean root
+    /// width (what density estimates, such as the voxel grid's finest cell, scale with).
+    pub width: f32,
+    /// Widest root width of any strand, world units (what bounds must be padded by).
+    pub max_width: f32,
+    /// Tip width as a fraction of the root width.
+    pub tip_width: f32,
+    /// Opacity of one strand in [0, 1].
+    pub opacity: f32,
+}
+
+impl StrandStyle {
+    /// The style of strands grown with `growth`.
+    pub fn of(growth: &GrowthParams) -> Self {
+        Self {
+            width: growth.width,
+            max_width: growth.width,
+            tip_width: growth.tip_width,
+            opacity: growth.opacity,
+        }
+    }
+
+    /// Refuses non-finite or out-of-range values, naming them.
+    pub fn validate(&self) -> Result<(), ParamError> {
+        let positive = |name: &str, v: f32| {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(ParamError::new(name, v, "must be finite and positive"))
+            }
+        };
+        positive("strands.style.width", self.width)?;
+        positive("strands.style.max_width", self.max_width)?;
+        let unit = |name: &str, v: f32| {
+            if (0.0..=1.0).contains(&v) {
+                Ok(())
+            } else {
+                Err(ParamError::new(name, v, "must be in [0, 1]"))
+            }
+        };
+        unit("strands.style.tip_width", self.tip_width)?;
+        unit("strands.style.opacity", self.opacity)
+    }
+}
+
+/// What stage 1 produces: the buffers later stages bind without any readback, and all
+/// they need to know about them, so that no later stage reads stage 1's parameters.
+/// Each frame's [`StrandLayout`] travels separately, in the [`StrandFrame`] that
+/// [`StrandStage::prepare`] returns.
 #[derive(Debug)]
 pub struct StrandBuffers {
     /// `strand_count * (segments + 1)` `vec4<f32>`: xyz = position, w = strand parameter in [0, 1].
@@ -135,33 +190,56 @@ pub struct StrandBuffers {
     /// One `StrandRoot` per strand: width, colour, seed and the root itself. Stage 1
     /// rewrites `width` every frame with the level of detail's width scale.
     pub roots: wgpu::Buffer,
-    /// Number of strands (the capacity; `layout` says how many this frame holds).
+    /// Number of strands (the capacity; each frame's [`StrandLayout`] says how many it holds).
     pub strand_count: u32,
     /// Segments per strand at full detail (every strand has the same count).
     pub segments: u32,
-    /// This frame's strands and segments per strand: every consumer draws
-    /// `layout.get()`, read when it writes its per-frame uniforms.
-    pub layout: LayoutCell,
+    /// Widths and opacity of the strands.
+    pub style: StrandStyle,
+    /// A world box every vertex stays in, at any time and level of detail, for the
+    /// wind the method was built with (shadow grids and maps size themselves by it).
+    pub reach: (Vec3, Vec3),
 }
 
 impl StrandBuffers {
-    /// Buffers holding `strand_count` strands of `segments` segments, all of them drawn.
+    /// Buffers holding `strand_count` strands of `segments` segments of `style`, staying
+    /// inside `reach`. Errors when the vertex buffer is too small for them, `style` is
+    /// out of range, or `reach` is not a finite box.
     pub fn new(
         vertices: wgpu::Buffer,
         roots: wgpu::Buffer,
         strand_count: u32,
         segments: u32,
-    ) -> Self {
-        Self {
+        style: StrandStyle,
+        reach: (Vec3, Vec3),
+    ) -> Result<Self, ParamError> {
+        style.validate()?;
+        let need = u64::from(strand_count) * u64::from(segments + 1) * 16;
+        if vertices.size() < need {
+            return Err(ParamError::new(
+                "strands.vertices",
+                vertices.size(),
+                &format!(
+                    "must hold {strand_count} x {} vec4<f32> = {need} bytes",
+                    segments + 1
+                ),
+            ));
+        }
+        if !(reach.0.is_finite() && reach.1.is_finite() && reach.0.cmple(reach.1).all()) {
+            return Err(ParamError::new(
+                "strands.reach",
+                reach,
+                "must be a finite box with min <= max",
+            ));
+        }
+        Ok(Self {
             vertices,
             roots,
             strand_count,
             segments,
-            layout: LayoutCell::new(StrandLayout {
-                strands: strand_count,
-                segments,
-            }),
-        }
+            style,
+            reach,
+        })
     }
 
     /// Vertices per strand at full detail.
@@ -172,6 +250,14 @@ impl StrandBuffers {
     /// Bytes of the vertex buffer.
     pub fn vertex_bytes(&self) -> u64 {
         self.vertices.size()
+    }
+
+    /// The layout of every strand at full detail.
+    pub fn full_layout(&self) -> StrandLayout {
+        StrandLayout {
+            strands: self.strand_count,
+            segments: self.segments,
+        }
     }
 }
 
@@ -186,10 +272,10 @@ impl StrandBuffers {
 /// use pelage_strands::{GrowStrands, MeshBuffers, StrandStage};
 /// let mesh = Mesh::creature();
 /// let mesh_buffers = MeshBuffers::upload(gpu, &mesh)?;
-/// let strands = GrowStrands::new(gpu, &mesh, &mesh_buffers, &HairParams::default())?;
-/// strands.set_time(&gpu.queue, 0.5)?;
+/// let mut strands = GrowStrands::new(gpu, &mesh, &mesh_buffers, &HairParams::default())?;
+/// let frame = strands.prepare(&gpu.queue, 0.5)?;
 /// let mut encoder = gpu.device.create_command_encoder(&Default::default());
-/// strands.encode(&mut encoder, None);
+/// strands.encode(&mut encoder, &frame, None)?;
 /// gpu.queue.submit([encoder.finish()]);
 /// # Ok(()) }
 /// ```
@@ -234,6 +320,7 @@ impl GrowStrands {
             "strands: grow",
             "strands/grow.wgsl",
             params,
+            Self::reach_of(mesh, params),
             &roots,
             &[
                 &mesh_buffers.positions,
@@ -243,6 +330,21 @@ impl GrowStrands {
             ],
         )?;
         Ok(Self { roots, pass })
+    }
+
+    /// A world box holding every point fur grown on `mesh` with `params` can reach: the
+    /// mesh's bounds grown by the longest strand (length, jitter and length map) and its
+    /// width. (A strand is a polyline of its length from its root, whatever the wind.)
+    pub fn reach_of(mesh: &Mesh, params: &HairParams) -> (Vec3, Vec3) {
+        let (lo, hi) = mesh.bounds();
+        let g = &params.growth;
+        let map_max = params
+            .roots
+            .length_scale
+            .as_ref()
+            .map_or(1.0, |m| m.iter().copied().fold(0.0f32, f32::max));
+        let reach = g.length * (1.0 + g.length_jitter) * map_max + g.width;
+        (lo - Vec3::splat(reach), hi + Vec3::splat(reach))
     }
 }
 
@@ -283,8 +385,10 @@ pub struct StrandPass {
     bind_group: wgpu::BindGroup,
     uniforms: UniformBuffer<GrowUniforms>,
     buffers: StrandBuffers,
-    /// The level of detail the next `set_time` grows.
+    /// The level of detail the next `prepare` grows.
     level: LodLevel,
+    /// The frame the last `prepare` returned (none before the first).
+    frame: Option<StrandFrame>,
     limits: wgpu::Limits,
 }
 
@@ -298,13 +402,14 @@ impl StrandPass {
     }
 
     /// Allocates the strand buffers for `params` (`roots` are the rest roots, copied to
-    /// the drawn roots) and builds `shader`'s pipeline with the uniforms, `inputs`, the
-    /// vertices and the drawn roots bound in that order.
+    /// the drawn roots; every vertex stays in `reach`) and builds `shader`'s pipeline
+    /// with the uniforms, `inputs`, the vertices and the drawn roots bound in that order.
     pub(crate) fn new(
         gpu: &Gpu,
         label: &'static str,
         shader: &str,
         params: &HairParams,
+        reach: (Vec3, Vec3),
         roots: &[StrandRoot],
         inputs: &[&wgpu::Buffer],
     ) -> crate::Result<Self> {
@@ -329,6 +434,13 @@ impl StrandPass {
                 bind_buffers(device, label, &pipeline.get_bind_group_layout(0), &entries);
             (pipeline, bind_group)
         })?;
+        let style = StrandStyle {
+            max_width: roots
+                .iter()
+                .map(|r| r.width)
+                .fold(params.growth.width, f32::max),
+            ..StrandStyle::of(&params.growth)
+        };
         Ok(Self {
             label,
             params: params.clone(),
@@ -340,8 +452,11 @@ impl StrandPass {
                 roots_buffer,
                 params.roots.count,
                 params.growth.segments,
-            ),
+                style,
+                reach,
+            )?,
             level: LodLevel::full(params),
+            frame: None,
             limits: gpu.limits().clone(),
         })
     }
@@ -349,8 +464,11 @@ impl StrandPass {
 
 /// The shape every stage 1 method has: [`GrowStrands`] (fur grown from a mesh) and
 /// [`GroomStrands`](crate::GroomStrands) (a groom file bent by the wind). Each frame:
-/// [`StrandStage::set_lod`] (optional), [`StrandStage::set_time`], then
-/// [`StrandStage::encode`]; later passes bind [`StrandStage::buffers`].
+/// [`StrandStage::set_lod`] (optional), [`StrandStage::prepare`], which returns the
+/// frame's [`StrandFrame`], then [`StrandStage::encode`] with that frame; later passes
+/// bind [`StrandStage::buffers`] and are prepared and recorded with the same frame
+/// (the shape of every stage: `prepare` writes the per-frame uniforms, `encode`
+/// records, both take the [`StrandFrame`]).
 pub trait StrandStage: std::fmt::Debug {
     /// The state the method shares with every other.
     fn pass(&self) -> &StrandPass;
@@ -372,11 +490,10 @@ pub trait StrandStage: std::fmt::Debug {
         height: u32,
     ) -> LodLevel;
 
-    /// Sets the time the next `encode` draws the strands for, at the level of detail
-    /// last given to [`StrandStage::set_lod`], and publishes that level's
-    /// [`StrandLayout`] to every pass reading the strand buffer: call it before their
-    /// per-frame uniforms are written.
-    fn set_time(&self, queue: &wgpu::Queue, time: f32) -> crate::Result<()> {
+    /// Writes the uniforms for time `time` at the level of detail last given to
+    /// [`StrandStage::set_lod`], and returns the frame this is: its [`StrandLayout`]
+    /// for every later pass's `prepare`, and the id every `encode` of this frame checks.
+    fn prepare(&mut self, queue: &wgpu::Queue, time: f32) -> crate::Result<StrandFrame> {
         if !time.is_finite() {
             return Err(pelage_scene::ParamError {
                 name: "time".into(),
@@ -385,13 +502,20 @@ pub trait StrandStage: std::fmt::Debug {
             }
             .into());
         }
-        let pass = self.pass();
-        pass.uniforms.write(queue, &self.uniforms_at(time))?;
-        pass.buffers.layout.set(pass.level.layout());
-        Ok(())
+        let uniforms = self.uniforms_at(time);
+        let pass = self.pass_mut();
+        pass.uniforms.write(queue, &uniforms)?;
+        let frame = StrandFrame::next(pass.level.layout());
+        pass.frame = Some(frame);
+        Ok(frame)
     }
 
-    /// Sets the level of detail the next [`StrandStage::set_time`] draws; see
+    /// The frame the last [`StrandStage::prepare`] returned (`None` before the first).
+    fn frame(&self) -> Option<StrandFrame> {
+        self.pass().frame
+    }
+
+    /// Sets the level of detail the next [`StrandStage::prepare`] draws; see
     /// [`StrandStage::level_for_view`]. A level asking for more strands than the groom
     /// has, or for a segment count that does not divide the groom's, is an error.
     fn set_lod(&mut self, level: LodLevel) -> crate::Result<()> {
@@ -422,7 +546,9 @@ pub trait StrandStage: std::fmt::Debug {
         &self.pass().level
     }
 
-    /// Replaces the wind (validated); takes effect at the next `set_time`.
+    /// Replaces the wind (validated); takes effect at the next `prepare`.
+    /// [`StrandBuffers::reach`] keeps the wind the method was built with: a groom in a
+    /// much stronger wind may leave it (rebuild the stage then).
     fn set_wind(&mut self, wind: WindParams) -> crate::Result<()> {
         wind.validate()?;
         self.pass_mut().params.wind = wind;
@@ -435,9 +561,16 @@ pub trait StrandStage: std::fmt::Debug {
         GrowUniforms::at_level(&pass.params, time, &pass.level)
     }
 
-    /// Records the pass.
-    fn encode(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&mut GpuTimer>) {
+    /// Records the pass for `frame`, which must be the one the last
+    /// [`StrandStage::prepare`] returned.
+    fn encode(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        frame: &StrandFrame,
+        timer: Option<&mut GpuTimer>,
+    ) -> crate::Result<()> {
         let pass = self.pass();
+        frame.check_prepared(pass.label, pass.frame.map_or(0, |f| f.id))?;
         let timestamp_writes = timer.and_then(|t| t.compute_pass(pass.label));
         let mut compute = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some(pass.label),
@@ -445,8 +578,9 @@ pub trait StrandStage: std::fmt::Debug {
         });
         compute.set_pipeline(&pass.pipeline);
         compute.set_bind_group(0, &pass.bind_group, &[]);
-        let groups = dispatch_size(&pass.limits, u64::from(pass.level.strands), WORKGROUP);
+        let groups = dispatch_size(&pass.limits, u64::from(frame.layout.strands), WORKGROUP);
         compute.dispatch_workgroups(groups.0, groups.1, 1);
+        Ok(())
     }
 
     /// The buffers this stage writes.

@@ -17,8 +17,9 @@
 //! grows only a prefix of the (randomly ordered) strands, widened by seed 002's
 //! area-preserving scale with a transition zone, and segment reduction keeps every
 //! `step`-th vertex where the curvature bound says the picture cannot tell. The
-//! [`StrandLayout`] of each frame is published through [`StrandBuffers::layout`], which
-//! every later pass reads when it writes its per-frame uniforms.
+//! [`StrandLayout`] of each frame travels in the [`StrandFrame`] that
+//! [`StrandStage::prepare`] returns: every later pass is prepared and recorded with it,
+//! and refuses to record a frame it was not prepared for ([`FrameOrderError`]).
 
 mod groom;
 mod grow;
@@ -27,10 +28,10 @@ mod mesh_buffers;
 mod roots;
 
 pub use groom::GroomStrands;
-pub use grow::{GrowStrands, GrowUniforms, StrandBuffers, StrandPass, StrandStage};
+pub use grow::{GrowStrands, GrowUniforms, StrandBuffers, StrandPass, StrandStage, StrandStyle};
 pub use lod::{
-    LayoutCell, LodLevel, StrandLayout, bend_error, bend_per_segment, fewest_segments,
-    reduced_segments,
+    FrameOrderError, LodLevel, PreparedFrame, StrandFrame, StrandLayout, bend_error,
+    bend_per_segment, fewest_segments, reduced_segments,
 };
 pub use mesh_buffers::MeshBuffers;
 pub use roots::{StrandRoot, hash_to_unit, pcg_hash, sample_roots};
@@ -59,6 +60,9 @@ pub enum StrandsError {
     /// The GPU refused something (a buffer too large, a validation error, ...).
     #[error(transparent)]
     Gpu(#[from] GpuError),
+    /// A pass was recorded for another frame than the one it was prepared for.
+    #[error(transparent)]
+    FrameOrder(#[from] FrameOrderError),
     /// Roots cannot be placed: every triangle has zero area or zero density.
     #[error("no triangle can carry strands: {0}")]
     NoSurface(String),

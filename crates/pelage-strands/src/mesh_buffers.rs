@@ -22,6 +22,9 @@ pub struct MeshBuffers {
     pub vertex_count: u32,
     /// Number of triangles.
     pub triangle_count: u32,
+    /// A world box the mesh stays in (every pose, for a skinned mesh): shadow maps of
+    /// the mesh cover it.
+    pub bounds: (glam::Vec3, glam::Vec3),
 }
 
 impl MeshBuffers {
@@ -52,19 +55,31 @@ impl MeshBuffers {
             normals: make("pelage mesh normals", bytemuck::cast_slice(&normals)),
             indices: make("pelage mesh indices", bytemuck::cast_slice(&mesh.indices)),
             vertex_count: mesh.positions.len() as u32,
+            bounds: mesh.bounds(),
             triangle_count: (mesh.indices.len() / 3) as u32,
         })
     }
 
     /// Wraps buffers the caller owns. They must hold `vertex_count` `f32 x3`
-    /// positions and normals and `triangle_count` `u32 x3` triangles, and have `STORAGE` usage.
+    /// positions and normals and `triangle_count` `u32 x3` triangles, and have `STORAGE`
+    /// usage; `bounds` is a world box the mesh stays in, in every pose the caller will
+    /// write (finite, min <= max).
     pub fn from_buffers(
         positions: wgpu::Buffer,
         normals: wgpu::Buffer,
         indices: wgpu::Buffer,
         vertex_count: u32,
         triangle_count: u32,
+        bounds: (glam::Vec3, glam::Vec3),
     ) -> crate::Result<Self> {
+        if !(bounds.0.is_finite() && bounds.1.is_finite() && bounds.0.cmple(bounds.1).all()) {
+            return Err(pelage_scene::ParamError::new(
+                "mesh.bounds",
+                bounds,
+                "must be a finite box with min <= max",
+            )
+            .into());
+        }
         let need = |what: &str, buf: &wgpu::Buffer, bytes: u64| -> crate::Result<()> {
             if buf.size() < bytes || !buf.usage().contains(wgpu::BufferUsages::STORAGE) {
                 return Err(crate::StrandsError::MeshMismatch {
@@ -83,6 +98,7 @@ impl MeshBuffers {
             indices,
             vertex_count,
             triangle_count,
+            bounds,
         })
     }
 

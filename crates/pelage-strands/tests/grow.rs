@@ -46,9 +46,9 @@ fn gpu_matches_cpu_mirror_for_every_hair_type_and_time() {
     for hair_type in types {
         for surface in [SurfaceInterpolation::Flat, SurfaceInterpolation::PnTriangle] {
             let p = params(300, hair_type, surface);
-            let strands = GrowStrands::new(&gpu, &mesh, &buffers, &p).unwrap();
+            let mut strands = GrowStrands::new(&gpu, &mesh, &buffers, &p).unwrap();
             for t in [0.0, 0.37, 5.0, 1234.5] {
-                let gpu_vertices = grow_on_gpu(&gpu, &strands, t);
+                let gpu_vertices = grow_on_gpu(&gpu, &mut strands, t);
                 let cpu_vertices = grow_strands(&mesh, strands.roots(), &strands.uniforms_at(t));
                 assert_eq!(gpu_vertices.len(), cpu_vertices.len());
                 let worst = gpu_vertices
@@ -79,8 +79,8 @@ fn mean_radial_error(gpu: &Gpu, surface: SurfaceInterpolation) -> f32 {
     let buffers = MeshBuffers::upload(gpu, &mesh).unwrap();
     let mut p = params(4000, HairType::Straight, surface);
     p.wind = WindParams::calm();
-    let strands = GrowStrands::new(gpu, &mesh, &buffers, &p).unwrap();
-    let vertices = grow_on_gpu(gpu, &strands, 0.0);
+    let mut strands = GrowStrands::new(gpu, &mesh, &buffers, &p).unwrap();
+    let vertices = grow_on_gpu(gpu, &mut strands, 0.0);
     let per_strand = (p.growth.segments + 1) as usize;
     let errors: Vec<f32> = vertices
         .chunks(per_strand)
@@ -114,12 +114,12 @@ fn same_scene_seed_and_time_give_bit_identical_buffers() {
         },
         SurfaceInterpolation::PnTriangle,
     );
-    let a = GrowStrands::new(&gpu, &mesh, &buffers, &p).unwrap();
-    let b = GrowStrands::new(&gpu, &mesh, &buffers, &p).unwrap();
-    let va = grow_on_gpu(&gpu, &a, 2.5);
+    let mut a = GrowStrands::new(&gpu, &mesh, &buffers, &p).unwrap();
+    let mut b = GrowStrands::new(&gpu, &mesh, &buffers, &p).unwrap();
+    let va = grow_on_gpu(&gpu, &mut a, 2.5);
     // Render another time in between: frame t must not depend on what came before.
-    grow_on_gpu(&gpu, &b, 7.0);
-    let vb = grow_on_gpu(&gpu, &b, 2.5);
+    grow_on_gpu(&gpu, &mut b, 7.0);
+    let vb = grow_on_gpu(&gpu, &mut b, 2.5);
     let bits = |v: &[Vec4]| {
         v.iter()
             .flat_map(|x| x.to_array().map(f32::to_bits))
@@ -152,9 +152,9 @@ fn strongest_wind_for_ten_thousand_frames_keeps_every_segment() {
         turbulence_speed: 100.0,
         ..WindParams::default()
     };
-    let strands = GrowStrands::new(&gpu, &mesh, &buffers, &p).unwrap();
-    let out = strands.buffers();
-    let frame_bytes = out.vertices.size();
+    let mut strands = GrowStrands::new(&gpu, &mesh, &buffers, &p).unwrap();
+    let vertices = strands.buffers().vertices.clone();
+    let frame_bytes = vertices.size();
     let history = gpu.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("history"),
         size: frame_bytes * u64::from(BATCH),
@@ -175,11 +175,11 @@ fn strongest_wind_for_ten_thousand_frames_keeps_every_segment() {
             // dt sweeps 1 ms .. 1 s geometrically, over and over.
             let frame = batch * BATCH + k;
             t += 1e-3 * 1000f32.powf((frame % 100) as f32 / 99.0);
-            strands.set_time(&gpu.queue, t).unwrap();
+            let frame = strands.prepare(&gpu.queue, t).unwrap();
             let mut encoder = gpu.device.create_command_encoder(&Default::default());
-            strands.encode(&mut encoder, None);
+            strands.encode(&mut encoder, &frame, None).unwrap();
             encoder.copy_buffer_to_buffer(
-                &out.vertices,
+                &vertices,
                 0,
                 &history,
                 frame_bytes * u64::from(k),

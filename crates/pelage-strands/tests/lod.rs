@@ -39,10 +39,10 @@ fn simplified_strands_match_the_cpu_mirror_and_seed_002_widths() {
             segment_error_pixels: 0.0,
         };
         strands.set_lod(level).unwrap();
-        let gpu_vertices = grow_on_gpu(&gpu, &strands, 0.7);
+        let gpu_vertices = grow_on_gpu(&gpu, &mut strands, 0.7);
         let u = strands.uniforms_at(0.7);
         let cpu = grow_strands(&mesh, strands.roots(), &u);
-        let layout = strands.buffers().layout.get();
+        let layout = strands.frame().unwrap().layout;
         assert_eq!(
             layout,
             StrandLayout {
@@ -133,7 +133,7 @@ fn segment_reduction_stays_within_its_pixel_bound() {
         let mut params = hair(400, hair_type);
         params.lod.start_pixels = 1.0; // never drop strands: this test is about segments
         let mut strands = GrowStrands::new(&gpu, &mesh, &buffers, &params).unwrap();
-        let full = grow_on_gpu(&gpu, &strands, 0.3);
+        let full = grow_on_gpu(&gpu, &mut strands, 0.3);
         for distance in [1.0f32, 3.0, 8.0, 20.0] {
             let eye = camera.target + (camera.eye - camera.target).normalize() * distance * 3.6;
             let view = Camera { eye, ..camera };
@@ -141,7 +141,7 @@ fn segment_reduction_stays_within_its_pixel_bound() {
             let reach = Vec3::splat(params.growth.length * 1.3);
             let level = LodLevel::for_view(&params, (lo - reach, hi + reach), &view, width, height);
             strands.set_lod(level).unwrap();
-            let reduced = grow_on_gpu(&gpu, &strands, 0.3);
+            let reduced = grow_on_gpu(&gpu, &mut strands, 0.3);
             // Pixels per world unit at the nearest point of the hair, as the bound uses.
             let focal = height as f32 / (2.0 * (view.fov_y * 0.5).tan());
             let nearest = (eye - camera.target).length() - (hi - lo).length() * 0.5 - reach.x;

@@ -26,7 +26,7 @@ use pelage::scene::{
     Camera, HairParams, Light, Mesh, ShadeParams, Transparency, WboitWeight, WindParams,
 };
 use pelage::shade::{ABuffer, HairInputs, HairPass, TargetFormat, Targets};
-use pelage::strands::{GrowStrands, MeshBuffers, StrandStage};
+use pelage::strands::{GrowStrands, MeshBuffers, StrandFrame, StrandStage};
 use pelage_lab::{ScatterChart, ScatterPoint, Table, pareto_front};
 use pelage_reference::flip::{DEFAULT_PIXELS_PER_DEGREE, LinearImage, flip, rmse_linear};
 use pelage_reference::oit::{Fragment, composite_sorted, linear_to_srgb8, srgb8_to_linear};
@@ -121,16 +121,22 @@ fn configurations(quick: bool) -> Vec<Transparency> {
 struct Grown {
     mesh: MeshBuffers,
     strands: GrowStrands,
+    /// The frame the strands were grown in, which every method is prepared and recorded with.
+    frame: StrandFrame,
 }
 
 fn grow(gpu: &Gpu, case: &Case) -> Result<Grown, Box<dyn std::error::Error>> {
     let mesh = MeshBuffers::upload(gpu, &case.mesh)?;
-    let strands = GrowStrands::new(gpu, &case.mesh, &mesh, &case.hair)?;
-    strands.set_time(&gpu.queue, 0.0)?;
+    let mut strands = GrowStrands::new(gpu, &case.mesh, &mesh, &case.hair)?;
+    let frame = strands.prepare(&gpu.queue, 0.0)?;
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
-    strands.encode(&mut encoder, None);
+    strands.encode(&mut encoder, &frame, None)?;
     gpu.submit_and_wait([encoder.finish()])?;
-    Ok(Grown { mesh, strands })
+    Ok(Grown {
+        mesh,
+        strands,
+        frame,
+    })
 }
 
 /// The camera of frame `i`: turned 0.25 degrees a frame about the vertical through the target.
@@ -169,7 +175,6 @@ fn render_method(
     let (width, height) = size;
     let inputs = HairInputs {
         params: shade,
-        hair: &case.hair,
         mesh: &grown.mesh,
         strands: grown.strands.buffers(),
         shadow: None,
@@ -184,8 +189,9 @@ fn render_method(
     let mut images = Vec::new();
     let mut times = Vec::new();
     for i in 0..frames {
-        method.set_frame(
+        method.prepare(
             &gpu.queue,
+            &grown.frame,
             &camera_at(&case.camera, i).matrices(width, height),
             &light,
             width,
@@ -195,7 +201,7 @@ fn render_method(
         let depth = targets.depth_view();
         let views = targets.views(&color, resolve.as_ref(), &depth);
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
-        method.encode(gpu, &mut encoder, &views, timer.as_mut())?;
+        method.encode(gpu, &mut encoder, &grown.frame, &views, timer.as_mut())?;
         if let Some(t) = &timer {
             t.resolve(&mut encoder);
         }
@@ -234,7 +240,6 @@ fn exact(
     let (width, height) = size;
     let inputs = HairInputs {
         params: shade,
-        hair: &case.hair,
         mesh: &grown.mesh,
         strands: grown.strands.buffers(),
         shadow: None,
@@ -249,8 +254,9 @@ fn exact(
     let mut nodes_per_pixel = 32.0f32;
     loop {
         let abuffer = ABuffer::new(gpu, &inputs, nodes_per_pixel, 64, width, height)?;
-        abuffer.set_frame(
+        abuffer.prepare(
             &gpu.queue,
+            &grown.frame,
             &case.camera.matrices(width, height),
             &light,
             width,
@@ -472,7 +478,6 @@ pub fn run(opts: &LabOpts) -> Result<(), Box<dyn std::error::Error>> {
             };
             let inputs = HairInputs {
                 params: &params,
-                hair: &case.hair,
                 mesh: &grown.mesh,
                 strands: grown.strands.buffers(),
                 shadow: None,

@@ -14,7 +14,7 @@
 
 use std::time::Instant;
 
-use glam::{Vec3, Vec4};
+use glam::Vec4;
 use pelage::gpu::{Gpu, GpuTimer, read_buffer, wgpu, zeroed_storage};
 use pelage::scene::{
     AdsmParams, DeepOpacityParams, DirectionalLight, HairParams, HairType, LayerSpacing, MapParams,
@@ -177,10 +177,10 @@ fn grow(
     groom: &Groom,
 ) -> Result<(GrowStrands, MeshBuffers), Box<dyn std::error::Error>> {
     let mesh_buffers = MeshBuffers::upload(gpu, &groom.mesh)?;
-    let strands = GrowStrands::new(gpu, &groom.mesh, &mesh_buffers, &groom.hair)?;
-    strands.set_time(&gpu.queue, 0.0)?;
+    let mut strands = GrowStrands::new(gpu, &groom.mesh, &mesh_buffers, &groom.hair)?;
+    let frame = strands.prepare(&gpu.queue, 0.0)?;
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
-    strands.encode(&mut encoder, None);
+    strands.encode(&mut encoder, &frame, None)?;
     gpu.submit_and_wait([encoder.finish()])?;
     Ok((strands, mesh_buffers))
 }
@@ -208,13 +208,14 @@ fn measure(
     truth: &[f32],
     frames: usize,
 ) -> Result<Run, Box<dyn std::error::Error>> {
-    method.set_light(&gpu.queue, light)?;
+    let strand_frame = strands.frame().ok_or("the strands were never grown")?;
+    method.prepare(&gpu.queue, &strand_frame, light)?;
     let mut timer = GpuTimer::new(gpu, 8)?;
     let mut stamps = Vec::new();
     let mut walls = Vec::new();
     for frame in 0..frames + 3 {
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
-        method.encode(&mut encoder, timer.as_mut());
+        method.encode(&mut encoder, &strand_frame, timer.as_mut())?;
         if let Some(t) = &timer {
             t.resolve(&mut encoder);
         }
@@ -317,15 +318,8 @@ pub fn run(opts: &LabOpts) -> Result<(), Box<dyn std::error::Error>> {
             // render pass has run on a device, and the map methods are render passes.
             let gpu = Gpu::headless()?;
             let (strands, mesh_buffers) = grow(&gpu, &groom)?;
-            let built = pelage::shadow::build(
-                &gpu,
-                params,
-                &groom.hair.growth,
-                strands.buffers(),
-                &mesh_buffers,
-                (Vec3::ZERO, Vec3::ONE),
-            )?
-            .ok_or("a configuration without a method")?;
+            let built = pelage::shadow::build(&gpu, params, strands.buffers(), &mesh_buffers)?
+                .ok_or("a configuration without a method")?;
             let run = measure(&gpu, built.as_ref(), &strands, &light, &truth, frames)?;
             let time = if run.timestamp_ms.is_finite() {
                 run.timestamp_ms

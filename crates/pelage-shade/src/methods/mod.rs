@@ -31,6 +31,7 @@ pub use wboit::Wboit;
 
 use pelage_gpu::{Gpu, GpuTimer, wgpu};
 use pelage_scene::{CameraMatrices, Light, Transparency};
+use pelage_strands::StrandFrame;
 
 use crate::draw::{HairInputs, TargetViews};
 
@@ -47,28 +48,34 @@ pub struct OitStats {
     pub capacity: u64,
 }
 
-/// One stage 3 method: draws the mesh and the hair into the caller's targets.
+/// One stage 3 method: draws the mesh and the hair into the caller's targets. Each
+/// frame: [`HairPass::prepare`] with stage 1's [`StrandFrame`], then
+/// [`HairPass::encode`] with the same frame.
 pub trait HairPass: std::fmt::Debug {
     /// Short name (`opaque`, `wboit`, `k_buffer`, `a_buffer`, `dbk`, `random_subsets`).
     fn name(&self) -> &'static str;
 
-    /// Writes camera and light for the next [`HairPass::encode`].
-    fn set_frame(
+    /// Writes camera and lights for the next [`HairPass::encode`], and takes the
+    /// strands stage 1 grows in `strands`.
+    fn prepare(
         &self,
         queue: &wgpu::Queue,
+        strands: &StrandFrame,
         camera: &CameraMatrices,
         lights: &[Light],
         width: u32,
         height: u32,
     ) -> crate::Result<()>;
 
-    /// Records the method's passes into `encoder`: the mesh (clearing colour and depth
-    /// unless `target.load`), then the hair. The targets must have the size the method
-    /// was built for.
+    /// Records the method's passes into `encoder` for `strands`, the frame of the last
+    /// `prepare` (another is a [`ShadeError::FrameOrder`](crate::ShadeError::FrameOrder)):
+    /// the mesh (clearing colour and depth unless `target.load`), then the hair. The
+    /// targets must have the size the method was built for.
     fn encode(
         &self,
         gpu: &Gpu,
         encoder: &mut wgpu::CommandEncoder,
+        strands: &StrandFrame,
         target: &TargetViews<'_>,
         timer: Option<&mut GpuTimer>,
     ) -> crate::Result<()>;

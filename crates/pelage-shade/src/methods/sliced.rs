@@ -404,9 +404,10 @@ macro_rules! sliced_hair_pass {
                 self.0.name
             }
 
-            fn set_frame(
+            fn prepare(
                 &self,
                 queue: &pelage_gpu::wgpu::Queue,
+                strands: &pelage_strands::StrandFrame,
                 camera: &pelage_scene::CameraMatrices,
                 lights: &[pelage_scene::Light],
                 width: u32,
@@ -414,16 +415,18 @@ macro_rules! sliced_hair_pass {
             ) -> $crate::Result<()> {
                 self.0
                     .common
-                    .set_frame(queue, camera, lights, width, height)
+                    .prepare(queue, strands, camera, lights, width, height)
             }
 
             fn encode(
                 &self,
                 gpu: &pelage_gpu::Gpu,
                 encoder: &mut pelage_gpu::wgpu::CommandEncoder,
+                strands: &pelage_strands::StrandFrame,
                 target: &$crate::TargetViews<'_>,
                 timer: Option<&mut pelage_gpu::GpuTimer>,
             ) -> $crate::Result<()> {
+                self.0.common.check(self.0.name, strands)?;
                 self.0.encode(gpu, encoder, target, timer)
             }
 

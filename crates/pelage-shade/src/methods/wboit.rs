@@ -2,6 +2,7 @@
 
 use pelage_gpu::{Gpu, GpuTimer, wgpu};
 use pelage_scene::{CameraMatrices, Light, WboitWeight};
+use pelage_strands::StrandFrame;
 
 use super::HairPass;
 use super::sliced::{OitTile, Sliced};
@@ -165,24 +166,28 @@ impl HairPass for Wboit {
         "wboit"
     }
 
-    fn set_frame(
+    fn prepare(
         &self,
         queue: &wgpu::Queue,
+        strands: &StrandFrame,
         camera: &CameraMatrices,
         lights: &[Light],
         width: u32,
         height: u32,
     ) -> crate::Result<()> {
-        self.common.set_frame(queue, camera, lights, width, height)
+        self.common
+            .prepare(queue, strands, camera, lights, width, height)
     }
 
     fn encode(
         &self,
         _gpu: &Gpu,
         encoder: &mut wgpu::CommandEncoder,
+        strands: &StrandFrame,
         target: &TargetViews<'_>,
         mut timer: Option<&mut GpuTimer>,
     ) -> crate::Result<()> {
+        self.common.check(self.name(), strands)?;
         self.resolve.check_target(target)?;
         self.common
             .encode_mesh(encoder, target, None, timer.as_deref_mut());

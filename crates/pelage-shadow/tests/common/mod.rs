@@ -10,7 +10,9 @@ use pelage_reference::transmittance::{
 };
 use pelage_scene::{DirectionalLight, GrowthParams, HairParams, Mesh, WindParams};
 use pelage_shadow::{ShadowMethod, TransmittanceProbe};
-use pelage_strands::{GrowStrands, MeshBuffers, StrandBuffers, StrandRoot};
+use pelage_strands::{
+    GrowStrands, MeshBuffers, StrandBuffers, StrandFrame, StrandRoot, StrandStyle,
+};
 // The per-frame calls of stage 1, for every test that uses this module.
 pub use pelage_strands::StrandStage;
 
@@ -48,12 +50,37 @@ pub fn strand_buffers(gpu: &Gpu, strands: &[Vec<Vec3>], width: f32) -> StrandBuf
         })
         .collect();
     let usage = wgpu::BufferUsages::STORAGE;
+    let points = strands.iter().flatten();
+    let lo = points.clone().fold(Vec3::INFINITY, |a, p| a.min(*p)) - Vec3::splat(width);
+    let hi = points.fold(Vec3::NEG_INFINITY, |a, p| a.max(*p)) + Vec3::splat(width);
     StrandBuffers::new(
         storage_buffer(gpu, "test vertices", &vertices, usage).unwrap(),
         storage_buffer(gpu, "test roots", &roots, usage).unwrap(),
         strands.len() as u32,
         segments,
+        StrandStyle::of(&growth(width, 1.0)),
+        (lo, hi),
     )
+    .unwrap()
+}
+
+/// The same buffers as `strands`, styled as strands grown with `growth` (width, tip
+/// width, opacity).
+pub fn styled(strands: &StrandBuffers, growth: &GrowthParams) -> StrandBuffers {
+    StrandBuffers {
+        vertices: strands.vertices.clone(),
+        roots: strands.roots.clone(),
+        strand_count: strands.strand_count,
+        segments: strands.segments,
+        style: StrandStyle::of(growth),
+        reach: strands.reach,
+    }
+}
+
+/// A stage 1 frame holding every strand of `strands` (what hand-made buffers, or grown
+/// ones at full detail, hold).
+pub fn full_frame(strands: &StrandBuffers) -> StrandFrame {
+    StrandFrame::next(strands.full_layout())
 }
 
 /// A one-triangle mesh out of the way (every method needs a mesh for its mesh map).
@@ -92,7 +119,8 @@ pub fn transmittance_from(
     strands: &StrandBuffers,
     light: &DirectionalLight,
 ) -> Vec<f32> {
-    method.set_light(&gpu.queue, light).unwrap();
+    let frame = full_frame(strands);
+    method.prepare(&gpu.queue, &frame, light).unwrap();
     let out = zeroed_storage(
         gpu,
         "transmittance",
@@ -102,7 +130,7 @@ pub fn transmittance_from(
     .unwrap();
     let probe = TransmittanceProbe::new(gpu, &method.binding()).unwrap();
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
-    method.encode(&mut encoder, None);
+    method.encode(&mut encoder, &frame, None).unwrap();
     probe
         .encode(gpu, &mut encoder, &strands.vertices, &out)
         .unwrap();
@@ -120,10 +148,10 @@ pub fn read_vec4(gpu: &Gpu, buffer: &wgpu::Buffer) -> Vec<Vec4> {
 /// Grows `hair` on `mesh` at t = 0 and returns the stage and its mesh buffers.
 pub fn grow(gpu: &Gpu, mesh: &Mesh, hair: &HairParams) -> (GrowStrands, MeshBuffers) {
     let buffers = MeshBuffers::upload(gpu, mesh).unwrap();
-    let strands = GrowStrands::new(gpu, mesh, &buffers, hair).unwrap();
-    strands.set_time(&gpu.queue, 0.0).unwrap();
+    let mut strands = GrowStrands::new(gpu, mesh, &buffers, hair).unwrap();
+    let frame = strands.prepare(&gpu.queue, 0.0).unwrap();
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
-    strands.encode(&mut encoder, None);
+    strands.encode(&mut encoder, &frame, None).unwrap();
     gpu.submit_and_wait([encoder.finish()]).unwrap();
     (strands, buffers)
 }

@@ -19,10 +19,10 @@ pub fn read_vertices(gpu: &Gpu, buffer: &wgpu::Buffer) -> Vec<Vec4> {
 }
 
 /// Runs a stage 1 method for time `t` on the GPU and returns the vertices.
-pub fn grow_on_gpu(gpu: &Gpu, strands: &dyn StrandStage, t: f32) -> Vec<Vec4> {
-    strands.set_time(&gpu.queue, t).unwrap();
+pub fn grow_on_gpu(gpu: &Gpu, strands: &mut dyn StrandStage, t: f32) -> Vec<Vec4> {
+    let frame = strands.prepare(&gpu.queue, t).unwrap();
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
-    strands.encode(&mut encoder, None);
+    strands.encode(&mut encoder, &frame, None).unwrap();
     gpu.submit_and_wait([encoder.finish()]).unwrap();
     read_vertices(gpu, &strands.buffers().vertices)
 }
