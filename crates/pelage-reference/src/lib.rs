@@ -10,11 +10,15 @@
 //! for the GPU model to match), and [`path_tracer`], a multi-threaded path tracer of the
 //! strands as real cylinders with that BSDF (multiple scattering, shadows, a Lambertian
 //! mesh).
+//!
+//! [`oit_raster`] rasterises strands as ribbons on the CPU, so the exact composite of
+//! [`oit`] can be fed fragments that do not come from the GPU.
 
 pub mod chiang;
 pub mod flip;
 pub mod noise;
 pub mod oit;
+pub mod oit_raster;
 pub mod path_tracer;
 pub mod shading;
 pub mod strands;
