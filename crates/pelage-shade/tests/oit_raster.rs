@@ -24,9 +24,9 @@ use pelage_reference::flip::{DEFAULT_PIXELS_PER_DEGREE, LinearImage, flip, rmse_
 use pelage_reference::oit_raster::{
     FragmentLists, RasterView, RibbonStrand, RibbonStyle, SamplePattern, rasterize,
 };
-use pelage_scene::{Camera, DirectionalLight, HairParams, Light, Mesh, ShadeParams, Transparency};
+use pelage_scene::{Camera, DirectionalLight, Light, Mesh, ShadeParams, Transparency};
 use pelage_shade::{ABuffer, HairInputs, HairPass, ShadeError, TargetFormat, Targets};
-use pelage_strands::{MeshBuffers, StrandBuffers, StrandRoot};
+use pelage_strands::{MeshBuffers, StrandBuffers, StrandFrame, StrandRoot, StrandStyle};
 
 const W: u32 = 96;
 const H: u32 = 64;
@@ -142,9 +142,10 @@ fn dark() -> Light {
 }
 
 struct Fixture {
-    hair: HairParams,
     mesh: MeshBuffers,
     strands: StrandBuffers,
+    /// The frame stage 1 would have handed over for these strands.
+    frame: StrandFrame,
 }
 
 /// Uploads `strands` as stage 1 would have written them: `vec4(position, v)` with the
@@ -173,22 +174,35 @@ fn upload(gpu: &Gpu, strands: &[RibbonStrand], opacity: f32) -> Fixture {
     let vertices: Vec<Vec4> = vertices;
     let vertex_buffer = storage_buffer(gpu, "test strand vertices", &vertices, usage).unwrap();
     let root_buffer = storage_buffer(gpu, "test strand roots", &roots, usage).unwrap();
-    let mut hair = HairParams::default();
-    hair.roots.count = strands.len() as u32;
-    hair.growth.segments = SEGMENTS as u32;
-    hair.growth.tip_width = TIP_WIDTH;
-    hair.growth.opacity = opacity;
+    let style = StrandStyle {
+        width: roots.iter().map(|r| r.width).fold(0.0, f32::max),
+        max_width: roots.iter().map(|r| r.width).fold(0.0, f32::max),
+        tip_width: TIP_WIDTH,
+        opacity,
+    };
+    let reach = vertices
+        .iter()
+        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), v| {
+            (lo.min(v.truncate()), hi.max(v.truncate()))
+        });
     // Not drawn (draw_mesh: false); the methods want one to exist.
     let mesh = MeshBuffers::upload(gpu, &Mesh::icosphere(0.5, 1).unwrap()).unwrap();
-    Fixture {
-        hair,
-        mesh,
-        strands: StrandBuffers::new(
-            vertex_buffer,
-            root_buffer,
-            strands.len() as u32,
-            SEGMENTS as u32,
+    let strands = StrandBuffers::new(
+        vertex_buffer,
+        root_buffer,
+        strands.len() as u32,
+        SEGMENTS as u32,
+        style,
+        (
+            reach.0 - Vec3::splat(style.max_width),
+            reach.1 + Vec3::splat(style.max_width),
         ),
+    )
+    .unwrap();
+    Fixture {
+        mesh,
+        frame: StrandFrame::next(strands.full_layout()),
+        strands,
     }
 }
 
@@ -202,7 +216,6 @@ fn target() -> TargetFormat {
 fn inputs<'a>(f: &'a Fixture, params: &'a ShadeParams) -> HairInputs<'a> {
     HairInputs {
         params,
-        hair: &f.hair,
         mesh: &f.mesh,
         strands: &f.strands,
         shadow: None,
@@ -226,10 +239,17 @@ fn half(h: u16) -> f32 {
 }
 
 /// Draws one frame with `method`; the linear RGB image.
-fn draw(gpu: &Gpu, method: &dyn HairPass) -> Vec<[f32; 3]> {
+fn draw(gpu: &Gpu, f: &Fixture, method: &dyn HairPass) -> Vec<[f32; 3]> {
     let targets = Targets::with_format(gpu, W, H, &target()).unwrap();
     method
-        .set_frame(&gpu.queue, &camera().matrices(W, H), &[dark()], W, H)
+        .prepare(
+            &gpu.queue,
+            &f.frame,
+            &camera().matrices(W, H),
+            &[dark()],
+            W,
+            H,
+        )
         .unwrap();
     let (color, resolve) = targets.color_views();
     let depth = targets.depth_view();
@@ -238,6 +258,7 @@ fn draw(gpu: &Gpu, method: &dyn HairPass) -> Vec<[f32; 3]> {
         .encode(
             gpu,
             &mut encoder,
+            &f.frame,
             &targets.views(&color, resolve.as_ref(), &depth),
             None,
         )
@@ -452,7 +473,7 @@ fn every_method_against_the_cpu_rasterised_exact_composite() {
             }
             Err(e) => panic!("{}: {e}", t.label()),
         };
-        let image = draw(&gpu, method.as_ref());
+        let image = draw(&gpu, &fixture, method.as_ref());
         let stats = method.stats(&gpu).unwrap();
         let truth = if t == Transparency::Opaque {
             &nearest
@@ -478,7 +499,14 @@ fn the_gpu_rasterises_the_same_fragments_as_the_cpu() {
     let p = shade_params(Transparency::a_buffer());
     let abuffer = ABuffer::new(&gpu, &inputs(&fixture, &p), 64.0, 64, W, H).unwrap();
     abuffer
-        .set_frame(&gpu.queue, &camera().matrices(W, H), &[dark()], W, H)
+        .prepare(
+            &gpu.queue,
+            &fixture.frame,
+            &camera().matrices(W, H),
+            &[dark()],
+            W,
+            H,
+        )
         .unwrap();
     let targets = Targets::with_format(&gpu, W, H, &target()).unwrap();
     let capture = abuffer.capture(&gpu, &targets).unwrap();
@@ -538,7 +566,7 @@ fn wboit_fails_on_nearly_opaque_strands_where_the_a_buffer_stays_exact() {
         for t in [Transparency::wboit(), Transparency::a_buffer()] {
             let p = shade_params(t.clone());
             let method = pelage_shade::build(&gpu, &inputs(&fixture, &p), W, H).unwrap();
-            let e = errors(&reference, &draw(&gpu, method.as_ref()));
+            let e = errors(&reference, &draw(&gpu, &fixture, method.as_ref()));
             println!("opacity {opacity}, {}: {e}", t.label());
             row.push(e);
         }
