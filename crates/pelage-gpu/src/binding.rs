@@ -70,10 +70,13 @@ impl ShaderBinding {
                 },
             })
             .collect();
-        Some(device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some(label),
-            layout,
-            entries: &entries,
-        }))
+        Some(crate::counters::create_bind_group(
+            device,
+            &wgpu::BindGroupDescriptor {
+                label: Some(label),
+                layout,
+                entries: &entries,
+            },
+        ))
     }
 }

@@ -4,7 +4,6 @@ use std::marker::PhantomData;
 
 use encase::ShaderType;
 use encase::internal::WriteInto;
-use wgpu::util::DeviceExt;
 
 use crate::context::Gpu;
 use crate::error::{GpuError, Result};
@@ -38,11 +37,14 @@ pub fn storage_buffer<T: ShaderType + WriteInto + ?Sized>(
         gpu.check_storage_size(label, bytes.len() as u64)?;
     }
     gpu.scoped(|device| {
-        device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some(label),
-            contents: &bytes,
-            usage: usage | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
-        })
+        crate::counters::create_buffer_init(
+            device,
+            &wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents: &bytes,
+                usage: usage | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+            },
+        )
     })
 }
 
@@ -59,15 +61,18 @@ pub fn zeroed_storage(
     gpu.check_storage_size(label, size)?;
     // wgpu zero-initialises every new buffer.
     gpu.scoped(|device| {
-        device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some(label),
-            size,
-            usage: usage
-                | wgpu::BufferUsages::STORAGE
-                | wgpu::BufferUsages::COPY_SRC
-                | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        })
+        crate::counters::create_buffer(
+            device,
+            &wgpu::BufferDescriptor {
+                label: Some(label),
+                size,
+                usage: usage
+                    | wgpu::BufferUsages::STORAGE
+                    | wgpu::BufferUsages::COPY_SRC
+                    | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            },
+        )
     })
 }
 
@@ -101,13 +106,16 @@ impl<T: ShaderType + WriteInto> UniformBuffer<T> {
         })?;
         let bytes = storage_bytes(label, value)?;
         let buffer = gpu.scoped(|device| {
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents: &bytes,
-                usage: wgpu::BufferUsages::UNIFORM
-                    | wgpu::BufferUsages::COPY_DST
-                    | wgpu::BufferUsages::COPY_SRC,
-            })
+            crate::counters::create_buffer_init(
+                device,
+                &wgpu::util::BufferInitDescriptor {
+                    label: Some(label),
+                    contents: &bytes,
+                    usage: wgpu::BufferUsages::UNIFORM
+                        | wgpu::BufferUsages::COPY_DST
+                        | wgpu::BufferUsages::COPY_SRC,
+                },
+            )
         })?;
         Ok(UniformBuffer {
             buffer,

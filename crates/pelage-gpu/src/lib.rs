@@ -17,6 +17,7 @@
 pub mod binding;
 pub mod buffers;
 pub mod context;
+pub mod counters;
 pub mod error;
 pub mod pipelines;
 pub mod readback;
@@ -26,6 +27,7 @@ pub mod timer;
 pub use binding::{BoundResource, ShaderBinding};
 pub use buffers::{UniformBuffer, storage_buffer, zeroed_storage};
 pub use context::{Gpu, WANTED_FEATURES, feature_names};
+pub use counters::{Created, create_bind_group, create_buffer, create_buffer_init};
 pub use error::{GpuError, Result};
 pub use pipelines::{bind_buffers, bind_numbered, compute_pipeline, dispatch_size};
 pub use readback::{TextureData, f16_to_f32, read_buffer, read_buffer_range, read_texture};

@@ -47,11 +47,14 @@ pub fn bind_numbered(
             resource: b.as_entire_binding(),
         })
         .collect();
-    device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some(label),
-        layout,
-        entries: &entries,
-    })
+    crate::counters::create_bind_group(
+        device,
+        &wgpu::BindGroupDescriptor {
+            label: Some(label),
+            layout,
+            entries: &entries,
+        },
+    )
 }
 
 /// Workgroup counts `(x, y)` covering `invocations` with groups of `group_size`,

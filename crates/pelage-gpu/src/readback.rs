@@ -170,12 +170,15 @@ pub fn read_texture(gpu: &Gpu, texture: &wgpu::Texture) -> Result<TextureData> {
 /// A `MAP_READ | COPY_DST` buffer of `size` bytes.
 fn staging_buffer(gpu: &Gpu, size: u64) -> Result<wgpu::Buffer> {
     gpu.scoped(|device| {
-        device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("pelage readback staging"),
-            size,
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        })
+        crate::counters::create_buffer(
+            device,
+            &wgpu::BufferDescriptor {
+                label: Some("pelage readback staging"),
+                size,
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            },
+        )
     })
 }
 

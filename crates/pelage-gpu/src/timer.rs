@@ -78,12 +78,15 @@ impl GpuTimer {
                 count,
             });
             let buffer = |label, usage| {
-                device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some(label),
-                    size: bytes,
-                    usage,
-                    mapped_at_creation: false,
-                })
+                crate::counters::create_buffer(
+                    device,
+                    &wgpu::BufferDescriptor {
+                        label: Some(label),
+                        size: bytes,
+                        usage,
+                        mapped_at_creation: false,
+                    },
+                )
             };
             let resolve = buffer(
                 "pelage timer resolve",

@@ -452,11 +452,14 @@ impl MarschnerLut {
         device: &wgpu::Device,
         layout: &wgpu::BindGroupLayout,
     ) -> wgpu::BindGroup {
-        device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("pelage marschner lut"),
-            layout,
-            entries: &self.bind_group_entries(),
-        })
+        pelage_gpu::create_bind_group(
+            device,
+            &wgpu::BindGroupDescriptor {
+                label: Some("pelage marschner lut"),
+                layout,
+                entries: &self.bind_group_entries(),
+            },
+        )
     }
 }
 

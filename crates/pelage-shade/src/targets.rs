@@ -276,8 +276,55 @@ impl Targets {
         })
     }
 
+    /// Every view of these targets, made once: record frames with
+    /// [`TargetViewSet::views`] so the methods that sample the depth keep their bind
+    /// groups (they rebuild them when handed a different view).
+    pub fn view_set(&self) -> TargetViewSet {
+        let (color, resolve) = self.color_views();
+        TargetViewSet {
+            color,
+            resolve,
+            depth: self.depth_view(),
+            depth_sampled: self.depth_sampled_view(),
+            width: self.width,
+            height: self.height,
+        }
+    }
+
     /// Reads the final colour back (RGBA8, sRGB encoded, rows tightly packed).
     pub fn read_color(&self, gpu: &Gpu) -> crate::Result<TextureData> {
         Ok(read_texture(gpu, &self.color)?)
+    }
+}
+
+/// The views of a [`Targets`] ([`Targets::view_set`]), kept from frame to frame.
+#[derive(Debug)]
+pub struct TargetViewSet {
+    /// The view drawn into (the MSAA texture when multisampled).
+    pub color: wgpu::TextureView,
+    /// The single-sample view `color` resolves into, when multisampled.
+    pub resolve: Option<wgpu::TextureView>,
+    /// The depth view.
+    pub depth: wgpu::TextureView,
+    /// The depth aspect alone, when the depth format has a stencil.
+    pub depth_sampled: Option<wgpu::TextureView>,
+    /// Size in pixels.
+    pub width: u32,
+    /// Size in pixels.
+    pub height: u32,
+}
+
+impl TargetViewSet {
+    /// The views, cleared before drawing (`load: false`).
+    pub fn views(&self) -> crate::TargetViews<'_> {
+        crate::TargetViews {
+            color: &self.color,
+            resolve: self.resolve.as_ref(),
+            depth: &self.depth,
+            depth_sampled: self.depth_sampled.as_ref(),
+            width: self.width,
+            height: self.height,
+            load: false,
+        }
     }
 }

@@ -239,11 +239,14 @@ impl LightMap {
                     binding: 5,
                     resource: wgpu::BindingResource::TextureView(&depth),
                 });
-                let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("pelage deep opacity layers"),
-                    layout: &pipeline.get_bind_group_layout(0),
-                    entries: &entries,
-                });
+                let group = pelage_gpu::create_bind_group(
+                    device,
+                    &wgpu::BindGroupDescriptor {
+                        label: Some("pelage deep opacity layers"),
+                        layout: &pipeline.get_bind_group_layout(0),
+                        entries: &entries,
+                    },
+                );
                 let texel_bytes = u64::from(format.block_copy_size(None).unwrap_or(16));
                 let bytes = texel_bytes * (u64::from(size).pow(2) + u64::from(second_side).pow(2));
                 Layers {

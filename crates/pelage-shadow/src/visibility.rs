@@ -79,24 +79,27 @@ impl LightVisibility {
         let label = format!("shadow: light {index} visibility");
         let (pipeline, own, shadow) = gpu.scoped(|device| {
             let pipeline = compute_pipeline(device, &label, &module, "main");
-            let own = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some(&label),
-                layout: &pipeline.get_bind_group_layout(0),
-                entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: strands.vertices.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                            buffer: out,
-                            offset,
-                            size: wgpu::BufferSize::new(bytes),
-                        }),
-                    },
-                ],
-            });
+            let own = pelage_gpu::create_bind_group(
+                device,
+                &wgpu::BindGroupDescriptor {
+                    label: Some(&label),
+                    layout: &pipeline.get_bind_group_layout(0),
+                    entries: &[
+                        wgpu::BindGroupEntry {
+                            binding: 0,
+                            resource: strands.vertices.as_entire_binding(),
+                        },
+                        wgpu::BindGroupEntry {
+                            binding: 1,
+                            resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                                buffer: out,
+                                offset,
+                                size: wgpu::BufferSize::new(bytes),
+                            }),
+                        },
+                    ],
+                },
+            );
             let shadow = binding.bind_group(
                 device,
                 &label,

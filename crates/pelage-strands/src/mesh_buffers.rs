@@ -2,7 +2,6 @@
 
 use pelage_gpu::{Gpu, wgpu};
 use pelage_scene::Mesh;
-use wgpu::util::DeviceExt;
 
 /// A triangle mesh in storage buffers.
 ///
@@ -43,12 +42,14 @@ impl MeshBuffers {
             gpu.check_storage_size(what, bytes as u64)?;
         }
         let make = |label: &str, contents: &[u8]| {
-            gpu.device
-                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            pelage_gpu::create_buffer_init(
+                &gpu.device,
+                &wgpu::util::BufferInitDescriptor {
                     label: Some(label),
                     contents,
                     usage,
-                })
+                },
+            )
         };
         Ok(Self {
             positions: make("pelage mesh positions", bytemuck::cast_slice(&positions)),

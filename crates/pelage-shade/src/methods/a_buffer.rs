@@ -157,12 +157,15 @@ impl ABuffer {
             ));
         };
         let copy = |label: &str, size: u64| {
-            gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size,
-                usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
-                mapped_at_creation: false,
-            })
+            pelage_gpu::create_buffer(
+                &gpu.device,
+                &wgpu::BufferDescriptor {
+                    label: Some(label),
+                    size,
+                    usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
+                    mapped_at_creation: false,
+                },
+            )
         };
         let (heads_copy, nodes_copy, background) = gpu.scoped(|device| {
             let background = device.create_texture(&wgpu::TextureDescriptor {

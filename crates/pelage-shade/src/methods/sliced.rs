@@ -67,6 +67,9 @@ pub(crate) struct Sliced {
     /// `(binding, buffer)` of the method's storage.
     pub buffers: Vec<(u32, wgpu::Buffer)>,
     pub passes: Vec<SlicedPass>,
+    /// The `@group(3)` bind groups per slice and pass, with the depth view they sample:
+    /// built on the first `encode` and again only when the caller's depth view changes.
+    groups: std::sync::Mutex<Option<(wgpu::TextureView, Vec<wgpu::BindGroup>)>>,
 }
 
 /// Rows per slice so that a per-pixel buffer of `bytes_per_pixel` (the method's
@@ -117,12 +120,14 @@ impl Sliced {
             bytes[at..at + one.len()].copy_from_slice(&one);
         }
         let tiles = gpu.scoped(|device| {
-            use wgpu::util::DeviceExt;
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("pelage oit slices"),
-                contents: &bytes,
-                usage: wgpu::BufferUsages::UNIFORM,
-            })
+            pelage_gpu::create_buffer_init(
+                device,
+                &wgpu::util::BufferInitDescriptor {
+                    label: Some("pelage oit slices"),
+                    contents: &bytes,
+                    usage: wgpu::BufferUsages::UNIFORM,
+                },
+            )
         })?;
         Ok(Self {
             width: base.width,
@@ -134,6 +139,7 @@ impl Sliced {
             stride,
             buffers: Vec::new(),
             passes: Vec::new(),
+            groups: std::sync::Mutex::new(None),
         })
     }
 
@@ -233,11 +239,14 @@ impl Sliced {
             // Groups 0 to 2 are empty in the resolve's layout but must still be bound.
             let groups = (0..3)
                 .map(|g| {
-                    Some(device.create_bind_group(&wgpu::BindGroupDescriptor {
-                        label: Some(label),
-                        layout: &pipeline.get_bind_group_layout(g),
-                        entries: &[],
-                    }))
+                    Some(pelage_gpu::create_bind_group(
+                        device,
+                        &wgpu::BindGroupDescriptor {
+                            label: Some(label),
+                            layout: &pipeline.get_bind_group_layout(g),
+                            entries: &[],
+                        },
+                    ))
                 })
                 .collect();
             Draw {
@@ -253,6 +262,42 @@ impl Sliced {
             bindings,
         });
         Ok(())
+    }
+
+    /// The `@group(3)` bind groups of every slice and pass, sampling `depth`.
+    fn bind_groups(
+        &self,
+        gpu: &Gpu,
+        depth: &wgpu::TextureView,
+    ) -> crate::Result<Vec<wgpu::BindGroup>> {
+        Ok(gpu.scoped(|device| {
+            let mut groups = Vec::new();
+            for slice in 0..self.count {
+                for pass in &self.passes {
+                    let entries: Vec<wgpu::BindGroupEntry<'_>> = pass
+                        .bindings
+                        .iter()
+                        .filter_map(|&binding| {
+                            let resource = match binding {
+                                0 => self.tile_binding(slice),
+                                1 => wgpu::BindingResource::TextureView(depth),
+                                _ => self.buffer(binding)?.as_entire_binding(),
+                            };
+                            Some(wgpu::BindGroupEntry { binding, resource })
+                        })
+                        .collect();
+                    groups.push(pelage_gpu::create_bind_group(
+                        device,
+                        &wgpu::BindGroupDescriptor {
+                            label: Some(pass.draw.label),
+                            layout: &pass.draw.pipeline.get_bind_group_layout(3),
+                            entries: &entries,
+                        },
+                    ));
+                }
+            }
+            groups
+        })?)
     }
 
     /// Records every pass for every slice.
@@ -277,32 +322,18 @@ impl Sliced {
         between: &mut dyn FnMut(&mut wgpu::CommandEncoder, usize),
     ) -> crate::Result<()> {
         self.check_target(target)?;
-        // Bind groups per slice and pass: they hold this frame's depth view.
-        let groups = gpu.scoped(|device| {
-            let mut groups = Vec::new();
-            for slice in 0..self.count {
-                for pass in &self.passes {
-                    let entries: Vec<wgpu::BindGroupEntry<'_>> = pass
-                        .bindings
-                        .iter()
-                        .filter_map(|&binding| {
-                            let resource = match binding {
-                                0 => self.tile_binding(slice),
-                                1 => wgpu::BindingResource::TextureView(target.depth_to_sample()),
-                                _ => self.buffer(binding)?.as_entire_binding(),
-                            };
-                            Some(wgpu::BindGroupEntry { binding, resource })
-                        })
-                        .collect();
-                    groups.push(device.create_bind_group(&wgpu::BindGroupDescriptor {
-                        label: Some(pass.draw.label),
-                        layout: &pass.draw.pipeline.get_bind_group_layout(3),
-                        entries: &entries,
-                    }));
-                }
-            }
-            groups
+        // Bind groups per slice and pass hold the depth view the passes sample: built
+        // once, and again only when the caller hands a different view.
+        let depth = target.depth_to_sample();
+        let mut cache = self.groups.lock().map_err(|_| {
+            GpuError::Validation("a thread panicked while recording this method".into())
         })?;
+        if cache.as_ref().is_none_or(|(view, _)| view != depth) {
+            *cache = Some((depth.clone(), self.bind_groups(gpu, depth)?));
+        }
+        let groups = cache
+            .as_ref()
+            .map_or(&[][..], |(_, groups)| groups.as_slice());
         let mut groups = groups.iter();
         for slice in 0..self.count {
             let y0 = slice * self.rows;

@@ -119,32 +119,38 @@ impl Wboit {
             };
             let accumulation = texture("pelage wboit accumulation", ACCUMULATION_FORMAT);
             let revealage = texture("pelage wboit revealage", REVEALAGE_FORMAT);
-            let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("pelage wboit resolve"),
-                layout: &resolve.passes[0].draw.pipeline.get_bind_group_layout(3),
-                entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: wgpu::BindingResource::TextureView(
-                            &accumulation.create_view(&Default::default()),
-                        ),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 2,
-                        resource: wgpu::BindingResource::TextureView(
-                            &revealage.create_view(&Default::default()),
-                        ),
-                    },
-                ],
-            });
-            let bind_accum = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("pelage wboit accumulate"),
-                layout: &accum.pipeline.get_bind_group_layout(3),
-                entries: &[wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: resolve.tile_binding(0),
-                }],
-            });
+            let bind = pelage_gpu::create_bind_group(
+                device,
+                &wgpu::BindGroupDescriptor {
+                    label: Some("pelage wboit resolve"),
+                    layout: &resolve.passes[0].draw.pipeline.get_bind_group_layout(3),
+                    entries: &[
+                        wgpu::BindGroupEntry {
+                            binding: 1,
+                            resource: wgpu::BindingResource::TextureView(
+                                &accumulation.create_view(&Default::default()),
+                            ),
+                        },
+                        wgpu::BindGroupEntry {
+                            binding: 2,
+                            resource: wgpu::BindingResource::TextureView(
+                                &revealage.create_view(&Default::default()),
+                            ),
+                        },
+                    ],
+                },
+            );
+            let bind_accum = pelage_gpu::create_bind_group(
+                device,
+                &wgpu::BindGroupDescriptor {
+                    label: Some("pelage wboit accumulate"),
+                    layout: &accum.pipeline.get_bind_group_layout(3),
+                    entries: &[wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: resolve.tile_binding(0),
+                    }],
+                },
+            );
             (accumulation, revealage, bind_accum, bind)
         })?;
         Ok(Self {
