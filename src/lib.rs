@@ -21,10 +21,20 @@
 //! let scene = pelage::Scene::default();
 //! let mut renderer = pelage::Renderer::new(&gpu, &scene, 320, 240)?;
 //! let stats = renderer.render(&gpu, 0.0, &scene.camera)?;
-//! renderer.image(&gpu)?.save("frame.png")?;
+//! let (width, height, rgba) = renderer.rgba8(&gpu)?; // sRGB RGBA8, rows top to bottom
+//! assert_eq!(rgba.len(), 4 * width as usize * height as usize);
 //! println!("{:.2} ms on the GPU", stats.gpu_ms());
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
+//!
+//! # Features
+//!
+//! - `backends` (default): wgpu's native backends (Vulkan, GLES, Metal, DX12), for a
+//!   program that depends on pelage alone. The stage crates enable none; an engine that
+//!   brings its own device turns default features off and keeps its own wgpu features.
+//! - `png` (default): `Renderer::image` as an `image::RgbaImage` and `save_png`.
+//!   Without it the `image` crate is no dependency and [`Renderer::rgba8`] returns the
+//!   plain pixels.
 
 pub use pelage_gpu as gpu;
 pub use pelage_scene as scene;
@@ -35,7 +45,9 @@ pub use pelage_strands as strands;
 mod output;
 mod renderer;
 
-pub use output::{AtomicFile, OutputError, remove_pending_temporaries, save_png, write_atomically};
+#[cfg(feature = "png")]
+pub use output::save_png;
+pub use output::{AtomicFile, OutputError, remove_pending_temporaries, write_atomically};
 pub use renderer::{FrameStats, Renderer, Scene};
 
 /// Any error of the frame pipeline.

@@ -53,7 +53,8 @@ pub fn write_atomically(
     Ok(file.commit()?)
 }
 
-/// Saves an RGBA image as PNG, atomically.
+/// Saves an RGBA image as PNG, atomically (feature `png`).
+#[cfg(feature = "png")]
 pub fn save_png(image: &image::RgbaImage, path: &Path) -> Result<(), OutputError> {
     write_atomically(path, |w| {
         image

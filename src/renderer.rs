@@ -351,11 +351,24 @@ impl Renderer {
         Ok(stages)
     }
 
-    /// The last rendered image as sRGB RGBA8: an `Rgba8UnormSrgb` target as it is, a
-    /// `Bgra8UnormSrgb` one swizzled, an `Rgba16Float` one clamped to [0, 1] and
-    /// sRGB-encoded (no tone mapping beyond the clamp); other formats are an error (bind
-    /// [`Renderer::color_texture`] instead).
+    /// The last rendered image as an [`image::RgbaImage`]: [`Renderer::rgba8`]'s pixels
+    /// (feature `png`).
+    #[cfg(feature = "png")]
     pub fn image(&self, gpu: &Gpu) -> crate::Result<image::RgbaImage> {
+        let (width, height, data) = self.rgba8(gpu)?;
+        image::RgbaImage::from_raw(width, height, data).ok_or_else(|| {
+            crate::Error::Gpu(pelage_gpu::GpuError::Map(
+                "colour readback has the wrong size for its image".into(),
+            ))
+        })
+    }
+
+    /// The last rendered image as sRGB RGBA8, `(width, height, pixels)` with rows top to
+    /// bottom and no padding: an `Rgba8UnormSrgb` target as it is, a `Bgra8UnormSrgb`
+    /// one swizzled, an `Rgba16Float` one clamped to [0, 1] and sRGB-encoded (no tone
+    /// mapping beyond the clamp); other formats are an error (bind
+    /// [`Renderer::color_texture`] instead).
+    pub fn rgba8(&self, gpu: &Gpu) -> crate::Result<(u32, u32, Vec<u8>)> {
         let mut data = self.targets.read_color(gpu)?;
         data.data = match self.targets.format.color {
             wgpu::TextureFormat::Rgba8UnormSrgb => data.data,
@@ -385,11 +398,7 @@ impl Renderer {
                 ))));
             }
         };
-        image::RgbaImage::from_raw(data.width, data.height, data.data).ok_or_else(|| {
-            crate::Error::Gpu(pelage_gpu::GpuError::Map(
-                "colour readback has the wrong size for its image".into(),
-            ))
-        })
+        Ok((data.width, data.height, data.data))
     }
 
     /// Stage 1, for binding its buffers or reading its roots.

@@ -67,7 +67,10 @@ impl Gpu {
     pub async fn headless_async() -> Result<Gpu> {
         if wgpu::Instance::enabled_backend_features().is_empty() {
             return Err(GpuError::NoAdapter {
-                tried: "this build of wgpu has no backend for this platform".into(),
+                tried: "this build of wgpu has no backend for this platform (pelage's stage \
+                        crates enable none: enable the facade's `backends` feature or wgpu's \
+                        `vulkan`, `metal`, `dx12` or `gles`)"
+                    .into(),
             });
         }
         if let Some(value) = std::env::var_os("WGPU_BACKEND") {

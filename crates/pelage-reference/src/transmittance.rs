@@ -50,7 +50,7 @@ impl Segment {
 }
 
 /// Segments of strands stored as pelage's `StrandBuffers` vertices: `vertices` holds
-/// `vertices_per_strand` vec4 per strand (xyz position, w = strand parameter in [0,1] root->tip).
+/// `vertices_per_strand` vec4 per strand (xyz position, w = strand parameter in \[0, 1\] root->tip).
 ///
 /// Width at a vertex = `root_widths[strand] * lerp(1, tip_width, w)`; a segment's radius is half
 /// the mean of its two end widths. Segments come strand by strand, root to tip, so there are

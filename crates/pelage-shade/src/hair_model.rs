@@ -18,7 +18,7 @@ pub const CONTRACT: &str = "shade/hair_model.wgsl";
 
 /// The shading model of stage 3: a uniform with its parameters, Marschner's tables when
 /// it is evaluated through them, and the [`ShaderBinding`] that redirects
-/// [`CONTRACT`] to the model's WGSL with its resources at `@group(2)`.
+/// the contract `shade/hair_model.wgsl` to the model's WGSL with its resources at `@group(2)`.
 #[derive(Debug)]
 pub struct HairModel {
     binding: ShaderBinding,
@@ -131,7 +131,7 @@ impl HairModel {
         self.chiang.as_ref()
     }
 
-    /// The redirect of [`CONTRACT`] and the resources of `@group(2)`.
+    /// The redirect of the contract `shade/hair_model.wgsl` and the resources of `@group(2)`.
     pub fn binding(&self) -> &ShaderBinding {
         &self.binding
     }

@@ -142,7 +142,7 @@ impl ABuffer {
     /// and the resolve, every stored fragment and the opaque colour under the hair: the
     /// input of an exact, fully sorted composite (the lab's reference). Needs the whole
     /// screen in one slice; fragments beyond the pool are missing (check
-    /// [`HairPass::stats`]). Waits for the GPU.
+    /// [`HairPass::stats`](crate::HairPass::stats)). Waits for the GPU.
     pub fn capture(&self, gpu: &Gpu, targets: &crate::Targets) -> crate::Result<FragmentCapture> {
         if self.0.sliced.count != 1 {
             return Err(crate::ShadeError::Unsupported(format!(
