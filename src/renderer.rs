@@ -3,7 +3,7 @@
 use pelage_gpu::{Gpu, GpuTimer, wgpu};
 use pelage_scene::{Camera, HairParams, Light, Mesh, Resampled, ShadeParams, ShadowParams};
 use pelage_shade::{
-    HairInputs, HairPass, OitStats, TargetFormat, TargetViews, Targets, Visibility,
+    HairInputs, HairPass, OitStats, TargetFormat, TargetViewSet, TargetViews, Targets, Visibility,
 };
 use pelage_shadow::{LightVisibility, ShadowMethod};
 use pelage_strands::{GroomStrands, GrowStrands, MeshBuffers, StrandFrame, StrandStage};
@@ -132,6 +132,9 @@ pub struct Renderer {
     stride: u32,
     /// The frame stage 1 last prepared, which every stage records.
     frame: Option<StrandFrame>,
+    /// The targets' views, made once (methods that sample the depth keep bind groups
+    /// built for them).
+    views: TargetViewSet,
 }
 
 impl Renderer {
@@ -227,6 +230,7 @@ impl Renderer {
             height,
         )?;
         let timer = GpuTimer::new(gpu, 64)?;
+        let views = targets.view_set();
         Ok(Self {
             mesh_buffers,
             strands,
@@ -240,6 +244,7 @@ impl Renderer {
             visibility,
             stride,
             frame: None,
+            views,
         })
     }
 
@@ -278,33 +283,70 @@ impl Renderer {
         Ok(frame)
     }
 
-    /// Grows the strands for time `t`, shadows them and draws them from `camera`; waits for the GPU.
-    pub fn render(&mut self, gpu: &Gpu, t: f32, camera: &Camera) -> crate::Result<FrameStats> {
+    /// Records a whole frame into `encoder`: prepares every stage for time `t` and
+    /// `camera` (stage 1 first, whose [`StrandFrame`] every later stage is prepared and
+    /// recorded with), then records stage 1, each light's shadow and its hand-over, and
+    /// stage 3 into the renderer's targets. Creates no buffer or bind group in steady
+    /// state and never waits for the GPU; submitting is the caller's.
+    pub fn record(
+        &mut self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        t: f32,
+        camera: &Camera,
+    ) -> crate::Result<StrandFrame> {
         let frame = self.prepare(gpu, t, camera)?;
-        let mut encoder = gpu.device.create_command_encoder(&Default::default());
-        self.strands
-            .encode(&mut encoder, &frame, self.timer.as_mut())?;
+        self.strands.encode(encoder, &frame, self.timer.as_mut())?;
         for (shadow, hand_over) in &self.shadows {
-            shadow.encode(&mut encoder, &frame, self.timer.as_mut())?;
-            hand_over.encode(&mut encoder, &frame, self.timer.as_mut())?;
+            shadow.encode(encoder, &frame, self.timer.as_mut())?;
+            hand_over.encode(encoder, &frame, self.timer.as_mut())?;
         }
-        let (color, resolve) = self.targets.color_views();
-        let depth = self.targets.depth_view();
-        let depth_sampled = self.targets.depth_sampled_view();
-        let views = TargetViews {
-            depth_sampled: depth_sampled.as_ref(),
-            ..self.targets.views(&color, resolve.as_ref(), &depth)
-        };
-        self.hair
-            .encode(gpu, &mut encoder, &frame, &views, self.timer.as_mut())?;
+        self.hair.encode(
+            gpu,
+            encoder,
+            &frame,
+            &self.views.views(),
+            self.timer.as_mut(),
+        )?;
+        Ok(frame)
+    }
+
+    /// Grows the strands for time `t`, shadows them and draws them from `camera`:
+    /// records the frame ([`Renderer::record`]), submits it and returns without waiting
+    /// for the GPU. The [`FrameStats`] returned are those of the newest earlier frame
+    /// the GPU has finished since the last call (read back a frame or more late; empty
+    /// when none has finished yet); [`Renderer::finish`] waits for this frame's.
+    pub fn render(&mut self, gpu: &Gpu, t: f32, camera: &Camera) -> crate::Result<FrameStats> {
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        self.record(gpu, &mut encoder, t, camera)?;
         if let Some(timer) = &self.timer {
             timer.resolve(&mut encoder);
         }
-        gpu.submit_and_wait([encoder.finish()])?;
+        gpu.submit([encoder.finish()])?;
+        let Some(timer) = &mut self.timer else {
+            return Ok(FrameStats::default());
+        };
+        timer.submitted(gpu)?;
+        Ok(timer
+            .try_read(gpu)?
+            .map(|report| FrameStats {
+                passes: report.by_label(),
+            })
+            .unwrap_or_default())
+    }
+
+    /// Waits for the GPU to finish every frame submitted so far and returns the GPU
+    /// time of the last one per pass (empty without timestamp queries, or when its
+    /// timings were already returned by [`Renderer::render`]).
+    pub fn finish(&mut self, gpu: &Gpu) -> crate::Result<FrameStats> {
         let passes = match &mut self.timer {
-            Some(timer) => timer.read(gpu)?.by_label(),
+            Some(timer) => timer.wait(gpu)?.map(|r| r.by_label()).unwrap_or_default(),
             None => Vec::new(),
         };
+        gpu.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| pelage_gpu::GpuError::Poll(e.to_string()))?;
+        gpu.check()?;
         Ok(FrameStats { passes })
     }
 

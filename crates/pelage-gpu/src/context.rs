@@ -228,6 +228,18 @@ impl Gpu {
         Ok(value)
     }
 
+    /// Submit `commands` (in order) without waiting: what a frame loop calls. Errors
+    /// wgpu reported outside error scopes (the submission's own validation among them)
+    /// and a lost device are returned; no error scope is pushed, nothing blocks.
+    pub fn submit(
+        &self,
+        commands: impl IntoIterator<Item = wgpu::CommandBuffer>,
+    ) -> Result<wgpu::SubmissionIndex> {
+        let index = self.queue.submit(commands);
+        self.check()?;
+        Ok(index)
+    }
+
     /// Submit `commands` (in order) and wait until the queue has finished it.
     ///
     /// Errors raised by the submission, errors recorded since the last check,

@@ -24,7 +24,9 @@
 //! # Ok(()) }
 //! ```
 
-use std::sync::atomic::{AtomicU32, Ordering};
+use std::collections::VecDeque;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU8, AtomicU32, Ordering};
 
 use crate::context::Gpu;
 use crate::error::{GpuError, Result};
@@ -33,16 +35,38 @@ use crate::readback::map_read;
 /// Bytes per timestamp.
 const QUERY_BYTES: u64 = wgpu::QUERY_SIZE as u64;
 
+/// Readback buffers a timer cycles through: a frame's timestamps are read while the
+/// next ones are recorded.
+const READBACKS: usize = 3;
+
+/// A frame whose timestamps are on their way back (see [`GpuTimer::submitted`]).
+#[derive(Debug)]
+struct InFlight {
+    slot: usize,
+    /// Bytes mapped, from 0.
+    bytes: u64,
+    labels: Vec<String>,
+    dropped: u32,
+    /// 0 while mapping, 1 mapped, 2 the map failed.
+    state: Arc<AtomicU8>,
+}
+
 /// Times up to `max_scopes` passes per frame with timestamp queries.
 ///
 /// One frame: [`GpuTimer::compute_pass`] / [`GpuTimer::render_pass`] per pass,
-/// [`GpuTimer::resolve`] at the end of the encoder, submit, then
-/// [`GpuTimer::read`], which also resets the timer for the next frame.
+/// [`GpuTimer::resolve`] at the end of the encoder, submit, then either
+/// [`GpuTimer::read`] (waits for the GPU) or, in a frame loop that must not wait,
+/// [`GpuTimer::submitted`] and later [`GpuTimer::try_read`], which returns the
+/// timings of an earlier frame once the GPU has finished it. Either resets the timer
+/// for the next frame.
 #[derive(Debug)]
 pub struct GpuTimer {
     queries: wgpu::QuerySet,
     resolve_buffer: wgpu::Buffer,
-    readback: wgpu::Buffer,
+    readbacks: Vec<wgpu::Buffer>,
+    /// The readback the next `resolve` copies into (never one in flight).
+    slot: usize,
+    in_flight: VecDeque<InFlight>,
     max_scopes: u32,
     labels: Vec<String>,
     dropped: u32,
@@ -71,7 +95,7 @@ impl GpuTimer {
                 ))
             })?;
         let bytes = u64::from(count) * QUERY_BYTES;
-        let (queries, resolve_buffer, readback) = gpu.scoped(|device| {
+        let (queries, resolve_buffer, readbacks) = gpu.scoped(|device| {
             let queries = device.create_query_set(&wgpu::QuerySetDescriptor {
                 label: Some("pelage timer"),
                 ty: wgpu::QueryType::Timestamp,
@@ -92,16 +116,22 @@ impl GpuTimer {
                 "pelage timer resolve",
                 wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
             );
-            let readback = buffer(
-                "pelage timer readback",
-                wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            );
-            (queries, resolve, readback)
+            let readbacks = (0..READBACKS)
+                .map(|_| {
+                    buffer(
+                        "pelage timer readback",
+                        wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                    )
+                })
+                .collect();
+            (queries, resolve, readbacks)
         })?;
         Ok(Some(GpuTimer {
             queries,
             resolve_buffer,
-            readback,
+            readbacks,
+            slot: 0,
+            in_flight: VecDeque::new(),
             max_scopes,
             labels: Vec::new(),
             dropped: 0,
@@ -154,7 +184,13 @@ impl GpuTimer {
         if count > 0 {
             let bytes = u64::from(count) * QUERY_BYTES;
             encoder.resolve_query_set(&self.queries, 0..count, &self.resolve_buffer, 0);
-            encoder.copy_buffer_to_buffer(&self.resolve_buffer, 0, &self.readback, 0, bytes);
+            encoder.copy_buffer_to_buffer(
+                &self.resolve_buffer,
+                0,
+                &self.readbacks[self.slot],
+                0,
+                bytes,
+            );
         }
         self.resolved.store(count, Ordering::Relaxed);
     }
@@ -183,25 +219,130 @@ impl GpuTimer {
                 labels.len()
             )));
         }
-        let bytes = map_read(gpu, &self.readback, 0..u64::from(count) * QUERY_BYTES)?;
-        let ns_per_tick = f64::from(gpu.queue.get_timestamp_period());
-        let ticks: Vec<u64> = bytes
-            .chunks_exact(8)
-            .map(|c| u64::from_le_bytes(c.try_into().unwrap_or_default()))
-            .collect();
-        let scopes = labels
-            .into_iter()
-            .zip(ticks.chunks_exact(2))
-            .map(|(label, pair)| {
-                let elapsed = match pair {
-                    [begin, end] => end.saturating_sub(*begin),
-                    _ => 0,
-                };
-                (label, elapsed as f64 * ns_per_tick / 1.0e6)
-            })
-            .collect();
-        Ok(TimerReport { scopes, dropped })
+        let bytes = map_read(
+            gpu,
+            &self.readbacks[self.slot],
+            0..u64::from(count) * QUERY_BYTES,
+        )?;
+        Ok(report(gpu, labels, dropped, &bytes))
     }
+
+    /// After the encoder holding the passes and [`GpuTimer::resolve`] was submitted:
+    /// starts reading this frame's timestamps back without waiting, and resets the
+    /// timer for the next frame. [`GpuTimer::try_read`] returns them once the GPU has
+    /// finished the frame.
+    ///
+    /// Three frames can be in flight; a fourth waits for the oldest (the CPU running
+    /// that far ahead of the GPU is held back here, as a swap chain would).
+    pub fn submitted(&mut self, gpu: &Gpu) -> Result<()> {
+        let labels = std::mem::take(&mut self.labels);
+        let dropped = std::mem::take(&mut self.dropped);
+        let resolved = self.resolved.swap(0, Ordering::Relaxed);
+        if labels.is_empty() {
+            return Ok(());
+        }
+        let count = 2 * labels.len() as u32;
+        if resolved != count {
+            return Err(GpuError::Validation(format!(
+                "GpuTimer::submitted: {} scopes were recorded but resolve() did not see them \
+                 all; call timer.resolve(&mut encoder) after the last timed pass, then submit",
+                labels.len()
+            )));
+        }
+        let state = Arc::new(AtomicU8::new(0));
+        let flag = state.clone();
+        let buffer = &self.readbacks[self.slot];
+        // No error scope: a failed map reaches the callback, and try_read skips it.
+        buffer.map_async(
+            wgpu::MapMode::Read,
+            0..u64::from(count) * QUERY_BYTES,
+            move |result| flag.store(if result.is_ok() { 1 } else { 2 }, Ordering::Release),
+        );
+        self.in_flight.push_back(InFlight {
+            slot: self.slot,
+            bytes: u64::from(count) * QUERY_BYTES,
+            labels,
+            dropped,
+            state,
+        });
+        // The next resolve needs a readback that is not in flight.
+        while self.in_flight.len() >= self.readbacks.len() {
+            gpu.device
+                .poll(wgpu::PollType::wait_indefinitely())
+                .map_err(|e| GpuError::Poll(e.to_string()))?;
+            if let Some(oldest) = self.in_flight.pop_front() {
+                self.readbacks[oldest.slot].unmap();
+            }
+        }
+        self.slot = (0..self.readbacks.len())
+            .map(|k| (self.slot + 1 + k) % self.readbacks.len())
+            .find(|s| self.in_flight.iter().all(|f| f.slot != *s))
+            .unwrap_or(self.slot);
+        Ok(())
+    }
+
+    /// The timings of the newest frame passed to [`GpuTimer::submitted`] that the GPU
+    /// has finished since the last call (older finished frames are dropped), or `None`
+    /// when none has finished yet. Never waits for the GPU.
+    pub fn try_read(&mut self, gpu: &Gpu) -> Result<Option<TimerReport>> {
+        gpu.device
+            .poll(wgpu::PollType::Poll)
+            .map_err(|e| GpuError::Poll(e.to_string()))?;
+        let mut newest = None;
+        while let Some(front) = self.in_flight.front() {
+            match front.state.load(Ordering::Acquire) {
+                0 => break,
+                state => {
+                    let Some(frame) = self.in_flight.pop_front() else {
+                        break;
+                    };
+                    let buffer = &self.readbacks[frame.slot];
+                    if state == 1 {
+                        let bytes = buffer
+                            .get_mapped_range(0..frame.bytes)
+                            .map(|view| view.to_vec())
+                            .map_err(|e| GpuError::Map(e.to_string()));
+                        buffer.unmap();
+                        newest = Some(report(gpu, frame.labels, frame.dropped, &bytes?));
+                    }
+                }
+            }
+        }
+        Ok(newest)
+    }
+
+    /// Waits for every frame in flight and returns the newest one's timings (`None`
+    /// when none is in flight).
+    pub fn wait(&mut self, gpu: &Gpu) -> Result<Option<TimerReport>> {
+        if self.in_flight.is_empty() {
+            return Ok(None);
+        }
+        gpu.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| GpuError::Poll(e.to_string()))?;
+        self.try_read(gpu)
+    }
+}
+
+/// Ticks `bytes` (begin, end per scope) as milliseconds per label.
+fn report(gpu: &Gpu, labels: Vec<String>, dropped: u32, bytes: &[u8]) -> TimerReport {
+    let ns_per_tick = f64::from(gpu.queue.get_timestamp_period());
+    let ticks: Vec<u64> = bytes
+        .chunks_exact(8)
+        .map(|c| u64::from_le_bytes(c.try_into().unwrap_or_default()))
+        .collect();
+    let scopes = labels
+        .into_iter()
+        .zip(ticks.chunks_exact(2))
+        .map(|(label, pair)| {
+            let elapsed = match pair {
+                [begin, end] => end.saturating_sub(*begin),
+                _ => 0,
+            };
+            (label, elapsed as f64 * ns_per_tick / 1.0e6)
+        })
+        .collect();
+    TimerReport { scopes, dropped }
 }
 
 /// GPU times of one frame's scopes.
