@@ -297,11 +297,16 @@ impl Engine {
             "embed/engine.wgsl",
             &[shadow.redirect()],
         )?;
-        let pipeline = |label, vertex: wgpu::VertexState, fragment, topology, depth| {
+        let pipeline = |vertex, buffers: &[_], fragment, topology, depth| {
             device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some(label),
+                label: Some(vertex),
                 layout: None,
-                vertex,
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some(vertex),
+                    compilation_options: Default::default(),
+                    buffers,
+                },
                 primitive: wgpu::PrimitiveState {
                     topology,
                     cull_mode: (topology == wgpu::PrimitiveTopology::TriangleList)
@@ -326,13 +331,8 @@ impl Engine {
             attributes,
         };
         let mesh_pipeline = pipeline(
-            "engine mesh",
-            wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_mesh"),
-                compilation_options: Default::default(),
-                buffers: &[Some(vec3(&POSITION)), Some(vec3(&NORMAL))],
-            },
+            "vs_mesh",
+            &[Some(vec3(&POSITION)), Some(vec3(&NORMAL))],
             "fs_mesh",
             wgpu::PrimitiveTopology::TriangleList,
             Some(wgpu::DepthStencilState {
@@ -345,13 +345,8 @@ impl Engine {
         );
         // The markers are an overlay: no depth test.
         let tip_pipeline = pipeline(
-            "engine tips",
-            wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_tip"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
+            "vs_tip",
+            &[],
             "fs_tip",
             wgpu::PrimitiveTopology::PointList,
             None,
@@ -473,20 +468,15 @@ impl Engine {
             let bg = shade.background.as_dvec3();
             let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("engine mesh"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &color,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color {
-                            r: bg.x,
-                            g: bg.y,
-                            b: bg.z,
-                            a: 1.0,
-                        }),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
+                color_attachments: &[color_attachment(
+                    &color,
+                    wgpu::LoadOp::Clear(wgpu::Color {
+                        r: bg.x,
+                        g: bg.y,
+                        b: bg.z,
+                        a: 1.0,
+                    }),
+                )],
                 depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                     view: &depth,
                     depth_ops: Some(wgpu::Operations {
@@ -526,15 +516,7 @@ impl Engine {
         if tips {
             let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("engine tips"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &color,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Load,
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
+                color_attachments: &[color_attachment(&color, wgpu::LoadOp::Load)],
                 depth_stencil_attachment: None,
                 timestamp_writes: None,
                 occlusion_query_set: None,
@@ -547,6 +529,22 @@ impl Engine {
         gpu.submit_and_wait([encoder.finish()])?;
         read_hdr(gpu, &self.color)
     }
+}
+
+/// A colour attachment of `view`, loaded with `load` and stored.
+fn color_attachment(
+    view: &wgpu::TextureView,
+    load: wgpu::LoadOp<wgpu::Color>,
+) -> Option<wgpu::RenderPassColorAttachment<'_>> {
+    Some(wgpu::RenderPassColorAttachment {
+        view,
+        depth_slice: None,
+        resolve_target: None,
+        ops: wgpu::Operations {
+            load,
+            store: wgpu::StoreOp::Store,
+        },
+    })
 }
 
 /// The mesh's vectors as the bytes of packed `f32` triples.
