@@ -78,7 +78,8 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     for f in 0..frames {
         let t = f as f32 / fps;
         let frame_started = Instant::now();
-        let stats = renderer.render(&gpu, t, &scene.camera)?;
+        renderer.render(&gpu, t, &scene.camera)?;
+        let stats = renderer.finish(&gpu)?;
         let frame_ms = frame_started.elapsed().as_secs_f64() * 1e3;
         if f % 250 == 0 || f + 1 == frames {
             let resident = resident_bytes() as f64 / 1e6;

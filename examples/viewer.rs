@@ -549,7 +549,10 @@ impl App {
         if let Some(renderer) = &mut self.renderer {
             match renderer.render(&gfx.gpu, self.view.t, &self.orbit.camera()) {
                 Ok(stats) => {
-                    self.view.stats = stats;
+                    // Timings arrive a frame or more late: keep the last ones until then.
+                    if !stats.passes.is_empty() {
+                        self.view.stats = stats;
+                    }
                     self.view.drawn = (renderer.lod().strands, renderer.lod().segments);
                 }
                 Err(e) => self.view.error = Some(format!("render: {e}")),

@@ -43,8 +43,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let camera = scene.camera.orbited(-0.02 * frame as f32);
 
         // Grow the strands for time t, shadow them and draw them, all on the GPU.
-        // The stats hold the GPU time of each pass (when the adapter has timestamps).
-        let stats = renderer.render(&gpu, t, &camera)?;
+        // `render` returns without waiting; `finish` waits for the GPU and returns the
+        // GPU time of each pass (when the adapter has timestamps).
+        renderer.render(&gpu, t, &camera)?;
+        let stats = renderer.finish(&gpu)?;
 
         // Read the image back and save it (written to a temporary file, then renamed).
         let path = out.join(format!("frame_{frame:04}.png"));

@@ -20,7 +20,8 @@
 //! let gpu = pelage::gpu::Gpu::headless()?;
 //! let scene = pelage::Scene::default();
 //! let mut renderer = pelage::Renderer::new(&gpu, &scene, 320, 240)?;
-//! let stats = renderer.render(&gpu, 0.0, &scene.camera)?;
+//! renderer.render(&gpu, 0.0, &scene.camera)?; // submits and returns, no wait
+//! let stats = renderer.finish(&gpu)?; // waits; the GPU time of each pass
 //! let (width, height, rgba) = renderer.rgba8(&gpu)?; // sRGB RGBA8, rows top to bottom
 //! assert_eq!(rgba.len(), 4 * width as usize * height as usize);
 //! println!("{:.2} ms on the GPU", stats.gpu_ms());
@@ -48,7 +49,7 @@ mod renderer;
 #[cfg(feature = "png")]
 pub use output::save_png;
 pub use output::{AtomicFile, OutputError, remove_pending_temporaries, write_atomically};
-pub use renderer::{FrameStats, Renderer, Scene};
+pub use renderer::{FRAMES_IN_FLIGHT, FrameStats, Renderer, Scene};
 
 /// Any error of the frame pipeline.
 #[derive(Debug, thiserror::Error)]

@@ -135,7 +135,12 @@ pub struct Renderer {
     /// The targets' views, made once (methods that sample the depth keep bind groups
     /// built for them).
     views: TargetViewSet,
+    /// Frames submitted by `render` the GPU may not have finished.
+    in_flight: std::collections::VecDeque<wgpu::SubmissionIndex>,
 }
+
+/// Frames [`Renderer::render`] lets the GPU fall behind by before it waits.
+pub const FRAMES_IN_FLIGHT: usize = 2;
 
 impl Renderer {
     /// Uploads the mesh, samples the roots (or uploads the groom), builds every pipeline
@@ -245,6 +250,7 @@ impl Renderer {
             stride,
             frame: None,
             views,
+            in_flight: Default::default(),
         })
     }
 
@@ -322,7 +328,20 @@ impl Renderer {
         if let Some(timer) = &self.timer {
             timer.resolve(&mut encoder);
         }
-        gpu.submit([encoder.finish()])?;
+        let index = gpu.submit([encoder.finish()])?;
+        // At most FRAMES_IN_FLIGHT frames queued: beyond that the CPU waits for the
+        // oldest, as a swap chain would hold it back.
+        self.in_flight.push_back(index);
+        while self.in_flight.len() > FRAMES_IN_FLIGHT {
+            if let Some(oldest) = self.in_flight.pop_front() {
+                gpu.device
+                    .poll(wgpu::PollType::Wait {
+                        submission_index: Some(oldest),
+                        timeout: None,
+                    })
+                    .map_err(|e| pelage_gpu::GpuError::Poll(e.to_string()))?;
+            }
+        }
         let Some(timer) = &mut self.timer else {
             return Ok(FrameStats::default());
         };
@@ -346,6 +365,7 @@ impl Renderer {
         gpu.device
             .poll(wgpu::PollType::wait_indefinitely())
             .map_err(|e| pelage_gpu::GpuError::Poll(e.to_string()))?;
+        self.in_flight.clear();
         gpu.check()?;
         Ok(FrameStats { passes })
     }

@@ -153,7 +153,8 @@ pub fn run(opts: &AnimateOpts) -> Result<(), CliError> {
             // A slow orbit over the animation (a quarter of a radian in all), so the wind
             // is seen from several sides.
             let camera = scene.camera.orbited(-0.5 * t / plan.duration());
-            let stats = renderer.render(&gpu, t, &camera)?;
+            renderer.render(&gpu, t, &camera)?;
+            let stats = renderer.finish(&gpu)?;
             if passes.len() < MAX_TIMED_FRAMES {
                 passes.push(stats.passes);
             }

@@ -384,7 +384,8 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
             let mut renderer = Renderer::new(&gpu, &s, width, height)?;
             let mut per_label: Vec<(String, Vec<f64>)> = Vec::new();
             for frame in 0..frames + 3 {
-                let stats = renderer.render(&gpu, frame as f32 / 24.0, &s.camera)?;
+                renderer.render(&gpu, frame as f32 / 24.0, &s.camera)?;
+                let stats = renderer.finish(&gpu)?;
                 if frame < 3 {
                     continue;
                 }

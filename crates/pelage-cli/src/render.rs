@@ -38,7 +38,8 @@ pub fn run(opts: &RenderOpts) -> Result<(), CliError> {
     println!("adapter: {}", gpu.describe());
     let size = opts.scene.size;
     let mut renderer = Renderer::new(&gpu, &scene, size.width, size.height)?;
-    let stats = renderer.render(&gpu, opts.time, &scene.camera)?;
+    renderer.render(&gpu, opts.time, &scene.camera)?;
+    let stats = renderer.finish(&gpu)?;
     save_png(&renderer.image(&gpu)?, &opts.out)?;
     println!(
         "wrote {} ({size}, {} strands x {} segments, t = {} s)",

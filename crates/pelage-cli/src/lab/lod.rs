@@ -160,7 +160,8 @@ fn measure(
     let (mut wall, mut stamps) = (Vec::new(), Vec::new());
     for _ in 0..frames {
         let started = Instant::now();
-        let stats = renderer.render(gpu, 0.5, camera)?;
+        renderer.render(gpu, 0.5, camera)?;
+        let stats = renderer.finish(gpu)?;
         wall.push(started.elapsed().as_secs_f64() * 1e3);
         stamps.push(stats.gpu_ms());
     }
