@@ -293,7 +293,8 @@ impl Renderer {
     /// `camera` (stage 1 first, whose [`StrandFrame`] every later stage is prepared and
     /// recorded with), then records stage 1, each light's shadow and its hand-over, and
     /// stage 3 into the renderer's targets. Creates no buffer or bind group in steady
-    /// state and never waits for the GPU; submitting is the caller's.
+    /// state and never waits for the GPU; submitting is the caller's. (Untimed: the
+    /// caller's own timestamp queries, if any, go around it.)
     pub fn record(
         &mut self,
         gpu: &Gpu,
@@ -301,19 +302,27 @@ impl Renderer {
         t: f32,
         camera: &Camera,
     ) -> crate::Result<StrandFrame> {
+        self.record_timed(gpu, encoder, t, camera, false)
+    }
+
+    /// [`Renderer::record`], with the renderer's timestamp queries when `timed`.
+    fn record_timed(
+        &mut self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        t: f32,
+        camera: &Camera,
+        timed: bool,
+    ) -> crate::Result<StrandFrame> {
         let frame = self.prepare(gpu, t, camera)?;
-        self.strands.encode(encoder, &frame, self.timer.as_mut())?;
+        let mut timer = self.timer.as_mut().filter(|_| timed);
+        self.strands.encode(encoder, &frame, timer.as_deref_mut())?;
         for (shadow, hand_over) in &self.shadows {
-            shadow.encode(encoder, &frame, self.timer.as_mut())?;
-            hand_over.encode(encoder, &frame, self.timer.as_mut())?;
+            shadow.encode(encoder, &frame, timer.as_deref_mut())?;
+            hand_over.encode(encoder, &frame, timer.as_deref_mut())?;
         }
-        self.hair.encode(
-            gpu,
-            encoder,
-            &frame,
-            &self.views.views(),
-            self.timer.as_mut(),
-        )?;
+        self.hair
+            .encode(gpu, encoder, &frame, &self.views.views(), timer)?;
         Ok(frame)
     }
 
@@ -324,7 +333,7 @@ impl Renderer {
     /// when none has finished yet); [`Renderer::finish`] waits for this frame's.
     pub fn render(&mut self, gpu: &Gpu, t: f32, camera: &Camera) -> crate::Result<FrameStats> {
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
-        self.record(gpu, &mut encoder, t, camera)?;
+        self.record_timed(gpu, &mut encoder, t, camera, true)?;
         if let Some(timer) = &self.timer {
             timer.resolve(&mut encoder);
         }

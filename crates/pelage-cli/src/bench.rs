@@ -576,6 +576,57 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
         });
     }
 
+    // 4c. The CPU cost of recording a frame: the default scene (voxel shadows, opaque,
+    //     Kajiya-Kay) recorded with `Renderer::record` into an encoder and finished, wall
+    //     clock on the CPU, median of the frames after three of warm-up; submitted and
+    //     waited for outside the timing. GPU objects created while recording are counted.
+    {
+        let gpu = Gpu::headless()?;
+        let s = Scene::default();
+        let mut renderer = Renderer::new(&gpu, &s, width, height)?;
+        let record_frames = if opts.quick { 20 } else { 200 };
+        let mut cpu = Vec::new();
+        let mut created = pelage::gpu::Created::default();
+        for frame in 0..record_frames + 3 {
+            let t = frame as f32 / 24.0;
+            let before = pelage::gpu::Created::now();
+            let started = Instant::now();
+            let mut encoder = gpu.device.create_command_encoder(&Default::default());
+            renderer.record(&gpu, &mut encoder, t, &s.camera)?;
+            let commands = encoder.finish();
+            let ms = started.elapsed().as_secs_f64() * 1e3;
+            if frame >= 3 {
+                cpu.push(ms);
+                let c = pelage::gpu::Created::now().since(&before);
+                created.buffers += c.buffers;
+                created.bind_groups += c.bind_groups;
+            }
+            gpu.submit_and_wait([commands])?;
+        }
+        let ms = median(cpu.clone());
+        cpu.sort_by(f64::total_cmp);
+        let p90 = cpu.get(cpu.len() * 9 / 10).copied().unwrap_or(f64::NAN);
+        bar.println(format!(
+            "  recording a default-scene frame ({width}x{height}): {ms:.3} ms CPU median, {p90:.3} ms p90, \
+             over {record_frames} frames: {} buffers and {} bind groups created",
+            created.buffers, created.bind_groups
+        ));
+        rows.push(Row {
+            section: "record",
+            stage: "record default frame (cpu)".into(),
+            strands: s.hair.roots.count,
+            pixels: u64::from(width) * u64::from(height),
+            gpu_ms: ms,
+            bytes: 0,
+            copy_ratio: p90 / ms,
+            note: format!(
+                "CPU wall clock of Renderer::record + finish, median; ratio column = p90/median; \
+                 {} buffers and {} bind groups created over {record_frames} frames",
+                created.buffers, created.bind_groups
+            ),
+        });
+    }
+
     bar.finish_and_clear();
 
     // 5. Memory.
