@@ -24,7 +24,7 @@ pub mod shaders;
 pub mod timer;
 
 pub use binding::{BoundResource, ShaderBinding};
-pub use buffers::{UniformBuffer, storage_buffer, zeroed_storage};
+pub use buffers::{UniformBuffer, storage_buffer, write_storage, zeroed_storage};
 pub use context::{Gpu, WANTED_FEATURES, feature_names};
 pub use error::{GpuError, Result};
 pub use pipelines::{bind_buffers, bind_numbered, compute_pipeline, dispatch_size};
