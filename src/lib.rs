@@ -36,7 +36,7 @@ mod output;
 mod renderer;
 
 pub use output::{AtomicFile, OutputError, remove_pending_temporaries, save_png, write_atomically};
-pub use renderer::{FrameStats, Renderer, Scene};
+pub use renderer::{Change, FrameStats, Renderer, Scene, Update};
 
 /// Any error of the frame pipeline.
 #[derive(Debug, thiserror::Error)]
@@ -56,6 +56,10 @@ pub enum Error {
     /// The scene is not usable.
     #[error("scene: {0}")]
     Param(#[from] scene::ParamError),
+    /// A change cannot be made to a built [`Renderer`] in place (it shapes buffers,
+    /// passes or pipelines); names the parameter. Build a new renderer for it.
+    #[error("{0} cannot change in place; build a new Renderer")]
+    NeedsRebuild(String),
     /// Writing an output failed.
     #[error(transparent)]
     Output(#[from] OutputError),

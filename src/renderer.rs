@@ -1,5 +1,9 @@
 //! The frame pipeline: strands, shadows, then shading into an offscreen image.
 
+mod update;
+
+pub use update::{Change, Update};
+
 use pelage_gpu::{Gpu, GpuTimer, wgpu};
 use pelage_scene::{Camera, HairParams, Light, Mesh, Resampled, ShadeParams, ShadowParams};
 use pelage_shade::{
@@ -132,6 +136,8 @@ pub struct Renderer {
     stride: u32,
     /// The frame stage 1 last prepared, which every stage records.
     frame: Option<StrandFrame>,
+    /// What the renderer draws, for [`Renderer::update`] to compare a scene with.
+    built: update::Built,
 }
 
 impl Renderer {
@@ -240,6 +246,7 @@ impl Renderer {
             visibility,
             stride,
             frame: None,
+            built: update::Built::of(scene),
         })
     }
 
