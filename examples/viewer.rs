@@ -3,6 +3,7 @@
 //! ```text
 //! cargo run --release --example viewer -- [--scene FILE.toml] [--size WxH]
 //!                                         [--frames N] [--screenshot FILE.png]
+//!                                         [--time-changes]
 //! ```
 //!
 //! Mouse: left drag orbits, right or middle drag pans, the wheel zooms.
@@ -13,12 +14,18 @@
 //! built-in creature; `--size` sets the window's inner size in pixels (default 1280x800);
 //! `--frames N` renders N frames (the wind advancing 1/24 s each), saves the whole window
 //! to `--screenshot FILE.png` (default `out/viewer/viewer.png`) and exits: the automated check.
+//! `--time-changes` scripts a change of each uniform-only parameter (wind, hair colour, key
+//! light, shading), once through a new renderer and once in place, prints the wall time
+//! from the change to the presented frame (the GPU idle) for both, and exits.
 //!
 //! Each frame: pelage renders offscreen at the window's size ([`Renderer`]); a fullscreen
 //! triangle copies its colour into a composition texture, egui draws its panels over it, and
 //! the same triangle copies the composition to the window's surface. A changed parameter
-//! rebuilds the renderer (once the mouse button is up); if pelage refuses the parameters the
-//! panel says why and the last good renderer keeps drawing.
+//! goes to [`Renderer::update`], which writes what lives in uniforms or small buffers
+//! (wind, hair colour, lights, shading) in place, at once, even while a slider is dragged;
+//! a change it answers with [`Update::Rebuild`] (strand count, methods, ...) rebuilds the
+//! renderer once the mouse button is up. If pelage refuses the parameters the panel says
+//! why and the last good renderer keeps drawing.
 
 use std::error::Error;
 use std::ops::RangeInclusive;
@@ -34,7 +41,7 @@ use pelage::scene::{
     Absorption, ChiangParams, MAX_MELANIN, ShadowParams, Transparency, WindParams,
 };
 use pelage::scene::{Camera, HairParams, HairType, Light, ShadeParams, ShadingModel};
-use pelage::{FrameStats, Renderer, Scene};
+use pelage::{FrameStats, Renderer, Scene, Update};
 use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
 use winit::event_loop::{ActiveEventLoop, EventLoop};
 use winit::keyboard::{Key, NamedKey};
@@ -53,10 +60,12 @@ struct Args {
     size: (u32, u32),
     frames: Option<u32>,
     screenshot: PathBuf,
+    time_changes: bool,
 }
 
 fn parse_args() -> Result<Args, String> {
     let (mut scene, mut size, mut frames) = (None, (1280, 800), None);
+    let mut time_changes = false;
     let mut screenshot = PathBuf::from("out/viewer/viewer.png");
     let mut it = std::env::args().skip(1);
     while let Some(flag) = it.next() {
@@ -64,6 +73,7 @@ fn parse_args() -> Result<Args, String> {
         match flag.as_str() {
             "--scene" => scene = Some(PathBuf::from(value()?)),
             "--screenshot" => screenshot = PathBuf::from(value()?),
+            "--time-changes" => time_changes = true,
             "--frames" => frames = Some(value()?.parse::<u32>().map_err(|e| e.to_string())?.max(1)),
             "--size" => {
                 let v = value()?;
@@ -86,6 +96,7 @@ fn parse_args() -> Result<Args, String> {
         size,
         frames,
         screenshot,
+        time_changes,
     })
 }
 
@@ -143,7 +154,7 @@ impl Orbit {
     }
 }
 
-/// Every scene parameter the panels edit; any change rebuilds the renderer.
+/// Every scene parameter the panels edit; a change goes to [`Renderer::update`].
 #[derive(Clone, PartialEq)]
 struct Controls {
     hair: HairParams,
@@ -151,6 +162,10 @@ struct Controls {
     shadow: ShadowParams,
     shade: ShadeParams,
     key_and_back: bool,
+    /// The key light turned about the vertical axis, degrees.
+    key_turn: f32,
+    /// The key light's intensity as a multiple of the scene's.
+    key_gain: f32,
 }
 
 impl Controls {
@@ -167,6 +182,18 @@ impl Controls {
             true => Light::key_and_back(&base.camera),
             false => base.lights.iter().take(1).cloned().collect(),
         };
+        let turn = glam::Quat::from_rotation_y(self.key_turn.to_radians());
+        match scene.lights.first_mut() {
+            Some(Light::Directional(d)) => {
+                d.direction = turn * d.direction;
+                d.intensity *= self.key_gain;
+            }
+            Some(Light::Point(p)) => {
+                p.position = turn * p.position;
+                p.intensity *= self.key_gain;
+            }
+            None => {}
+        }
         scene
     }
 }
@@ -415,6 +442,8 @@ struct App {
     /// is not retried until something changes).
     attempted: Option<(Controls, u32, u32)>,
     renderer: Option<Renderer>,
+    /// `--time-changes`: the scripted changes, and the one whose frame is being timed.
+    timing: Option<Timing>,
     orbit: Orbit,
     view: View,
     gfx: Option<Gfx>,
@@ -515,9 +544,39 @@ impl App {
             .handle_platform_output(&gfx.window, out.platform_output);
         let x0 = ((x0 * out.pixels_per_point).round() as u32).min(w - 1);
 
-        // 2. Rebuild the renderer after a change, once no slider is being dragged.
+        // 2. After a change: in place when the renderer can take it (at once, even while a
+        //    slider is dragged), otherwise a new renderer once no slider is being dragged.
+        let mut rebuild_anyway = false;
+        if let Some(timing) = &mut self.timing {
+            rebuild_anyway = timing.next(&mut self.controls, self.frames);
+        }
         let wanted = Some((self.controls.clone(), w - x0, h));
-        if self.attempted != wanted && !ctx.input(|i| i.pointer.any_down()) {
+        let mut rebuild = self.attempted != wanted;
+        let applying = Instant::now();
+        let same_size = |r: &Renderer| {
+            let t = r.color_texture();
+            (t.width(), t.height()) == (w - x0, h)
+        };
+        if let Some(renderer) = self
+            .renderer
+            .as_mut()
+            .filter(|r| rebuild && !rebuild_anyway && same_size(r))
+        {
+            let scene = self.controls.scene(&self.base);
+            let update = renderer.update(&gfx.gpu, &scene).map_err(|e| e.to_string());
+            match update.and_then(|u| gfx.take_errors().map_or(Ok(u), Err)) {
+                Ok(Update::Applied(_)) => (rebuild, self.view.error) = (false, None),
+                Ok(Update::Rebuild(_)) => {}
+                Err(e) => {
+                    self.view.error = Some(format!("kept the last good parameters: {e}"));
+                    rebuild = false;
+                }
+            }
+            if !rebuild {
+                self.attempted = wanted.clone();
+            }
+        }
+        if rebuild && !ctx.input(|i| i.pointer.any_down()) {
             let scene = self.controls.scene(&self.base);
             let built = Renderer::new(&gfx.gpu, &scene, w - x0, h).map_err(|e| e.to_string());
             match built.and_then(|r| gfx.take_errors().map_or(Ok(r), Err)) {
@@ -531,6 +590,9 @@ impl App {
                 }
             }
             self.attempted = wanted;
+        }
+        if let Some(timing) = self.timing.as_mut().filter(|t| t.started.is_some()) {
+            timing.apply_ms = applying.elapsed().as_secs_f64() * 1e3;
         }
 
         // 3. Advance the wind (fixed steps for --frames, the clock otherwise) and render.
@@ -622,6 +684,14 @@ impl App {
         queue.present(frame);
         if let Some(e) = gfx.take_errors() {
             self.view.error = Some(e);
+        }
+        if let Some(timing) = &mut self.timing {
+            gfx.gpu.device.poll(wgpu::PollType::wait_indefinitely())?;
+            if timing.presented() {
+                timing.report();
+                event_loop.exit();
+                return Ok(());
+            }
         }
 
         // 7. Screenshots: on request, and at the end of a --frames run.
@@ -738,6 +808,8 @@ fn panels(ui: &mut egui::Ui, c: &mut Controls, v: &mut View) -> f32 {
             section(ui, "Lights", &mut |ui| {
                 ui.radio_value(&mut c.key_and_back, false, "key (the scene's first light)");
                 ui.radio_value(&mut c.key_and_back, true, "key + warm back light");
+                slider(ui, &mut c.key_turn, -180.0..=180.0, "key light turn (°)");
+                slider(ui, &mut c.key_gain, 0.0..=4.0, "key light intensity (x)");
             });
         });
     });
@@ -1005,6 +1077,12 @@ fn shading_ui(ui: &mut egui::Ui, c: &mut Controls) {
     }
     slider(ui, &mut c.shade.ambient, 0.0..=1.0, "ambient");
     slider(ui, &mut c.shade.root_occlusion, 0.0..=1.0, "root occlusion");
+    ui.horizontal(|ui| {
+        let mut rgb = c.shade.mesh_color.to_array();
+        ui.color_edit_button_rgb(&mut rgb); // linear RGB
+        c.shade.mesh_color = Vec3::from_array(rgb);
+        ui.label("mesh colour");
+    });
 }
 
 /// Chiang et al. 2016: roughness, tilt, index, where the absorption comes from (the hair
@@ -1066,6 +1144,81 @@ fn chiang_ui(ui: &mut egui::Ui, p: &mut ChiangParams, hair_color: Vec3) {
     ui.checkbox(&mut p.dual_scattering, "dual scattering");
 }
 
+/// `--time-changes`: each uniform-only parameter changed twice, first through a new
+/// renderer (what the viewer did before `Renderer::update`), then in place, each change
+/// timed from the moment the controls change to the frame presented with the GPU idle.
+#[derive(Default)]
+struct Timing {
+    /// Changes made so far; change `i` is kind `i / 2`, through a new renderer when even.
+    step: usize,
+    /// When the change being timed was made.
+    started: Option<Instant>,
+    /// Milliseconds the change being timed took to apply (the update or the new renderer).
+    apply_ms: f64,
+    /// Per kind: milliseconds to the frame and to apply, through a new renderer, then in place.
+    results: Vec<(&'static str, [f64; 4])>,
+}
+
+impl Timing {
+    /// The kinds of change scripted, each flipping its parameter between two values.
+    const KINDS: [&'static str; 4] = ["wind", "hair colour", "key light", "shading"];
+    /// Frames drawn before the first change (the first renderer built and warm).
+    const WARM_UP: u32 = 3;
+
+    /// Before frame `frame`: makes the next change when the last one was presented and the
+    /// warm-up is over; returns whether it must go through a new renderer.
+    fn next(&mut self, c: &mut Controls, frame: u32) -> bool {
+        if frame < Self::WARM_UP || self.started.is_some() || self.step >= 2 * Self::KINDS.len() {
+            return false;
+        }
+        let flip = self.step.is_multiple_of(2);
+        match self.step / 2 {
+            0 => c.hair.wind.strength = if flip { 2.5 } else { 0.4 },
+            1 => {
+                c.hair.growth.color = if flip {
+                    Vec3::new(0.7, 0.55, 0.3)
+                } else {
+                    Vec3::new(0.15, 0.1, 0.08)
+                }
+            }
+            2 => c.key_turn = if flip { 60.0 } else { -45.0 },
+            _ => c.shade.ambient = if flip { 0.5 } else { 0.05 },
+        }
+        self.started = Some(Instant::now());
+        flip
+    }
+
+    /// After a frame was presented and the GPU went idle: records the change it showed;
+    /// returns whether every change has been timed.
+    fn presented(&mut self) -> bool {
+        if let Some(started) = self.started.take() {
+            let ms = started.elapsed().as_secs_f64() * 1e3;
+            let kind = Self::KINDS[self.step / 2];
+            if self.step.is_multiple_of(2) {
+                let nan = f64::NAN;
+                self.results.push((kind, [ms, self.apply_ms, nan, nan]));
+            } else if let Some((_, last)) = self.results.last_mut() {
+                (last[2], last[3]) = (ms, self.apply_ms);
+            }
+            self.step += 1;
+        }
+        self.step >= 2 * Self::KINDS.len()
+    }
+
+    fn report(&self) {
+        println!("time from a change to its frame presented, and of that to apply it (ms):");
+        println!(
+            "{:<12} {:>16} {:>16} {:>16} {:>16}",
+            "change", "new: to frame", "new: to apply", "in place: frame", "in place: apply"
+        );
+        for (kind, [rebuild, new_ms, in_place, update_ms]) in &self.results {
+            println!(
+                "{kind:<12} {rebuild:>16.1} {new_ms:>16.1} {in_place:>16.1} {update_ms:>16.2}"
+            );
+        }
+    }
+}
+
 fn main() {
     let run = || -> Result<(), Box<dyn Error>> {
         let args = parse_args()?;
@@ -1079,6 +1232,8 @@ fn main() {
             shadow: base.shadow.clone(),
             shade: base.shade.clone(),
             key_and_back: false,
+            key_turn: 0.0,
+            key_gain: 1.0,
         };
         let event_loop = EventLoop::new()?;
         let mut app = App {
@@ -1088,6 +1243,7 @@ fn main() {
                 groom: base.groom.as_ref().map(|g| (g.strands, g.segments)),
                 ..Default::default()
             },
+            timing: args.time_changes.then(Timing::default),
             args,
             base,
             controls,

@@ -49,7 +49,7 @@ mod renderer;
 #[cfg(feature = "png")]
 pub use output::save_png;
 pub use output::{AtomicFile, OutputError, remove_pending_temporaries, write_atomically};
-pub use renderer::{FRAMES_IN_FLIGHT, FrameStats, Renderer, Scene};
+pub use renderer::{Change, FRAMES_IN_FLIGHT, FrameStats, Renderer, Scene, Update};
 
 /// Any error of the frame pipeline.
 #[derive(Debug, thiserror::Error)]
@@ -69,6 +69,10 @@ pub enum Error {
     /// The scene is not usable.
     #[error("scene: {0}")]
     Param(#[from] scene::ParamError),
+    /// A change cannot be made to a built [`Renderer`] in place (it shapes buffers,
+    /// passes or pipelines); names the parameter. Build a new renderer for it.
+    #[error("{0} cannot change in place; build a new Renderer")]
+    NeedsRebuild(String),
     /// Writing an output failed.
     #[error(transparent)]
     Output(#[from] OutputError),

@@ -1,5 +1,9 @@
 //! The frame pipeline: strands, shadows, then shading into an offscreen image.
 
+mod update;
+
+pub use update::{Change, Update};
+
 use pelage_gpu::{Gpu, GpuTimer, wgpu};
 use pelage_scene::{Camera, HairParams, Light, Mesh, Resampled, ShadeParams, ShadowParams};
 use pelage_shade::{
@@ -137,6 +141,8 @@ pub struct Renderer {
     views: TargetViewSet,
     /// Frames submitted by `render` the GPU may not have finished.
     in_flight: std::collections::VecDeque<wgpu::SubmissionIndex>,
+    /// What the renderer draws, for [`Renderer::update`] to compare a scene with.
+    built: update::Built,
 }
 
 /// Frames [`Renderer::render`] lets the GPU fall behind by before it waits.
@@ -251,6 +257,7 @@ impl Renderer {
             frame: None,
             views,
             in_flight: Default::default(),
+            built: update::Built::of(scene),
         })
     }
 

@@ -48,6 +48,27 @@ pub fn storage_buffer<T: ShaderType + WriteInto + ?Sized>(
     })
 }
 
+/// Queues a rewrite of `buffer` from offset 0 with `value` in WGSL storage layout (takes
+/// effect at the next submit), for a buffer made by [`storage_buffer`] or
+/// [`zeroed_storage`] (both allow `COPY_DST`). Errors when `value` does not fit `buffer`.
+pub fn write_storage<T: ShaderType + WriteInto + ?Sized>(
+    queue: &wgpu::Queue,
+    label: &str,
+    buffer: &wgpu::Buffer,
+    value: &T,
+) -> Result<()> {
+    let bytes = storage_bytes(label, value)?;
+    if bytes.len() as u64 > buffer.size() {
+        return Err(GpuError::Validation(format!(
+            "`{label}`: {} bytes do not fit its {}-byte buffer",
+            bytes.len(),
+            buffer.size()
+        )));
+    }
+    queue.write_buffer(buffer, 0, &bytes);
+    Ok(())
+}
+
 /// A zero-filled buffer of `bytes` (rounded up to a multiple of 4, at least 4)
 /// with `STORAGE | COPY_SRC | COPY_DST` added to `usage`; size checked with
 /// [`Gpu::check_storage_size`].

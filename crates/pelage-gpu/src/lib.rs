@@ -25,7 +25,7 @@ pub mod shaders;
 pub mod timer;
 
 pub use binding::{BoundResource, ShaderBinding};
-pub use buffers::{UniformBuffer, storage_buffer, zeroed_storage};
+pub use buffers::{UniformBuffer, storage_buffer, write_storage, zeroed_storage};
 pub use context::{Gpu, WANTED_FEATURES, feature_names};
 pub use counters::{Created, create_bind_group, create_buffer, create_buffer_init};
 pub use error::{GpuError, Result};

@@ -155,6 +155,8 @@ pub(crate) struct Common {
     pub visibility_stride: u32,
     /// The visibility buffer, or a small one that is never read.
     pub visibility: wgpu::Buffer,
+    /// The mesh's colour (rewritten by [`Common::set_params`]).
+    pub mesh_style: UniformBuffer<MeshStyle>,
 }
 
 impl Common {
@@ -313,6 +315,7 @@ impl Common {
             model,
             visibility_stride,
             visibility: visibility_buffer,
+            mesh_style,
         })
     }
 
@@ -424,6 +427,47 @@ impl Common {
         self.hair_vertices
             .store(ribbon_vertices(layout), Ordering::Release);
         self.prepared.set(strands);
+        Ok(())
+    }
+
+    /// What [`HairPass::set_params`](crate::HairPass::set_params) does for every method:
+    /// refuses what shapes pipelines or buffers (naming it; nothing changes then), then
+    /// rewrites the shading model's uniform or tables and the mesh colour, and keeps the
+    /// rest (background, ambient, root occlusion) for the next `prepare` and `encode`.
+    pub fn set_params(&mut self, gpu: &Gpu, params: &ShadeParams) -> crate::Result<()> {
+        params.validate()?;
+        let old = &self.params;
+        let rebuild = |what: String| Err(crate::ShadeError::NeedsRebuild(what));
+        if params.transparency != old.transparency {
+            return rebuild(format!(
+                "shade.transparency ({} to {})",
+                old.transparency.name(),
+                params.transparency.name()
+            ));
+        }
+        if params.sample_count != old.sample_count {
+            return rebuild(format!(
+                "shade.sample_count ({} to {})",
+                old.sample_count, params.sample_count
+            ));
+        }
+        if params.min_pixels != old.min_pixels {
+            return rebuild(format!(
+                "shade.min_pixels ({} to {})",
+                old.min_pixels, params.min_pixels
+            ));
+        }
+        self.model.check_update(&params.model)?;
+        self.model.update(gpu, &params.model)?;
+        self.mesh_style.write(
+            &gpu.queue,
+            &MeshStyle {
+                color: params.mesh_color,
+                _pad: 0.0,
+            },
+        )?;
+        self.style_value.root_occlusion = params.root_occlusion;
+        self.params = params.clone();
         Ok(())
     }
 

@@ -25,6 +25,8 @@ pub struct HairModel {
     lut: Option<MarschnerLut>,
     chiang: Option<ChiangTables>,
     bytes: u64,
+    /// The model and parameters in use (see [`HairModel::update`]).
+    params: ShadingModel,
 }
 
 impl HairModel {
@@ -123,7 +125,101 @@ impl HairModel {
             lut,
             chiang,
             bytes,
+            params: model.clone(),
         })
+    }
+
+    /// Errors with [`ShadeError::NeedsRebuild`](crate::ShadeError::NeedsRebuild) when
+    /// [`HairModel::update`] cannot take `model` in place: another kind of model (other
+    /// WGSL, other resources), or a Marschner fibre from tables turning from circular to
+    /// elliptical or back (another table layout). Bad values are a parameter error.
+    pub fn check_update(&self, model: &ShadingModel) -> crate::Result<()> {
+        model.validate()?;
+        if model_module(model) != self.binding.module {
+            return Err(crate::ShadeError::NeedsRebuild(format!(
+                "shade.model ({} to {}: another shader)",
+                self.params.name(),
+                model.name()
+            )));
+        }
+        if let (Some(lut), ShadingModel::Marschner { params, .. }) = (&self.lut, model) {
+            if MarschnerLut::slices_for(params, lut.resolution()) != lut.slices() {
+                return Err(crate::ShadeError::NeedsRebuild(
+                    "shading.marschner.eccentricity (a fibre turning from circular to elliptical \
+                     or back changes the lookup tables' layout)"
+                        .into(),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Takes new parameters of the same kind of model in place (see
+    /// [`HairModel::check_update`] for what is refused): rewrites the model's uniform and,
+    /// when what they tabulate changed, fills Marschner's or Chiang's tables again (one
+    /// compute submission, waited for). The result is what [`HairModel::new`] builds
+    /// for `model`.
+    pub fn update(&mut self, gpu: &Gpu, model: &ShadingModel) -> crate::Result<()> {
+        self.check_update(model)?;
+        if *model == self.params {
+            return Ok(());
+        }
+        let first = || match self.binding.resources.first() {
+            Some(BoundResource::Buffer(buffer)) => Ok(buffer.clone()),
+            _ => Err(pelage_gpu::GpuError::Validation(
+                "the shading model has no uniform buffer at binding 0".into(),
+            )),
+        };
+        let queue = &gpu.queue;
+        let mut tables = None;
+        match model {
+            ShadingModel::KajiyaKay(p) => pelage_gpu::write_storage(
+                queue,
+                "pelage kajiya-kay",
+                &first()?,
+                &KajiyaKayUniforms::from_params(p),
+            )?,
+            ShadingModel::Marschner { params, lut: false } => pelage_gpu::write_storage(
+                queue,
+                "pelage marschner",
+                &first()?,
+                &MarschnerUniforms::from_params(params),
+            )?,
+            ShadingModel::Marschner { params, lut: true } => {
+                if let Some(lut) = &self.lut {
+                    // The tables tabulate the parameters: fill them again.
+                    lut.update(queue, params)?;
+                    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+                    lut.encode(&mut encoder);
+                    tables = Some(encoder);
+                }
+            }
+            ShadingModel::Sadeghi(p) => pelage_gpu::write_storage(
+                queue,
+                "pelage sadeghi",
+                &first()?,
+                &SadeghiUniforms::from_params(p),
+            )?,
+            ShadingModel::Chiang(p) => {
+                if let Some(chiang) = &mut self.chiang {
+                    if chiang.update(queue, p)? {
+                        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+                        chiang.encode(&mut encoder);
+                        tables = Some(encoder);
+                    }
+                }
+            }
+        }
+        if let Some(encoder) = tables {
+            gpu.submit_and_wait([encoder.finish()])?;
+        }
+        self.params = model.clone();
+        Ok(())
+    }
+
+    /// The model and parameters in use.
+    pub fn params(&self) -> &ShadingModel {
+        &self.params
     }
 
     /// Chiang's tables and uniform, when the model is Chiang's.
@@ -149,5 +245,16 @@ impl HairModel {
     /// Redirects for a hair pass: the model's, unless it is the contract's default.
     pub(crate) fn redirect(&self) -> Option<pelage_gpu::Redirect> {
         (self.binding.module != CONTRACT).then(|| self.binding.redirect())
+    }
+}
+
+/// The WGSL file that implements [`CONTRACT`] for `model` (what [`HairModel::new`] binds).
+fn model_module(model: &ShadingModel) -> &'static str {
+    match model {
+        ShadingModel::KajiyaKay(_) => CONTRACT,
+        ShadingModel::Marschner { lut: false, .. } => "shade/models/marschner_model.wgsl",
+        ShadingModel::Marschner { lut: true, .. } => "shade/models/marschner_lut_model.wgsl",
+        ShadingModel::Sadeghi(_) => "shade/models/sadeghi_model.wgsl",
+        ShadingModel::Chiang(_) => "shade/models/chiang_model.wgsl",
     }
 }

@@ -77,6 +77,10 @@ pub enum ShadeError {
     /// A pass was recorded for another stage 1 frame than it was prepared for.
     #[error(transparent)]
     FrameOrder(#[from] pelage_strands::FrameOrderError),
+    /// A parameter cannot change in place: it shapes pipelines or buffers; build the
+    /// method (or the renderer) again with it.
+    #[error("{0} cannot change in place; build again with the new parameters")]
+    NeedsRebuild(String),
     /// The adapter lacks a feature the method needs.
     #[error("{0}")]
     Unsupported(String),

@@ -52,6 +52,8 @@ pub struct GroomStrands {
     /// The longest rest segment, world units.
     longest_segment: f32,
     pass: StrandPass,
+    /// The rest roots the pass reads (rewritten by [`StrandStage::set_color`]).
+    rest_roots: wgpu::Buffer,
 }
 
 impl GroomStrands {
@@ -124,6 +126,7 @@ impl GroomStrands {
             chord_error,
             longest_segment,
             pass,
+            rest_roots,
         })
     }
 
@@ -168,17 +171,7 @@ impl GroomStrands {
     /// strand (at most its length) and by the width.
     pub fn reach_of(groom: &Resampled, hair: &HairParams) -> crate::Result<(Vec3, Vec3)> {
         let params = Self::params_for(groom, hair)?;
-        let (lo, hi) = groom.bounds();
-        // Segment j turns by at most j·turn from its rest direction, and a unit vector
-        // turned by θ moves by 2 sin(θ/2) <= min(θ, 2).
-        let turn = bend_per_segment(&params.growth, &params.wind);
-        let segments = params.growth.segments;
-        let seg = params.growth.length / segments as f32;
-        let swing: f32 = (1..=segments)
-            .map(|j| seg * (j as f32 * turn).min(2.0))
-            .sum();
-        let pad = Vec3::splat(swing.min(params.growth.length) + params.growth.width);
-        Ok((lo - pad, hi + pad))
+        Ok(reach_around(groom.bounds(), &params))
     }
 
     /// The rest points of every strand in buffer order, `segments + 1` per strand (input
@@ -194,6 +187,25 @@ impl GroomStrands {
     }
 }
 
+/// [`GroomStrands::reach_of`] for rest points inside `(lo, hi)` and the parameters the
+/// groom amounts to.
+fn reach_around((lo, hi): (Vec3, Vec3), params: &HairParams) -> (Vec3, Vec3) {
+    // Segment j turns by at most j·turn from its rest direction, and a unit vector
+    // turned by θ moves by 2 sin(θ/2) <= min(θ, 2).
+    let turn = bend_per_segment(&params.growth, &params.wind);
+    let segments = params.growth.segments;
+    let seg = params.growth.length / segments as f32;
+    let swing: f32 = (1..=segments)
+        .map(|j| seg * (j as f32 * turn).min(2.0))
+        .sum();
+    let pad = Vec3::splat(swing.min(params.growth.length) + params.growth.width);
+    (lo - pad, hi + pad)
+}
+
+/// The hash draw a groom strand's brightness comes from (after its phase; see
+/// [`GroomStrands::new`]).
+const GROOM_BRIGHTNESS_DRAW: u32 = 2;
+
 impl StrandStage for GroomStrands {
     fn pass(&self) -> &StrandPass {
         &self.pass
@@ -205,6 +217,31 @@ impl StrandStage for GroomStrands {
 
     fn roots(&self) -> &[StrandRoot] {
         &self.roots
+    }
+
+    fn reach_with_wind(&self, wind: &pelage_scene::WindParams) -> crate::Result<(Vec3, Vec3)> {
+        wind.validate()?;
+        let first = self.rest.first().copied().unwrap_or(Vec3::ZERO);
+        let bounds = (self.rest.iter()).fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+        let mut params = self.params().clone();
+        params.wind = wind.clone();
+        Ok(reach_around(bounds, &params))
+    }
+
+    fn set_color(
+        &mut self,
+        queue: &wgpu::Queue,
+        color: Vec3,
+        color_jitter: f32,
+    ) -> crate::Result<()> {
+        crate::grow::recolor(
+            &mut self.pass,
+            &mut self.roots,
+            &self.rest_roots,
+            GROOM_BRIGHTNESS_DRAW,
+            queue,
+            (color, color_jitter),
+        )
     }
 
     /// Segment reduction measured on the rest shape: the farthest rest point from the

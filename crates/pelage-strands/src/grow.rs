@@ -283,6 +283,8 @@ impl StrandBuffers {
 pub struct GrowStrands {
     roots: Vec<StrandRoot>,
     pass: StrandPass,
+    /// The rest roots the pass reads (rewritten by [`StrandStage::set_color`]).
+    rest_roots: wgpu::Buffer,
 }
 
 impl GrowStrands {
@@ -329,7 +331,11 @@ impl GrowStrands {
                 &rest_roots,
             ],
         )?;
-        Ok(Self { roots, pass })
+        Ok(Self {
+            roots,
+            pass,
+            rest_roots,
+        })
     }
 
     /// A world box holding every point fur grown on `mesh` with `params` can reach: the
@@ -359,6 +365,22 @@ impl StrandStage for GrowStrands {
 
     fn roots(&self) -> &[StrandRoot] {
         &self.roots
+    }
+
+    fn set_color(
+        &mut self,
+        queue: &wgpu::Queue,
+        color: Vec3,
+        color_jitter: f32,
+    ) -> crate::Result<()> {
+        recolor(
+            &mut self.pass,
+            &mut self.roots,
+            &self.rest_roots,
+            crate::roots::GROWN_BRIGHTNESS_DRAW,
+            queue,
+            (color, color_jitter),
+        )
     }
 
     fn level_for_view(
@@ -555,6 +577,28 @@ pub trait StrandStage: std::fmt::Debug {
         Ok(())
     }
 
+    /// Recolours every strand as if the method had been built with `growth.color =
+    /// color` and `growth.color_jitter = color_jitter` (each strand keeps its brightness
+    /// draw, so the colours are bit for bit those of a new method): rewrites the roots
+    /// (rest and drawn; the drawn widths come back at the next `encode`), taking effect at
+    /// the next submit. Refuses a negative or non-finite colour or a jitter outside
+    /// [0, 1), naming it, and then changes nothing.
+    fn set_color(
+        &mut self,
+        queue: &wgpu::Queue,
+        color: Vec3,
+        color_jitter: f32,
+    ) -> crate::Result<()>;
+
+    /// The [`StrandBuffers::reach`] a method built with `wind` (and otherwise these
+    /// parameters) would have: the same for grown fur, whose reach does not depend on the
+    /// wind; for a groom, how far the wind can swing it. When it differs from the reach in
+    /// use, [`StrandStage::set_wind`] leaves the later stages sized for the old wind.
+    fn reach_with_wind(&self, wind: &WindParams) -> crate::Result<(Vec3, Vec3)> {
+        wind.validate()?;
+        Ok(self.buffers().reach)
+    }
+
     /// The uniforms the pass uses at `time` (what the CPU mirror needs to reproduce a frame).
     fn uniforms_at(&self, time: f32) -> GrowUniforms {
         let pass = self.pass();
@@ -592,4 +636,28 @@ pub trait StrandStage: std::fmt::Debug {
     fn params(&self) -> &HairParams {
         &self.pass().params
     }
+}
+
+/// What [`StrandStage::set_color`] does for either method: validates `(color, jitter)`,
+/// recolours `roots` from each strand's `draw`-th hash draw, writes them to `rest` and to
+/// the drawn roots, and keeps the new colour in the pass's parameters.
+pub(crate) fn recolor(
+    pass: &mut StrandPass,
+    roots: &mut [StrandRoot],
+    rest: &wgpu::Buffer,
+    draw: u32,
+    queue: &wgpu::Queue,
+    (color, jitter): (Vec3, f32),
+) -> crate::Result<()> {
+    let mut growth = pass.params.growth.clone();
+    growth.color = color;
+    growth.color_jitter = jitter;
+    growth.validate()?;
+    for root in roots.iter_mut() {
+        root.color = color * crate::strand_brightness(root.seed, draw, jitter);
+    }
+    pelage_gpu::write_storage(queue, "pelage strand rest roots", rest, &*roots)?;
+    pelage_gpu::write_storage(queue, "pelage strand roots", &pass.buffers.roots, &*roots)?;
+    pass.params.growth = growth;
+    Ok(())
 }

@@ -34,7 +34,7 @@ pub use lod::{
     bend_per_segment, fewest_segments, reduced_segments,
 };
 pub use mesh_buffers::MeshBuffers;
-pub use roots::{StrandRoot, hash_to_unit, pcg_hash, sample_roots};
+pub use roots::{StrandRoot, hash_to_unit, pcg_hash, sample_roots, strand_brightness};
 
 use pelage_gpu::{GpuError, ShaderSources};
 use pelage_scene::{MeshError, ParamError};

@@ -42,6 +42,21 @@ pub struct StrandRoot {
     pub color: Vec3,
 }
 
+/// A strand's brightness factor `1 + jitter·(2u − 1)`, `u` being the `draw`-th hash draw
+/// after its `seed` ([`StrandRoot::seed`]): what its colour is the base colour times.
+/// [`sample_roots`] takes it from draw 8, a groom ([`GroomStrands`](crate::GroomStrands))
+/// from draw 2; recolouring strands with it reproduces their colours exactly.
+pub fn strand_brightness(seed: u32, draw: u32, jitter: f32) -> f32 {
+    let mut h = seed;
+    for _ in 0..draw {
+        h = pcg_hash(h);
+    }
+    1.0 + jitter * (2.0 * hash_to_unit(h) - 1.0)
+}
+
+/// The hash draw [`sample_roots`] takes a grown strand's brightness from.
+pub(crate) const GROWN_BRIGHTNESS_DRAW: u32 = 8;
+
 /// Places `roots.count` strands over `mesh`, each triangle getting a share proportional
 /// to its area (times its corners' mean density, if a density map is given).
 /// Zero-area triangles get no strands.
@@ -134,6 +149,25 @@ pub fn sample_roots(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn brightness_reproduces_sampled_colours_exactly() {
+        let mesh = Mesh::icosphere(1.0, 2).unwrap();
+        let growth = GrowthParams::default();
+        let roots = sample_roots(
+            &mesh,
+            &RootParams {
+                count: 500,
+                ..Default::default()
+            },
+            &growth,
+        )
+        .unwrap();
+        for r in &roots {
+            let b = strand_brightness(r.seed, GROWN_BRIGHTNESS_DRAW, growth.color_jitter);
+            assert_eq!(r.color, growth.color * b);
+        }
+    }
 
     #[test]
     fn strand_keeps_its_root_when_count_changes() {

@@ -83,6 +83,18 @@ pub trait HairPass: std::fmt::Debug {
     /// Bytes of GPU memory the method owns beyond the caller's targets.
     fn memory_bytes(&self) -> u64;
 
+    /// Takes the parameters of `params` that live in uniforms or small tables, in place:
+    /// the background, the mesh colour, the ambient light, the root occlusion and the
+    /// shading model's parameters when the model stays the same kind (Marschner's lookup
+    /// tables and Chiang's tables are computed again, one compute submission waited for,
+    /// when what they depend on changed). Pictures are those of a method built with
+    /// `params`. Anything else differing from what the method was built with (the
+    /// transparency method, sample count, minimum ribbon width, the model's kind, or a
+    /// Marschner fibre turning from circular to elliptical) is a
+    /// [`ShadeError::NeedsRebuild`](crate::ShadeError::NeedsRebuild) naming it, and
+    /// then nothing changes; bad values are a parameter error.
+    fn set_params(&mut self, gpu: &Gpu, params: &pelage_scene::ShadeParams) -> crate::Result<()>;
+
     /// Horizontal slices the screen is drawn in (1 unless per-pixel storage for the
     /// whole target would pass the storage binding limit).
     fn slices(&self) -> u32 {

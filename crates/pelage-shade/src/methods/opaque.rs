@@ -95,6 +95,10 @@ impl HairPass for Opaque {
         Ok(())
     }
 
+    fn set_params(&mut self, gpu: &Gpu, params: &pelage_scene::ShadeParams) -> crate::Result<()> {
+        self.common.set_params(gpu, params)
+    }
+
     fn memory_bytes(&self) -> u64 {
         0
     }

@@ -465,6 +465,14 @@ macro_rules! sliced_hair_pass {
                 self.0.sliced.memory_bytes()
             }
 
+            fn set_params(
+                &mut self,
+                gpu: &pelage_gpu::Gpu,
+                params: &pelage_scene::ShadeParams,
+            ) -> $crate::Result<()> {
+                self.0.common.set_params(gpu, params)
+            }
+
             fn slices(&self) -> u32 {
                 self.0.sliced.count
             }

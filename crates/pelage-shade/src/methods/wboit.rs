@@ -251,6 +251,10 @@ impl HairPass for Wboit {
         Ok(())
     }
 
+    fn set_params(&mut self, gpu: &Gpu, params: &pelage_scene::ShadeParams) -> crate::Result<()> {
+        self.common.set_params(gpu, params)
+    }
+
     fn memory_bytes(&self) -> u64 {
         10 * u64::from(self.width) * u64::from(self.height)
     }
