@@ -102,6 +102,8 @@ pub fn zeroed_storage(
 pub struct UniformBuffer<T> {
     /// The buffer (`UNIFORM | COPY_DST | COPY_SRC`), for bind groups.
     pub buffer: wgpu::Buffer,
+    /// The bytes last queued: a write of the same value queues nothing.
+    last: std::sync::Mutex<Vec<u8>>,
     _t: PhantomData<T>,
 }
 
@@ -140,11 +142,14 @@ impl<T: ShaderType + WriteInto> UniformBuffer<T> {
         })?;
         Ok(UniformBuffer {
             buffer,
+            last: std::sync::Mutex::new(bytes),
             _t: PhantomData,
         })
     }
 
-    /// Queue a rewrite of the buffer with `value` (takes effect at the next submit).
+    /// Queue a rewrite of the buffer with `value` (takes effect at the next submit);
+    /// nothing is queued when `value` lays out to the bytes last written (a light or
+    /// camera that did not move costs no staging copy).
     ///
     /// Uniform-compatible types have the same layout in storage and uniform
     /// space, so the storage writer is used (checked once in [`UniformBuffer::new`]).
@@ -157,7 +162,14 @@ impl<T: ShaderType + WriteInto> UniformBuffer<T> {
                 self.buffer.size()
             )));
         }
-        queue.write_buffer(&self.buffer, 0, &bytes);
+        let mut last = self
+            .last
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner());
+        if *last != bytes {
+            queue.write_buffer(&self.buffer, 0, &bytes);
+            *last = bytes;
+        }
         Ok(())
     }
 }
