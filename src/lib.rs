@@ -49,7 +49,7 @@ mod renderer;
 #[cfg(feature = "png")]
 pub use output::save_png;
 pub use output::{AtomicFile, OutputError, remove_pending_temporaries, write_atomically};
-pub use renderer::{Change, FRAMES_IN_FLIGHT, FrameStats, Renderer, Scene, Update};
+pub use renderer::{Change, FRAMES_IN_FLIGHT, FrameStats, Renderer, Scene, Update, frame_plan};
 
 /// Any error of the frame pipeline.
 #[derive(Debug, thiserror::Error)]
@@ -73,6 +73,9 @@ pub enum Error {
     /// passes or pipelines); names the parameter. Build a new renderer for it.
     #[error("{0} cannot change in place; build a new Renderer")]
     NeedsRebuild(String),
+    /// The passes of a frame are in an order that reads a resource before it is written.
+    #[error("frame plan: {0}")]
+    Plan(#[from] gpu::PlanError),
     /// Writing an output failed.
     #[error(transparent)]
     Output(#[from] OutputError),

@@ -4,7 +4,7 @@ mod update;
 
 pub use update::{Change, Update};
 
-use pelage_gpu::{Gpu, GpuTimer, wgpu};
+use pelage_gpu::{FramePlan, Gpu, GpuTimer, wgpu};
 use pelage_scene::{Camera, HairParams, Light, Mesh, Resampled, ShadeParams, ShadowParams};
 use pelage_shade::{
     HairInputs, HairPass, OitStats, TargetFormat, TargetViewSet, TargetViews, Targets, Visibility,
@@ -139,6 +139,10 @@ pub struct Renderer {
     /// The targets' views, made once (methods that sample the depth keep bind groups
     /// built for them).
     views: TargetViewSet,
+    /// The timings of the newest frame read back.
+    last_stats: FrameStats,
+    /// The passes a frame records, checked at construction.
+    plan: FramePlan,
     /// Frames submitted by `render` the GPU may not have finished.
     in_flight: std::collections::VecDeque<wgpu::SubmissionIndex>,
     /// What the renderer draws, for [`Renderer::update`] to compare a scene with.
@@ -240,6 +244,8 @@ impl Renderer {
             width,
             height,
         )?;
+        let plan = frame_plan(strands.as_ref(), &shadows, hair.as_ref());
+        plan.validate()?;
         let timer = GpuTimer::new(gpu, 64)?;
         let views = targets.view_set();
         Ok(Self {
@@ -257,6 +263,8 @@ impl Renderer {
             frame: None,
             views,
             in_flight: Default::default(),
+            last_stats: FrameStats::default(),
+            plan,
             built: update::Built::of(scene),
         })
     }
@@ -362,28 +370,34 @@ impl Renderer {
             return Ok(FrameStats::default());
         };
         timer.submitted(gpu)?;
-        Ok(timer
-            .try_read(gpu)?
-            .map(|report| FrameStats {
-                passes: report.by_label(),
-            })
-            .unwrap_or_default())
+        Ok(match timer.try_read(gpu)? {
+            Some(report) => {
+                self.last_stats = FrameStats {
+                    passes: report.by_label(),
+                };
+                self.last_stats.clone()
+            }
+            None => FrameStats::default(),
+        })
     }
 
     /// Waits for the GPU to finish every frame submitted so far and returns the GPU
-    /// time of the last one per pass (empty without timestamp queries, or when its
-    /// timings were already returned by [`Renderer::render`]).
+    /// time of the last one per pass (empty without timestamp queries).
     pub fn finish(&mut self, gpu: &Gpu) -> crate::Result<FrameStats> {
-        let passes = match &mut self.timer {
-            Some(timer) => timer.wait(gpu)?.map(|r| r.by_label()).unwrap_or_default(),
-            None => Vec::new(),
-        };
+        if let Some(report) = match &mut self.timer {
+            Some(timer) => timer.wait(gpu)?,
+            None => None,
+        } {
+            self.last_stats = FrameStats {
+                passes: report.by_label(),
+            };
+        }
         gpu.device
             .poll(wgpu::PollType::wait_indefinitely())
             .map_err(|e| pelage_gpu::GpuError::Poll(e.to_string()))?;
         self.in_flight.clear();
         gpu.check()?;
-        Ok(FrameStats { passes })
+        Ok(self.last_stats.clone())
     }
 
     /// Wall-clock time of each stage submitted on its own and waited for, median of
@@ -511,6 +525,13 @@ impl Renderer {
         self.strands.lod()
     }
 
+    /// The passes [`Renderer::record`] records, in order, with the named resources each
+    /// reads and writes (validated when the renderer was built): what an engine splicing
+    /// the stages into its own render graph must keep in order.
+    pub fn plan(&self) -> &FramePlan {
+        &self.plan
+    }
+
     /// Stage 3's method.
     pub fn hair_pass(&self) -> &dyn HairPass {
         self.hair.as_ref()
@@ -536,6 +557,45 @@ impl Renderer {
     pub fn color_texture(&self) -> &wgpu::Texture {
         &self.targets.color
     }
+}
+
+/// The plan of a frame of `strands`, one shadow and hand-over per light (light `i`'s
+/// resources renamed `shadow{i}.*`), and `hair`, over the mesh and the targets.
+pub fn frame_plan(
+    strands: &dyn StrandStage,
+    shadows: &[(Box<dyn ShadowMethod>, LightVisibility)],
+    hair: &dyn HairPass,
+) -> FramePlan {
+    let mut plan = FramePlan::new([
+        pelage_strands::MESH,
+        pelage_shade::TARGET_COLOR,
+        pelage_shade::TARGET_DEPTH,
+    ]);
+    plan.push(strands.passes());
+    let mut key_lookup = Vec::new();
+    for (index, (shadow, hand_over)) in shadows.iter().enumerate() {
+        let name = format!("shadow{index}");
+        plan.push(
+            shadow
+                .passes()
+                .into_iter()
+                .map(|p| p.renamed("shadow", &name)),
+        );
+        let lookup: Vec<String> = shadow
+            .lookup()
+            .iter()
+            .map(|r| match r.strip_prefix("shadow.") {
+                Some(rest) => format!("{name}.{rest}"),
+                None => r.clone(),
+            })
+            .collect();
+        plan.push(hand_over.passes(&lookup));
+        if index == 0 {
+            key_lookup = lookup;
+        }
+    }
+    plan.push(hair.passes(&key_lookup));
+    plan
 }
 
 /// Linear light in [0, 1] as an 8-bit sRGB value (the sRGB transfer function).

@@ -19,6 +19,7 @@ pub mod buffers;
 pub mod context;
 pub mod counters;
 pub mod error;
+pub mod frame;
 pub mod pipelines;
 pub mod readback;
 pub mod shaders;
@@ -29,6 +30,7 @@ pub use buffers::{UniformBuffer, storage_buffer, write_storage, zeroed_storage};
 pub use context::{Gpu, WANTED_FEATURES, feature_names};
 pub use counters::{Created, create_bind_group, create_buffer, create_buffer_init};
 pub use error::{GpuError, Result};
+pub use frame::{FramePlan, PassInfo, PlanError};
 pub use pipelines::{bind_buffers, bind_numbered, compute_pipeline, dispatch_size};
 pub use readback::{TextureData, f16_to_f32, read_buffer, read_buffer_range, read_texture};
 pub use shaders::{

@@ -4,13 +4,25 @@
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU32, Ordering};
 
-use pelage_gpu::{Gpu, GpuTimer, Redirect, ShaderBinding, UniformBuffer, bind_buffers, wgpu};
+use pelage_gpu::{
+    Gpu, GpuTimer, PassInfo, Redirect, ShaderBinding, UniformBuffer, bind_buffers, wgpu,
+};
 use pelage_scene::{CameraMatrices, Light, ParamError, ShadeParams};
 use pelage_strands::{MeshBuffers, PreparedFrame, StrandBuffers, StrandFrame, StrandLayout};
 
 use crate::hair_model::HairModel;
 use crate::ribbons::{FrameUniforms, MeshStyle, RibbonStyle};
 use crate::targets::TargetFormat;
+
+/// The frame resource naming the colour target a method draws into.
+pub const TARGET_COLOR: &str = "target.color";
+/// The frame resource naming the depth target a method draws into and tests against.
+pub const TARGET_DEPTH: &str = "target.depth";
+/// The frame resource of the per-vertex light visibility stage 2 hands over (the name
+/// `pelage_shadow::VISIBILITY` has; this crate does not depend on stage 2).
+pub const VISIBILITY: &str = "visibility";
+/// The frame resource naming a transparency method's own per-pixel storage.
+pub const OIT_STORAGE: &str = "oit.storage";
 
 /// The inputs every method is built from.
 #[derive(Clone, Copy, Debug)]
@@ -469,6 +481,34 @@ impl Common {
         self.style_value.root_occlusion = params.root_occlusion;
         self.params = params.clone();
         Ok(())
+    }
+
+    /// The mesh pass as `encode_mesh` records it when the method draws the mesh (reads
+    /// the mesh and the key light's shadow `lookup`, clears and writes the targets);
+    /// `None` when the engine draws its own.
+    pub fn mesh_pass(&self, lookup: &[String]) -> Option<PassInfo> {
+        self.draw_mesh.then(|| {
+            PassInfo::new(self.mesh_draw.label)
+                .reads([pelage_strands::MESH.to_string()])
+                .reads(lookup.iter().cloned())
+                .writes([TARGET_COLOR, TARGET_DEPTH])
+        })
+    }
+
+    /// A hair pass labelled `label`: reads the strands, the visibility (when bound) and
+    /// the depth target.
+    pub fn hair_pass(&self, label: &str) -> PassInfo {
+        let pass = PassInfo::new(label)
+            .reads([
+                pelage_strands::STRAND_VERTICES,
+                pelage_strands::STRAND_ROOTS,
+            ])
+            .reads([TARGET_DEPTH]);
+        if self.visibility_stride > 0 {
+            pass.reads([VISIBILITY])
+        } else {
+            pass
+        }
     }
 
     /// Errors unless the last [`Common::prepare`] was for `strands`.

@@ -15,7 +15,9 @@ mod models;
 mod ribbons;
 mod targets;
 
-pub use draw::{HairInputs, TargetViews, Visibility};
+pub use draw::{
+    HairInputs, OIT_STORAGE, TARGET_COLOR, TARGET_DEPTH, TargetViews, VISIBILITY, Visibility,
+};
 pub use hair_model::{HairModel, LUT_RESOLUTION};
 pub use methods::{
     ABuffer, CapturedFragment, Dbk, FragmentCapture, HairPass, KBuffer, OitStats, OitTile, Opaque,

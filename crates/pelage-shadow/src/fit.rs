@@ -4,7 +4,7 @@
 use encase::ShaderType;
 use glam::Vec3;
 use pelage_gpu::{
-    Gpu, GpuTimer, UniformBuffer, bind_numbered, compute_pipeline, wgpu, zeroed_storage,
+    Gpu, GpuTimer, PassInfo, UniformBuffer, bind_numbered, compute_pipeline, wgpu, zeroed_storage,
 };
 use pelage_scene::DirectionalLight;
 use pelage_strands::{PreparedFrame, StrandBuffers, StrandFrame, StrandLayout};
@@ -224,6 +224,14 @@ impl LightFit {
         pass.set_pipeline(&self.pipelines[1]);
         pass.set_bind_group(0, &self.groups[1], &[]);
         pass.dispatch_workgroups(1, 1, 1);
+    }
+
+    /// The fit pass as `encode(.., label)` records it: reads the strand vertices, writes
+    /// the grid (`shadow.grid`).
+    pub fn pass_info(&self, label: &str) -> PassInfo {
+        PassInfo::new(label)
+            .reads([pelage_strands::STRAND_VERTICES])
+            .writes([crate::SHADOW_GRID])
     }
 
     /// The uniforms (binding 0 of every light-space pass).

@@ -34,7 +34,7 @@ pub use visibility::LightVisibility;
 pub use voxel::VoxelShadow;
 
 use glam::Vec3;
-use pelage_gpu::{Gpu, GpuTimer, ShaderBinding, ShaderSources, wgpu};
+use pelage_gpu::{Gpu, GpuTimer, PassInfo, ShaderBinding, ShaderSources, wgpu};
 use pelage_scene::{DirectionalLight, ShadowParams};
 use pelage_strands::{MeshBuffers, StrandBuffers, StrandFrame};
 
@@ -56,6 +56,20 @@ pub static SHADERS: ShaderSources = pelage_gpu::wgsl_sources!(
     "shadow/voxel_scan.wgsl",
     "shadow/voxel_splat.wgsl",
 );
+
+/// The frame resource of a shadow's light-space grid (every method fits one).
+pub const SHADOW_GRID: &str = "shadow.grid";
+/// The frame resource of the voxel method's optical depth volume.
+pub const SHADOW_VOLUME: &str = "shadow.volume";
+/// The frame resource of a shadow map's front-most hair depth.
+pub const SHADOW_DEPTH: &str = "shadow.depth";
+/// The frame resource of the deep opacity maps' layers.
+pub const SHADOW_LAYERS: &str = "shadow.layers";
+/// The frame resource of the mesh's own shadow map.
+pub const SHADOW_MESH_MAP: &str = "shadow.mesh_map";
+/// The frame resource of the per-vertex light visibility every light's hand-over
+/// ([`LightVisibility`]) writes and the hair pass reads.
+pub const VISIBILITY: &str = "visibility";
 
 /// The WGSL file every shading pass imports for `light_visibility(p)`; a method's
 /// [`ShaderBinding`] redirects it to the method's lookup. It is one of
@@ -83,6 +97,22 @@ pub trait ShadowMethod: std::fmt::Debug {
         strands: &StrandFrame,
         timer: Option<&mut GpuTimer>,
     ) -> Result<()>;
+    /// The passes [`ShadowMethod::encode`] records, with the named resources each reads
+    /// and writes, under the namespace `shadow` (`shadow.grid`, `shadow.volume`, ...;
+    /// a frame with several lights renames it per light, see
+    /// [`PassInfo::renamed`](pelage_gpu::PassInfo::renamed)).
+    fn passes(&self) -> Vec<PassInfo>;
+    /// The resources behind [`ShadowMethod::binding`] that the passes write: what a
+    /// pass sampling this shadow reads. By default every resource the passes write.
+    fn lookup(&self) -> Vec<String> {
+        let mut names: Vec<String> = Vec::new();
+        for name in self.passes().into_iter().flat_map(|p| p.writes) {
+            if !names.contains(&name) {
+                names.push(name);
+            }
+        }
+        names
+    }
     /// The shadow contract's implementation, for the shading passes.
     fn binding(&self) -> ShaderBinding;
     /// Bytes of GPU memory the method holds.

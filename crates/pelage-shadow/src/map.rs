@@ -4,7 +4,9 @@
 
 use encase::ShaderType;
 use glam::{Vec3, Vec4};
-use pelage_gpu::{BoundResource, Gpu, GpuTimer, ShaderBinding, UniformBuffer, bind_numbered, wgpu};
+use pelage_gpu::{
+    BoundResource, Gpu, GpuTimer, PassInfo, ShaderBinding, UniformBuffer, bind_numbered, wgpu,
+};
 use pelage_scene::{
     AdsmParams, DeepOpacityParams, DirectionalLight, LayerSpacing, MapParams, OpacityFormat,
     ShadowMapParams,
@@ -351,6 +353,32 @@ impl LightMap {
         Ok(())
     }
 
+    /// The passes `encode` records: the fit, the front-most depth (`shadow.depth`), the
+    /// opacity layers (`shadow.layers`, deep opacity maps only), the mesh map.
+    fn passes(&self) -> Vec<PassInfo> {
+        use pelage_strands::{STRAND_ROOTS, STRAND_VERTICES};
+        let mut passes = vec![
+            self.fit.pass_info("shadow: fit"),
+            PassInfo::new("shadow: depth")
+                .reads([crate::SHADOW_GRID, STRAND_VERTICES, STRAND_ROOTS])
+                .writes([crate::SHADOW_DEPTH]),
+        ];
+        if self.layers.is_some() {
+            passes.push(
+                PassInfo::new("shadow: opacity")
+                    .reads([
+                        crate::SHADOW_GRID,
+                        crate::SHADOW_DEPTH,
+                        STRAND_VERTICES,
+                        STRAND_ROOTS,
+                    ])
+                    .writes([crate::SHADOW_LAYERS]),
+            );
+        }
+        passes.extend(self.mesh_map.passes());
+        passes
+    }
+
     fn binding(&self, module: &'static str) -> ShaderBinding {
         let mut resources = vec![
             BoundResource::Buffer(self.fit.uniforms().clone()),
@@ -472,6 +500,10 @@ impl ShadowMethod for DeepOpacityMaps {
         self.map.encode(encoder, strands, timer)
     }
 
+    fn passes(&self) -> Vec<PassInfo> {
+        self.map.passes()
+    }
+
     fn binding(&self) -> ShaderBinding {
         self.map.binding("shadow/dom_lookup.wgsl")
     }
@@ -538,6 +570,10 @@ impl ShadowMethod for HairShadowMap {
         timer: Option<&mut GpuTimer>,
     ) -> crate::Result<()> {
         self.map.encode(encoder, strands, timer)
+    }
+
+    fn passes(&self) -> Vec<PassInfo> {
+        self.map.passes()
     }
 
     fn binding(&self) -> ShaderBinding {
@@ -607,6 +643,10 @@ impl ShadowMethod for Adsm {
         timer: Option<&mut GpuTimer>,
     ) -> crate::Result<()> {
         self.map.encode(encoder, strands, timer)
+    }
+
+    fn passes(&self) -> Vec<PassInfo> {
+        self.map.passes()
     }
 
     fn binding(&self) -> ShaderBinding {

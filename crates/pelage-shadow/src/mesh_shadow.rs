@@ -3,7 +3,7 @@
 
 use encase::ShaderType;
 use glam::{Mat4, Vec3};
-use pelage_gpu::{BoundResource, Gpu, GpuTimer, UniformBuffer, bind_buffers, wgpu};
+use pelage_gpu::{BoundResource, Gpu, GpuTimer, PassInfo, UniformBuffer, bind_buffers, wgpu};
 use pelage_scene::DirectionalLight;
 use pelage_strands::MeshBuffers;
 
@@ -185,6 +185,19 @@ impl MeshShadowMap {
         pass.set_pipeline(pipeline);
         pass.set_bind_group(0, bind_group, &[]);
         pass.draw(0..*vertices, 0..1);
+    }
+
+    /// The depth pass as `encode` records it (none when disabled): reads the mesh,
+    /// writes `shadow.mesh_map`.
+    pub fn passes(&self) -> Vec<PassInfo> {
+        self.draw
+            .iter()
+            .map(|_| {
+                PassInfo::new("shadow: mesh map")
+                    .reads([pelage_strands::MESH])
+                    .writes([crate::SHADOW_MESH_MAP])
+            })
+            .collect()
     }
 
     /// The resources `wgsl/shadow/mesh_shadow.wgsl` binds at 3, 4 and 5.

@@ -2,7 +2,7 @@
 //! vertex (`wgsl/shadow/probe.wgsl`), into that light's slice of a visibility buffer.
 
 use pelage_gpu::{
-    Gpu, GpuTimer, ShaderBinding, compute_pipeline, dispatch_size, wgpu, zeroed_storage,
+    Gpu, GpuTimer, PassInfo, ShaderBinding, compute_pipeline, dispatch_size, wgpu, zeroed_storage,
 };
 use pelage_strands::{PreparedFrame, StrandBuffers, StrandFrame, StrandLayout};
 
@@ -116,6 +116,18 @@ impl LightVisibility {
             limits: gpu.limits().clone(),
             label,
         })
+    }
+
+    /// The pass `encode` records: reads the strand vertices and the shadow method's
+    /// `lookup` ([`ShadowMethod::lookup`](crate::ShadowMethod::lookup), under the
+    /// frame's name for this light), writes [`VISIBILITY`](crate::VISIBILITY).
+    pub fn passes(&self, lookup: &[String]) -> Vec<PassInfo> {
+        vec![
+            PassInfo::new(self.label.clone())
+                .reads([pelage_strands::STRAND_VERTICES.to_string()])
+                .reads(lookup.iter().cloned())
+                .writes([crate::VISIBILITY]),
+        ]
     }
 
     /// Takes the strands stage 1 grows in `strands`, for the next `encode`.

@@ -2,8 +2,8 @@
 
 use glam::Vec3;
 use pelage_gpu::{
-    BoundResource, Gpu, GpuTimer, ShaderBinding, bind_buffers, compute_pipeline, dispatch_size,
-    wgpu, zeroed_storage,
+    BoundResource, Gpu, GpuTimer, PassInfo, ShaderBinding, bind_buffers, compute_pipeline,
+    dispatch_size, wgpu, zeroed_storage,
 };
 use pelage_scene::{DirectionalLight, Splat, VoxelParams};
 use pelage_strands::{MeshBuffers, StrandBuffers, StrandFrame};
@@ -210,6 +210,21 @@ impl ShadowMethod for VoxelShadow {
         self.encode_scan(encoder, timer.as_deref_mut());
         self.mesh_map.encode(encoder, timer);
         Ok(())
+    }
+
+    fn passes(&self) -> Vec<PassInfo> {
+        use pelage_strands::{STRAND_ROOTS, STRAND_VERTICES};
+        let mut passes = vec![
+            self.fit.pass_info("shadow: fit"),
+            PassInfo::new("shadow: splat")
+                .reads([crate::SHADOW_GRID, STRAND_VERTICES, STRAND_ROOTS])
+                .writes([crate::SHADOW_VOLUME]),
+            PassInfo::new("shadow: scan")
+                .reads([crate::SHADOW_GRID, crate::SHADOW_VOLUME])
+                .writes([crate::SHADOW_VOLUME]),
+        ];
+        passes.extend(self.mesh_map.passes());
+        passes
     }
 
     fn binding(&self) -> ShaderBinding {

@@ -4,8 +4,8 @@
 use encase::ShaderType;
 use glam::Vec3;
 use pelage_gpu::{
-    Gpu, GpuTimer, UniformBuffer, bind_buffers, compute_pipeline, dispatch_size, storage_buffer,
-    wgpu, zeroed_storage,
+    Gpu, GpuTimer, PassInfo, UniformBuffer, bind_buffers, compute_pipeline, dispatch_size,
+    storage_buffer, wgpu, zeroed_storage,
 };
 use pelage_scene::{
     Camera, GrowthParams, HairParams, HairType, Mesh, ParamError, SurfaceInterpolation, WindParams,
@@ -14,6 +14,13 @@ use pelage_scene::{
 use crate::{
     LodLevel, MeshBuffers, StrandFrame, StrandLayout, StrandRoot, StrandsError, sample_roots,
 };
+
+/// The frame resource naming [`StrandBuffers::vertices`] in a [`FramePlan`](pelage_gpu::FramePlan).
+pub const STRAND_VERTICES: &str = "strands.vertices";
+/// The frame resource naming [`StrandBuffers::roots`] (stage 1 rewrites their widths).
+pub const STRAND_ROOTS: &str = "strands.roots";
+/// The frame resource naming the [`MeshBuffers`], which the caller may rewrite every frame.
+pub const MESH: &str = "mesh";
 
 /// Workgroup size of `grow.wgsl` and `groom.wgsl`.
 const WORKGROUP: u32 = 64;
@@ -331,6 +338,9 @@ impl GrowStrands {
                 &rest_roots,
             ],
         )?;
+        let mut pass = pass;
+        // The mesh buffers may be rewritten every frame (skinning): a frame input.
+        pass.inputs = &[MESH];
         Ok(Self {
             roots,
             pass,
@@ -402,6 +412,9 @@ impl StrandStage for GrowStrands {
 pub struct StrandPass {
     /// The timestamp label of the pass.
     label: &'static str,
+    /// The frame inputs the pass reads besides its own buffers (see
+    /// [`StrandStage::passes`]).
+    pub(crate) inputs: &'static [&'static str],
     params: HairParams,
     pipeline: wgpu::ComputePipeline,
     bind_group: wgpu::BindGroup,
@@ -465,6 +478,7 @@ impl StrandPass {
         };
         Ok(Self {
             label,
+            inputs: &[],
             params: params.clone(),
             pipeline,
             bind_group,
@@ -625,6 +639,18 @@ pub trait StrandStage: std::fmt::Debug {
         let groups = dispatch_size(&pass.limits, u64::from(frame.layout.strands), WORKGROUP);
         compute.dispatch_workgroups(groups.0, groups.1, 1);
         Ok(())
+    }
+
+    /// The passes [`StrandStage::encode`] records, with the named resources each reads
+    /// and writes ([`STRAND_VERTICES`], [`STRAND_ROOTS`]; [`MESH`] for grown fur), for a
+    /// [`FramePlan`](pelage_gpu::FramePlan).
+    fn passes(&self) -> Vec<PassInfo> {
+        let pass = self.pass();
+        vec![
+            PassInfo::new(pass.label)
+                .reads(pass.inputs.iter().copied())
+                .writes([STRAND_VERTICES, STRAND_ROOTS]),
+        ]
     }
 
     /// The buffers this stage writes.

@@ -28,7 +28,10 @@ mod mesh_buffers;
 mod roots;
 
 pub use groom::GroomStrands;
-pub use grow::{GrowStrands, GrowUniforms, StrandBuffers, StrandPass, StrandStage, StrandStyle};
+pub use grow::{
+    GrowStrands, GrowUniforms, MESH, STRAND_ROOTS, STRAND_VERTICES, StrandBuffers, StrandPass,
+    StrandStage, StrandStyle,
+};
 pub use lod::{
     FrameOrderError, LodLevel, PreparedFrame, StrandFrame, StrandLayout, bend_error,
     bend_per_segment, fewest_segments, reduced_segments,

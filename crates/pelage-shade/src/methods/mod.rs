@@ -29,7 +29,7 @@ pub use random_subsets::RandomSubsets;
 pub use sliced::OitTile;
 pub use wboit::Wboit;
 
-use pelage_gpu::{Gpu, GpuTimer, wgpu};
+use pelage_gpu::{Gpu, GpuTimer, PassInfo, wgpu};
 use pelage_scene::{CameraMatrices, Light, Transparency};
 use pelage_strands::StrandFrame;
 
@@ -79,6 +79,12 @@ pub trait HairPass: std::fmt::Debug {
         target: &TargetViews<'_>,
         timer: Option<&mut GpuTimer>,
     ) -> crate::Result<()>;
+
+    /// The passes [`HairPass::encode`] records in order (a pass drawn once per slice of
+    /// the screen appears once per slice), with the named resources each reads and
+    /// writes; `lookup` names what the key light's shadow (the one the mesh samples)
+    /// wrote, empty without shadows.
+    fn passes(&self, lookup: &[String]) -> Vec<PassInfo>;
 
     /// Bytes of GPU memory the method owns beyond the caller's targets.
     fn memory_bytes(&self) -> u64;

@@ -1,6 +1,6 @@
 //! The opaque method: depth-tested ribbons, alpha ignored (`shade/ribbons.wgsl`).
 
-use pelage_gpu::{Gpu, GpuTimer, wgpu};
+use pelage_gpu::{Gpu, GpuTimer, PassInfo, wgpu};
 use pelage_scene::{CameraMatrices, Light};
 use pelage_strands::StrandFrame;
 
@@ -97,6 +97,18 @@ impl HairPass for Opaque {
 
     fn set_params(&mut self, gpu: &Gpu, params: &pelage_scene::ShadeParams) -> crate::Result<()> {
         self.common.set_params(gpu, params)
+    }
+
+    fn passes(&self, lookup: &[String]) -> Vec<PassInfo> {
+        let hair = self
+            .common
+            .hair_pass(self.hair.label)
+            .writes([crate::draw::TARGET_COLOR, crate::draw::TARGET_DEPTH]);
+        self.common
+            .mesh_pass(lookup)
+            .into_iter()
+            .chain([hair])
+            .collect()
     }
 
     fn memory_bytes(&self) -> u64 {

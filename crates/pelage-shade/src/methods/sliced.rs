@@ -2,13 +2,13 @@
 //! buffers fit one storage binding, and recording each method's passes per band.
 
 use encase::ShaderType;
-use pelage_gpu::{Gpu, GpuError, GpuTimer, wgpu};
+use pelage_gpu::{Gpu, GpuError, GpuTimer, PassInfo, wgpu};
 
 use crate::targets::TargetFormat;
 
 use crate::draw::{
-    Common, Draw, HairInputs, HairPipe, RasterDesc, TargetViews, Vertices, depth_state,
-    over_target, raster_pipeline,
+    Common, Draw, HairInputs, HairPipe, OIT_STORAGE, RasterDesc, TARGET_COLOR, TARGET_DEPTH,
+    TargetViews, Vertices, depth_state, over_target, raster_pipeline,
 };
 
 /// One slice of the screen and the method's constants (`OitTile` in `shade/oit/common.wgsl`).
@@ -264,6 +264,40 @@ impl Sliced {
         Ok(())
     }
 
+    /// The passes `encode` records: every pass of the method for each slice in turn.
+    /// Storage passes write the method's storage ([`OIT_STORAGE`]; the first of a slice
+    /// starts it, later ones read it too), the resolve reads it and blends over the
+    /// colour, the opaque fallback draws into the targets.
+    pub fn pass_infos(&self, common: &Common) -> Vec<PassInfo> {
+        let mut infos = Vec::new();
+        for _ in 0..self.count {
+            let mut started = false;
+            for pass in &self.passes {
+                let label = pass.draw.label;
+                let info = match pass.kind {
+                    PassKind::Storage | PassKind::DepthOnly => {
+                        let info = common.hair_pass(label).writes([OIT_STORAGE]);
+                        let info = if started {
+                            info.reads([OIT_STORAGE])
+                        } else {
+                            info
+                        };
+                        started = true;
+                        info
+                    }
+                    PassKind::OpaqueHair => {
+                        common.hair_pass(label).writes([TARGET_COLOR, TARGET_DEPTH])
+                    }
+                    PassKind::Resolve => PassInfo::new(label)
+                        .reads([OIT_STORAGE, TARGET_COLOR, TARGET_DEPTH])
+                        .writes([TARGET_COLOR]),
+                };
+                infos.push(info);
+            }
+        }
+        infos
+    }
+
     /// The `@group(3)` bind groups of every slice and pass, sampling `depth`.
     fn bind_groups(
         &self,
@@ -459,6 +493,15 @@ macro_rules! sliced_hair_pass {
             ) -> $crate::Result<()> {
                 self.0.common.check(self.0.name, strands)?;
                 self.0.encode(gpu, encoder, target, timer)
+            }
+
+            fn passes(&self, lookup: &[String]) -> Vec<pelage_gpu::PassInfo> {
+                self.0
+                    .common
+                    .mesh_pass(lookup)
+                    .into_iter()
+                    .chain(self.0.sliced.pass_infos(&self.0.common))
+                    .collect()
             }
 
             fn memory_bytes(&self) -> u64 {

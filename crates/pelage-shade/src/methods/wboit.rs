@@ -1,6 +1,6 @@
 //! Weighted blended OIT (McGuire and Bavoil 2013) (`shade/oit/wboit.wgsl`).
 
-use pelage_gpu::{Gpu, GpuTimer, wgpu};
+use pelage_gpu::{Gpu, GpuTimer, PassInfo, wgpu};
 use pelage_scene::{CameraMatrices, Light, WboitWeight};
 use pelage_strands::StrandFrame;
 
@@ -253,6 +253,24 @@ impl HairPass for Wboit {
 
     fn set_params(&mut self, gpu: &Gpu, params: &pelage_scene::ShadeParams) -> crate::Result<()> {
         self.common.set_params(gpu, params)
+    }
+
+    fn passes(&self, lookup: &[String]) -> Vec<PassInfo> {
+        let accumulate = self
+            .common
+            .hair_pass(self.accum.label)
+            .writes([crate::draw::OIT_STORAGE]);
+        let resolve = self.resolve.passes.iter().map(|pass| {
+            PassInfo::new(pass.draw.label)
+                .reads([crate::draw::OIT_STORAGE, crate::draw::TARGET_COLOR])
+                .writes([crate::draw::TARGET_COLOR])
+        });
+        self.common
+            .mesh_pass(lookup)
+            .into_iter()
+            .chain([accumulate])
+            .chain(resolve)
+            .collect()
     }
 
     fn memory_bytes(&self) -> u64 {

@@ -1,0 +1,128 @@
+//! The frame as a list of passes over named resources: the renderer's plan is valid for
+//! every shadow and transparency method, it declares exactly the passes a real frame
+//! records (its labels against the GPU timer's), and a plan in the wrong order is
+//! refused, naming the pass to record first.
+
+use pelage::gpu::{Gpu, PlanError};
+use pelage::scene::{ShadowParams, Transparency};
+use pelage::{Renderer, Scene, frame_plan};
+
+fn scene(shadow: ShadowParams, transparency: Transparency, lights: usize) -> Scene {
+    let mut scene = Scene::default();
+    scene.hair.roots.count = 1500;
+    scene.shadow = shadow;
+    scene.shade.transparency = transparency;
+    scene.shade.sample_count = 1;
+    scene.lights = vec![pelage::scene::Light::default(); lights];
+    scene
+}
+
+#[test]
+fn the_plan_declares_the_passes_a_frame_records() {
+    let gpu = Gpu::headless().unwrap_or_else(|e| panic!("this test needs a GPU adapter: {e}"));
+    if !gpu.has_timestamps() {
+        panic!("this test compares with timestamp labels; the adapter has no timestamp queries");
+    }
+    let cases = [
+        (ShadowParams::None, Transparency::Opaque, 1),
+        (ShadowParams::default(), Transparency::Opaque, 2),
+        (
+            ShadowParams::DeepOpacity(Default::default()),
+            Transparency::wboit(),
+            1,
+        ),
+        (
+            ShadowParams::ShadowMap(Default::default()),
+            Transparency::a_buffer(),
+            1,
+        ),
+        (
+            ShadowParams::Adsm(Default::default()),
+            Transparency::KBuffer { k: 8 },
+            1,
+        ),
+        (ShadowParams::default(), Transparency::dbk(0.05), 1),
+        (
+            ShadowParams::default(),
+            Transparency::RandomSubsets { k: 8 },
+            1,
+        ),
+    ];
+    for (shadow, method, lights) in cases {
+        let s = scene(shadow.clone(), method.clone(), lights);
+        let mut renderer = match Renderer::new(&gpu, &s, 96, 72) {
+            Ok(r) => r,
+            Err(pelage::Error::Shade(pelage::shade::ShadeError::Unsupported(why))) => {
+                println!("{method:?}: skipped, this adapter cannot run it: {why}");
+                continue;
+            }
+            Err(e) => panic!("{shadow:?} {method:?}: {e}"),
+        };
+        let plan = renderer.plan().clone();
+        plan.validate().unwrap();
+        renderer.render(&gpu, 0.0, &s.camera).unwrap();
+        let stats = renderer.finish(&gpu).unwrap();
+        let timed: Vec<&str> = stats.passes.iter().map(|(l, _)| l.as_str()).collect();
+        println!(
+            "{method:?}, {lights} light(s): {} passes: {:?}",
+            plan.passes().len(),
+            plan.labels()
+        );
+        assert_eq!(
+            plan.labels(),
+            timed,
+            "{shadow:?} / {method:?}: the plan's passes differ from what the frame recorded"
+        );
+        // Light i's resources are its own.
+        if lights == 2 {
+            assert!(
+                plan.passes()
+                    .iter()
+                    .any(|p| p.writes.iter().any(|w| w == "shadow1.volume"))
+            );
+        }
+    }
+}
+
+#[test]
+fn a_plan_in_the_wrong_order_names_the_pass_to_record_first() {
+    let gpu = Gpu::headless().unwrap_or_else(|e| panic!("this test needs a GPU adapter: {e}"));
+    let s = scene(ShadowParams::default(), Transparency::Opaque, 1);
+    let renderer = Renderer::new(&gpu, &s, 64, 48).unwrap();
+    // Stage 3 before stage 1: the hair pass would read strands nothing wrote yet.
+    let mut wrong = pelage::gpu::FramePlan::new(renderer.plan().inputs().to_vec());
+    let passes = renderer.plan().passes();
+    let hair: Vec<_> = passes
+        .iter()
+        .filter(|p| p.label.starts_with("shade:"))
+        .cloned()
+        .collect();
+    let rest: Vec<_> = passes
+        .iter()
+        .filter(|p| !p.label.starts_with("shade:"))
+        .cloned()
+        .collect();
+    wrong.push(hair);
+    wrong.push(rest);
+    let err = wrong.validate().unwrap_err();
+    println!("{err}");
+    match &err {
+        PlanError::Unwritten {
+            pass,
+            written_later_by,
+            ..
+        } => {
+            assert!(pass.starts_with("shade:"), "{err}");
+            assert!(written_later_by.is_some(), "{err}");
+        }
+    }
+    // The renderer's own assembly, run on its stages, is the valid order.
+    let again = frame_plan(renderer.strands(), &[], renderer.hair_pass());
+    // Without its shadows the plan is still valid: the hair then reads no visibility
+    // only if the method was built without it; this one was, so the mesh pass's
+    // lookup is missing and visibility is unwritten.
+    assert!(
+        again.validate().is_err(),
+        "a frame without the shadow the hair reads must be refused"
+    );
+}
