@@ -20,6 +20,10 @@
 //!    tip as a point;
 //! 5. reads the HDR target back and tone maps it (Reinhard, then sRGB) on the CPU.
 //!
+//! Each pelage stage is prepared (per-frame uniforms) and recorded with the
+//! `StrandFrame` stage 1 returns, and the order of every pass, pelage's and the
+//! engine's, is declared once in a `FramePlan` and checked.
+//!
 //! Writes `DIR/embed_NNNN.png` (default `out/embed`) and checks the last frame.
 //! `tests/embed.rs` renders frame 0 without the tips and compares it with the facade's
 //! picture of the same scene (`pelage::Renderer`).
@@ -27,11 +31,13 @@
 use std::path::PathBuf;
 
 use glam::Vec3;
-use pelage::gpu::{Gpu, ShaderSources, wgpu};
+use pelage::gpu::{FramePlan, Gpu, PassInfo, ShaderSources, wgpu};
 use pelage::scene::{CameraMatrices, HairParams, Light, Mesh, ShadeParams, VoxelParams};
-use pelage::shade::{HairInputs, HairPass, TargetFormat, TargetViews, Visibility};
+use pelage::shade::{
+    HairInputs, HairPass, TARGET_COLOR, TARGET_DEPTH, TargetFormat, TargetViews, Visibility,
+};
 use pelage::shadow::{LightVisibility, ShadowMethod, VoxelShadow};
-use pelage::strands::{GrowStrands, MeshBuffers, StrandStage};
+use pelage::strands::{GrowStrands, MESH, MeshBuffers, StrandStage};
 use wgpu::util::DeviceExt;
 
 type Result<T> = std::result::Result<T, Box<dyn std::error::Error>>;
@@ -267,6 +273,21 @@ impl Engine {
             WIDTH,
             HEIGHT,
         )?;
+
+        // The frame's passes in order, pelage's declared by its stages and the engine's
+        // own beside them, checked once: the engine's mesh samples the shadow, so it
+        // comes after the shadow's passes, and pelage's hair after the mesh.
+        let lookup = voxel.lookup();
+        let mut plan = FramePlan::new([MESH, TARGET_COLOR, TARGET_DEPTH]);
+        plan.push(strands.passes());
+        plan.push(voxel.passes());
+        plan.push(hand_over.passes(&lookup));
+        plan.push([PassInfo::new("engine mesh")
+            .reads([MESH.to_string()])
+            .reads(lookup.iter().cloned())
+            .writes([TARGET_COLOR, TARGET_DEPTH])]);
+        plan.push(hair.passes(&lookup));
+        plan.validate()?;
 
         // The engine's targets.
         let target = |format, usage| {

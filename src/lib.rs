@@ -83,3 +83,8 @@ pub enum Error {
 
 /// Result of the frame pipeline.
 pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+/// The README's Rust examples, compiled as doc tests (the engine example among them).
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+mod readme {}

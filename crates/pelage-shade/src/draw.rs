@@ -150,7 +150,7 @@ pub(crate) struct Common {
     pub frame: UniformBuffer<FrameUniforms>,
     pub style: UniformBuffer<RibbonStyle>,
     pub mesh_draw: Draw,
-    /// Ribbon vertices of this frame's strands (written by `set_frame`).
+    /// Ribbon vertices of this frame's strands (written by `prepare`).
     pub hair_vertices: Arc<AtomicU32>,
     /// The stage 1 frame `prepare` last wrote the uniforms for.
     pub prepared: PreparedFrame,

@@ -128,7 +128,7 @@ pub struct LightFit {
 }
 
 impl LightFit {
-    /// The fit of `strands`' vertices under `base` (whose axes `set_light` replaces).
+    /// The fit of `strands`' vertices under `base` (whose axes `prepare` replaces).
     pub fn new(gpu: &Gpu, base: LightGridUniforms, strands: &StrandBuffers) -> crate::Result<Self> {
         let uniforms = UniformBuffer::new(gpu, "pelage light grid uniforms", &base)?;
         let usage = wgpu::BufferUsages::STORAGE;
@@ -244,7 +244,7 @@ impl LightFit {
         &self.grid
     }
 
-    /// The uniforms as created (axes are set per frame by `set_light`).
+    /// The uniforms as created (axes are set per frame by `prepare`).
     pub fn base(&self) -> LightGridUniforms {
         self.base
     }

@@ -32,10 +32,10 @@ use crate::{LodLevel, StrandRoot, hash_to_unit, pcg_hash};
 /// use pelage_scene::{GroomSource, HairParams};
 /// use pelage_strands::{GroomStrands, StrandStage};
 /// let groom = GroomSource { fit: Some(1.8), ..GroomSource::new("long_hair.hair") }.load()?;
-/// let strands = GroomStrands::new(gpu, &groom, &HairParams::default())?;
-/// strands.set_time(&gpu.queue, 0.5)?;
+/// let mut strands = GroomStrands::new(gpu, &groom, &HairParams::default())?;
+/// let frame = strands.prepare(&gpu.queue, 0.5)?;
 /// let mut encoder = gpu.device.create_command_encoder(&Default::default());
-/// strands.encode(&mut encoder, None);
+/// strands.encode(&mut encoder, &frame, None)?;
 /// gpu.queue.submit([encoder.finish()]);
 /// # Ok(()) }
 /// ```

@@ -270,7 +270,7 @@ impl StrandBuffers {
 
 /// Stage 1: grows strands over a mesh for any time `t`.
 ///
-/// The per-frame calls (`set_time`, `set_lod`, `encode`, `buffers`, ...) are those of
+/// The per-frame calls (`set_lod`, `prepare`, `encode`, `buffers`, ...) are those of
 /// every stage 1 method, in [`StrandStage`].
 ///
 /// ```no_run
