@@ -353,14 +353,23 @@ impl LightMap {
 
     fn binding(&self, module: &'static str) -> ShaderBinding {
         let mut resources = vec![
-            BoundResource::Buffer(self.fit.uniforms().clone()),
-            BoundResource::Buffer(self.fit.grid().clone()),
-            BoundResource::Buffer(self.uniforms.buffer.clone()),
+            BoundResource::Uniform(self.fit.uniforms().clone()),
+            BoundResource::Storage(self.fit.grid().clone()),
+            BoundResource::Uniform(self.uniforms.buffer.clone()),
         ];
         resources.extend(self.mesh_map.resources());
-        resources.push(BoundResource::TextureView(self.depth.clone()));
+        resources.push(BoundResource::Texture(
+            self.depth.clone(),
+            wgpu::TextureSampleType::Depth,
+        ));
         if let Some(layers) = &self.layers {
-            resources.extend(layers.views.iter().cloned().map(BoundResource::TextureView));
+            // Read with textureLoad: float32 layers need no filtering.
+            resources.extend(layers.views.iter().map(|v| {
+                BoundResource::Texture(
+                    v.clone(),
+                    wgpu::TextureSampleType::Float { filterable: false },
+                )
+            }));
         }
         ShaderBinding {
             contract: crate::CONTRACT,

@@ -190,9 +190,9 @@ impl MeshShadowMap {
     /// The resources `wgsl/shadow/mesh_shadow.wgsl` binds at 3, 4 and 5.
     pub fn resources(&self) -> [BoundResource; 3] {
         [
-            BoundResource::Buffer(self.uniforms.buffer.clone()),
-            BoundResource::TextureView(self.view.clone()),
-            BoundResource::Sampler(self.sampler.clone()),
+            BoundResource::Uniform(self.uniforms.buffer.clone()),
+            BoundResource::Texture(self.view.clone(), wgpu::TextureSampleType::Depth),
+            BoundResource::Sampler(self.sampler.clone(), wgpu::SamplerBindingType::Comparison),
         ]
     }
 

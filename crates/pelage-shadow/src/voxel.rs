@@ -214,9 +214,9 @@ impl ShadowMethod for VoxelShadow {
 
     fn binding(&self) -> ShaderBinding {
         let mut resources = vec![
-            BoundResource::Buffer(self.fit.uniforms().clone()),
-            BoundResource::Buffer(self.fit.grid().clone()),
-            BoundResource::Buffer(self.volume.clone()),
+            BoundResource::Uniform(self.fit.uniforms().clone()),
+            BoundResource::Storage(self.fit.grid().clone()),
+            BoundResource::Storage(self.volume.clone()),
         ];
         resources.extend(self.mesh_map.resources());
         ShaderBinding {
