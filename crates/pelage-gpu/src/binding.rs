@@ -104,16 +104,36 @@ impl ShaderBinding {
     }
 
     /// The layout of group `group` ([`ShaderBinding::layout_entries`]) created on
-    /// `device`; empty when the module binds nothing.
+    /// `device`, or `None` when the module binds nothing (the group is then left out
+    /// of the consumer's pipeline layout, see [`ShaderBinding::place`]).
     pub fn layout(
         &self,
         device: &wgpu::Device,
         label: &str,
         visibility: wgpu::ShaderStages,
-    ) -> wgpu::BindGroupLayout {
-        crate::BindLayout::new(label, visibility)
-            .entries(self.layout_entries(visibility))
-            .build(device)
+    ) -> Option<wgpu::BindGroupLayout> {
+        if self.resources.is_empty() {
+            return None;
+        }
+        Some(
+            crate::BindLayout::new(label, visibility)
+                .entries(self.layout_entries(visibility))
+                .build(device),
+        )
+    }
+
+    /// Puts `layout` (normally [`ShaderBinding::layout`]'s) at index `group` of a
+    /// consumer's pipeline `layouts`, growing it with `None`s as needed.
+    pub fn place<'a>(
+        &self,
+        layouts: &mut Vec<Option<&'a wgpu::BindGroupLayout>>,
+        layout: Option<&'a wgpu::BindGroupLayout>,
+    ) {
+        let group = self.group as usize;
+        if layouts.len() <= group {
+            layouts.resize(group + 1, None);
+        }
+        layouts[group] = layout;
     }
 
     /// A bind group for `layout` (normally [`ShaderBinding::layout`]'s), or `None`
