@@ -302,3 +302,120 @@ fn library_shaders_compile_on_the_device() {
         library.module(&gpu, name).unwrap_or_else(|e| panic!("{e}"));
     }
 }
+
+const SCALE: &str = r"
+@group(0) @binding(0) var<uniform> factor: vec4<u32>;
+@group(0) @binding(1) var<storage, read> input: array<u32>;
+@group(0) @binding(2) var<storage, read_write> output: array<u32>;
+
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    if (id.x < arrayLength(&output)) {
+        output[id.x] = input[id.x] * factor.x;
+    }
+}
+";
+
+#[test]
+fn explicit_layouts_run_and_a_mismatch_is_a_validation_error() {
+    use pelage_gpu::{BindLayout, bind_buffers, compute_pipeline_with_layouts};
+    let gpu = gpu();
+    let module = gpu
+        .device
+        .create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("scale"),
+            source: wgpu::ShaderSource::Wgsl(SCALE.into()),
+        });
+    let layout = BindLayout::new("scale", wgpu::ShaderStages::COMPUTE)
+        .uniform(0)
+        .storage(1)
+        .storage_rw(2);
+    assert_eq!(layout.layout_entries().len(), 3);
+    let usage = wgpu::BufferUsages::STORAGE;
+    let factor = storage_buffer(
+        &gpu,
+        "factor",
+        &[3u32, 0, 0, 0],
+        wgpu::BufferUsages::UNIFORM,
+    )
+    .unwrap();
+    let input = storage_buffer(&gpu, "input", &[1u32, 2, 3, 4], usage).unwrap();
+    let output = zeroed_storage(&gpu, "output", 16, usage).unwrap();
+    let (pipeline, group) = gpu
+        .scoped(|device| {
+            let layout = layout.build(device);
+            let pipeline =
+                compute_pipeline_with_layouts(device, "scale", &module, "main", &[Some(&layout)]);
+            let group = bind_buffers(device, "scale", &layout, &[&factor, &input, &output]);
+            (pipeline, group)
+        })
+        .unwrap();
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    {
+        let mut pass = encoder.begin_compute_pass(&Default::default());
+        pass.set_pipeline(&pipeline);
+        pass.set_bind_group(0, &group, &[]);
+        pass.dispatch_workgroups(1, 1, 1);
+    }
+    gpu.submit_and_wait([encoder.finish()]).unwrap();
+    let out = read_buffer(&gpu, &output).unwrap();
+    assert_eq!(bytemuck::cast_slice::<u8, u32>(&out), &[3, 6, 9, 12]);
+
+    // The output declared read-only where the shader writes it: a validation error.
+    let wrong = BindLayout::new("scale wrong", wgpu::ShaderStages::COMPUTE)
+        .uniform(0)
+        .storage(1)
+        .storage(2);
+    let result = gpu.scoped(|device| {
+        let layout = wrong.build(device);
+        compute_pipeline_with_layouts(device, "scale wrong", &module, "main", &[Some(&layout)])
+    });
+    match result {
+        Err(GpuError::Validation(message)) => println!("{message}"),
+        other => panic!("expected a validation error, got {other:?}"),
+    }
+    gpu.check().unwrap();
+}
+
+#[test]
+fn a_shader_binding_describes_its_layout() {
+    use pelage_gpu::{BoundResource, ShaderBinding};
+    let gpu = gpu();
+    let buffer = zeroed_storage(&gpu, "b", 16, wgpu::BufferUsages::STORAGE).unwrap();
+    let binding = ShaderBinding {
+        contract: "shadow/none.wgsl",
+        module: "shadow/none.wgsl",
+        sources: &SHADERS,
+        group: 2,
+        resources: vec![
+            BoundResource::Uniform(buffer.clone()),
+            BoundResource::Storage(buffer.clone()),
+        ],
+    };
+    let entries = binding.layout_entries(wgpu::ShaderStages::FRAGMENT);
+    assert_eq!(entries.len(), 2);
+    assert_eq!(entries[1].binding, 1);
+    assert!(matches!(
+        entries[1].ty,
+        wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only: true },
+            ..
+        }
+    ));
+    let layout = binding
+        .layout(&gpu.device, "b", wgpu::ShaderStages::FRAGMENT)
+        .unwrap();
+    let mut layouts = Vec::new();
+    binding.place(&mut layouts, Some(&layout));
+    assert_eq!(layouts.len(), 3);
+    assert!(layouts[0].is_none() && layouts[1].is_none() && layouts[2].is_some());
+    let empty = ShaderBinding {
+        resources: Vec::new(),
+        ..binding
+    };
+    assert!(
+        empty
+            .layout(&gpu.device, "none", wgpu::ShaderStages::FRAGMENT)
+            .is_none()
+    );
+}

@@ -5,7 +5,8 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicU32, Ordering};
 
 use pelage_gpu::{
-    Gpu, GpuTimer, PassInfo, Redirect, ShaderBinding, UniformBuffer, bind_buffers, wgpu,
+    BindLayout, Gpu, GpuTimer, PassInfo, Redirect, ShaderBinding, UniformBuffer, bind_buffers,
+    pipeline_layout, wgpu,
 };
 use pelage_scene::{CameraMatrices, Light, ParamError, ShadeParams};
 use pelage_strands::{MeshBuffers, PreparedFrame, StrandBuffers, StrandFrame, StrandLayout};
@@ -141,6 +142,8 @@ pub(crate) struct HairPipe<'a> {
     pub depth: wgpu::DepthStencilState,
     /// Whether `fragment` shades (calls `hair_radiance`), so binds the shading model.
     pub shades: bool,
+    /// The layout of the method's `@group(3)`, if the module declares one.
+    pub oit: Option<&'a wgpu::BindGroupLayout>,
 }
 
 /// The uniforms and the mesh draw every method has.
@@ -279,10 +282,30 @@ impl Common {
                 .library()
                 .module_redirected(gpu, "shade/mesh.wgsl", &redirects)?;
         let mesh_draw = gpu.scoped(|device| {
+            // mesh.wgsl: frame, positions, normals, indices, style; group 1 the shadow method's.
+            let layout = BindLayout::new("pelage mesh", wgpu::ShaderStages::VERTEX_FRAGMENT)
+                .uniform(0)
+                .storage(1)
+                .storage(2)
+                .storage(3)
+                .uniform(4)
+                .build(device);
+            let shadow_layout = shadow.and_then(|b| {
+                b.layout(
+                    device,
+                    "pelage mesh shadow",
+                    wgpu::ShaderStages::VERTEX_FRAGMENT,
+                )
+            });
+            let mut layouts = vec![Some(&layout)];
+            if let Some(b) = shadow {
+                b.place(&mut layouts, shadow_layout.as_ref());
+            }
             let pipeline = raster_pipeline(
                 device,
                 &RasterDesc {
                     label: "pelage mesh",
+                    layouts: &layouts,
                     module: &mesh_module,
                     vertex: "vs_main",
                     fragment: Some("fs_main"),
@@ -295,7 +318,7 @@ impl Common {
             let group0 = bind_buffers(
                 device,
                 "pelage mesh",
-                &pipeline.get_bind_group_layout(0),
+                &layout,
                 &[
                     &frame.buffer,
                     &mesh.positions,
@@ -304,7 +327,9 @@ impl Common {
                     &mesh_style.buffer,
                 ],
             );
-            let shadow_group = shadow_group(device, shadow, &pipeline, "pelage mesh shadow");
+            let shadow_group = shadow
+                .zip(shadow_layout.as_ref())
+                .and_then(|(b, l)| b.bind_group(device, "pelage mesh shadow", l));
             Draw {
                 label: "shade: mesh",
                 pipeline,
@@ -347,12 +372,37 @@ impl Common {
             targets,
             ref depth,
             shades,
+            oit,
         } = *pipe;
         Ok(gpu.scoped(|device| {
+            // hair.wgsl: the vertex stage reads the strands and visibility, both stages
+            // the frame and style uniforms.
+            let layout = BindLayout::new(label, wgpu::ShaderStages::VERTEX_FRAGMENT)
+                .uniform(0)
+                .visible(wgpu::ShaderStages::VERTEX)
+                .storage(1)
+                .storage(2)
+                .visible(wgpu::ShaderStages::VERTEX_FRAGMENT)
+                .uniform(3)
+                .visible(wgpu::ShaderStages::VERTEX)
+                .storage(4)
+                .build(device);
+            let model = self.model.binding();
+            let model_layout = shades
+                .then(|| model.layout(device, label, wgpu::ShaderStages::VERTEX_FRAGMENT))
+                .flatten();
+            // Group 1 stays empty: the hair reads its shadows from the visibility buffer.
+            let mut layouts = vec![Some(&layout), None];
+            model.place(&mut layouts, model_layout.as_ref());
+            if let Some(oit) = oit {
+                layouts.resize(4, None);
+                layouts[3] = Some(oit);
+            }
             let pipeline = raster_pipeline(
                 device,
                 &RasterDesc {
                     label,
+                    layouts: &layouts,
                     module,
                     vertex: "vs_main",
                     fragment: Some(fragment),
@@ -366,7 +416,7 @@ impl Common {
             let group0 = bind_buffers(
                 device,
                 label,
-                &pipeline.get_bind_group_layout(0),
+                &layout,
                 &[
                     &self.frame.buffer,
                     &inputs.strands.vertices,
@@ -375,10 +425,9 @@ impl Common {
                     &self.visibility,
                 ],
             );
-            // Group 1 stays empty: the hair reads its shadows from the visibility buffer.
-            let model_group = shades
-                .then(|| contract_group(device, self.model.binding(), &pipeline, label))
-                .flatten();
+            let model_group = model_layout
+                .as_ref()
+                .and_then(|l| model.bind_group(device, label, l));
             Draw {
                 label,
                 pipeline,
@@ -573,26 +622,6 @@ impl Common {
     }
 }
 
-/// The bind group of the shadow method for `pipeline`, if it binds anything.
-fn shadow_group(
-    device: &wgpu::Device,
-    shadow: Option<&ShaderBinding>,
-    pipeline: &wgpu::RenderPipeline,
-    label: &str,
-) -> Option<wgpu::BindGroup> {
-    shadow.and_then(|b| contract_group(device, b, pipeline, label))
-}
-
-/// The bind group of a contract implementation `b` for `pipeline`, if it binds anything.
-fn contract_group(
-    device: &wgpu::Device,
-    b: &ShaderBinding,
-    pipeline: &wgpu::RenderPipeline,
-    label: &str,
-) -> Option<wgpu::BindGroup> {
-    b.bind_group(device, label, &pipeline.get_bind_group_layout(b.group))
-}
-
 /// Depth state for `target`'s depth format and direction: test nearer, write when `write`.
 pub(crate) fn depth_state(target: &TargetFormat, write: bool) -> wgpu::DepthStencilState {
     wgpu::DepthStencilState {
@@ -616,6 +645,8 @@ pub(crate) fn over_target(target: &TargetFormat) -> wgpu::ColorTargetState {
 
 pub(crate) struct RasterDesc<'a> {
     pub label: &'a str,
+    /// The explicit bind group layouts, group `i` = `layouts[i]`.
+    pub layouts: &'a [Option<&'a wgpu::BindGroupLayout>],
     pub module: &'a wgpu::ShaderModule,
     pub vertex: &'a str,
     pub fragment: Option<&'a str>,
@@ -626,9 +657,10 @@ pub(crate) struct RasterDesc<'a> {
 }
 
 pub(crate) fn raster_pipeline(device: &wgpu::Device, d: &RasterDesc<'_>) -> wgpu::RenderPipeline {
+    let layout = pipeline_layout(device, d.label, d.layouts);
     device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
         label: Some(d.label),
-        layout: None,
+        layout: Some(&layout),
         vertex: wgpu::VertexState {
             module: d.module,
             entry_point: Some(d.vertex),

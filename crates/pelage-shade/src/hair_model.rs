@@ -44,7 +44,7 @@ impl HairModel {
                 )?;
                 (
                     CONTRACT,
-                    vec![BoundResource::Buffer(u.buffer.clone())],
+                    vec![BoundResource::Uniform(u.buffer.clone())],
                     None,
                 )
             }
@@ -56,7 +56,7 @@ impl HairModel {
                 )?;
                 (
                     "shade/models/marschner_model.wgsl",
-                    vec![BoundResource::Buffer(u.buffer.clone())],
+                    vec![BoundResource::Uniform(u.buffer.clone())],
                     None,
                 )
             }
@@ -65,16 +65,14 @@ impl HairModel {
                 let mut encoder = gpu.device.create_command_encoder(&Default::default());
                 lut.encode(&mut encoder);
                 gpu.submit_and_wait([encoder.finish()])?;
-                let resources = [
-                    lut.m_buffer(),
-                    lut.n0_buffer(),
-                    lut.n1_buffer(),
-                    lut.info_buffer(),
-                    lut.model_buffer(),
-                ]
-                .into_iter()
-                .map(|b| BoundResource::Buffer(b.clone()))
-                .collect();
+                // marschner_lut_lookup.wgsl (0..=3) and marschner_lut_model.wgsl (4).
+                let resources = vec![
+                    BoundResource::Storage(lut.m_buffer().clone()),
+                    BoundResource::Storage(lut.n0_buffer().clone()),
+                    BoundResource::Storage(lut.n1_buffer().clone()),
+                    BoundResource::Uniform(lut.info_buffer().clone()),
+                    BoundResource::Uniform(lut.model_buffer().clone()),
+                ];
                 (
                     "shade/models/marschner_lut_model.wgsl",
                     resources,
@@ -86,7 +84,7 @@ impl HairModel {
                     UniformBuffer::new(gpu, "pelage sadeghi", &SadeghiUniforms::from_params(p))?;
                 (
                     "shade/models/sadeghi_model.wgsl",
-                    vec![BoundResource::Buffer(u.buffer.clone())],
+                    vec![BoundResource::Uniform(u.buffer.clone())],
                     None,
                 )
             }
@@ -95,24 +93,19 @@ impl HairModel {
                 let mut encoder = gpu.device.create_command_encoder(&Default::default());
                 tables.encode(&mut encoder);
                 gpu.submit_and_wait([encoder.finish()])?;
-                let resources = [
-                    tables.model_buffer(),
-                    tables.n_buffer(),
-                    tables.dual_buffer(),
-                ]
-                .into_iter()
-                .map(|b| BoundResource::Buffer(b.clone()))
-                .collect();
+                // chiang.wgsl: the model uniform, then the two tables.
+                let resources = vec![
+                    BoundResource::Uniform(tables.model_buffer().clone()),
+                    BoundResource::Storage(tables.n_buffer().clone()),
+                    BoundResource::Storage(tables.dual_buffer().clone()),
+                ];
                 chiang = Some(tables);
                 ("shade/models/chiang_model.wgsl", resources, None)
             }
         };
         let bytes = resources
             .iter()
-            .map(|r| match r {
-                BoundResource::Buffer(b) => b.size(),
-                _ => 0,
-            })
+            .map(|r| r.buffer().map_or(0, wgpu::Buffer::size))
             .sum();
         Ok(Self {
             binding: ShaderBinding {
@@ -164,9 +157,14 @@ impl HairModel {
         if *model == self.params {
             return Ok(());
         }
-        let first = || match self.binding.resources.first() {
-            Some(BoundResource::Buffer(buffer)) => Ok(buffer.clone()),
-            _ => Err(pelage_gpu::GpuError::Validation(
+        let first = || match self
+            .binding
+            .resources
+            .first()
+            .and_then(BoundResource::buffer)
+        {
+            Some(buffer) => Ok(buffer.clone()),
+            None => Err(pelage_gpu::GpuError::Validation(
                 "the shading model has no uniform buffer at binding 0".into(),
             )),
         };

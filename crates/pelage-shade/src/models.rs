@@ -45,7 +45,9 @@
 
 use encase::ShaderType;
 use glam::Vec3;
-use pelage_gpu::{Gpu, UniformBuffer, compute_pipeline, wgpu, zeroed_storage};
+use pelage_gpu::{
+    BindLayout, Gpu, UniformBuffer, compute_pipeline_with_layouts, wgpu, zeroed_storage,
+};
 use pelage_scene::{
     Absorption, ChiangParams, KajiyaKayParams, MarschnerParams, ParamError, SadeghiParams,
     chiang_color_scale,
@@ -295,16 +297,25 @@ impl MarschnerLut {
         let module = crate::SHADERS
             .library()
             .module(gpu, "shade/models/marschner_lut.wgsl")?;
-        let pipeline = gpu.scoped(|device| {
-            compute_pipeline(device, "pelage marschner lut build", &module, "build")
-        })?;
-        let build_group = gpu.scoped(|device| {
-            pelage_gpu::bind_buffers(
+        let (pipeline, build_group) = gpu.scoped(|device| {
+            let label = "pelage marschner lut build";
+            // marschner_lut.wgsl: the model and info uniforms, the three tables written.
+            let layout = BindLayout::new(label, wgpu::ShaderStages::COMPUTE)
+                .uniform(0)
+                .uniform(1)
+                .storage_rw(2)
+                .storage_rw(3)
+                .storage_rw(4)
+                .build(device);
+            let pipeline =
+                compute_pipeline_with_layouts(device, label, &module, "build", &[Some(&layout)]);
+            let group = pelage_gpu::bind_buffers(
                 device,
-                "pelage marschner lut build",
-                &pipeline.get_bind_group_layout(0),
+                label,
+                &layout,
                 &[&model.buffer, &info_buffer.buffer, &m, &n0, &n1],
-            )
+            );
+            (pipeline, group)
         })?;
         Ok(Self {
             info,
@@ -578,39 +589,14 @@ impl ChiangTables {
         // One explicit layout for both entry points (each uses only some of the bindings,
         // so layouts derived from them would differ).
         let (pipelines, group) = gpu.scoped(|device| {
-            let entry = |binding, ty| wgpu::BindGroupLayoutEntry {
-                binding,
-                visibility: wgpu::ShaderStages::COMPUTE,
-                ty: wgpu::BindingType::Buffer {
-                    ty,
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            };
-            let rw = wgpu::BufferBindingType::Storage { read_only: false };
-            let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("pelage chiang tables"),
-                entries: &[
-                    entry(0, wgpu::BufferBindingType::Uniform),
-                    entry(1, rw),
-                    entry(2, rw),
-                ],
-            });
-            let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("pelage chiang tables"),
-                bind_group_layouts: &[Some(&layout)],
-                immediate_size: 0,
-            });
+            let layout = BindLayout::new("pelage chiang tables", wgpu::ShaderStages::COMPUTE)
+                .uniform(0)
+                .storage_rw(1)
+                .storage_rw(2)
+                .build(device);
+            let layouts = [Some(&layout)];
             let pipeline = |label, entry_point| {
-                device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                    label: Some(label),
-                    layout: Some(&pipeline_layout),
-                    module: &module,
-                    entry_point: Some(entry_point),
-                    compilation_options: Default::default(),
-                    cache: None,
-                })
+                compute_pipeline_with_layouts(device, label, &module, entry_point, &layouts)
             };
             let pipelines = [
                 pipeline("pelage chiang N", "azimuthal"),

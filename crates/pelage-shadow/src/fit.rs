@@ -4,7 +4,8 @@
 use encase::ShaderType;
 use glam::Vec3;
 use pelage_gpu::{
-    Gpu, GpuTimer, PassInfo, UniformBuffer, bind_numbered, compute_pipeline, wgpu, zeroed_storage,
+    BindLayout, Gpu, GpuTimer, PassInfo, UniformBuffer, bind_buffers,
+    compute_pipeline_with_layouts, wgpu, zeroed_storage,
 };
 use pelage_scene::DirectionalLight;
 use pelage_strands::{PreparedFrame, StrandBuffers, StrandFrame, StrandLayout};
@@ -138,25 +139,32 @@ impl LightFit {
             .library()
             .module(gpu, "shadow/light_fit.wgsl")?;
         let (pipelines, groups) = gpu.scoped(|device| {
+            // One layout for both entry points, the union of what they use: fit reads the
+            // vertices and widens the bounds, finalize reads the bounds and writes the grid.
+            let layout = BindLayout::new("pelage light fit", wgpu::ShaderStages::COMPUTE)
+                .uniform(0)
+                .storage(1)
+                .storage_rw(2)
+                .storage_rw(3)
+                .build(device);
+            let layouts = [Some(&layout)];
             let pipelines = [
-                compute_pipeline(device, "pelage light fit", &module, "fit"),
-                compute_pipeline(device, "pelage light fit finalize", &module, "finalize"),
-            ];
-            // Each entry point binds only what it uses: fit reads vertices, finalize writes the grid.
-            let groups = [
-                bind_numbered(
-                    device,
-                    "pelage light fit",
-                    &pipelines[0].get_bind_group_layout(0),
-                    &[(0, &uniforms.buffer), (1, &strands.vertices), (2, &bounds)],
-                ),
-                bind_numbered(
+                compute_pipeline_with_layouts(device, "pelage light fit", &module, "fit", &layouts),
+                compute_pipeline_with_layouts(
                     device,
                     "pelage light fit finalize",
-                    &pipelines[1].get_bind_group_layout(0),
-                    &[(0, &uniforms.buffer), (2, &bounds), (3, &grid)],
+                    &module,
+                    "finalize",
+                    &layouts,
                 ),
             ];
+            let group = bind_buffers(
+                device,
+                "pelage light fit",
+                &layout,
+                &[&uniforms.buffer, &strands.vertices, &bounds, &grid],
+            );
+            let groups = [group.clone(), group];
             (pipelines, groups)
         })?;
         Ok(Self {

@@ -5,7 +5,8 @@
 use encase::ShaderType;
 use glam::{Vec3, Vec4};
 use pelage_gpu::{
-    BoundResource, Gpu, GpuTimer, PassInfo, ShaderBinding, UniformBuffer, bind_numbered, wgpu,
+    BindLayout, BoundResource, Gpu, GpuTimer, PassInfo, ShaderBinding, UniformBuffer, bind_buffers,
+    pipeline_layout, wgpu,
 };
 use pelage_scene::{
     AdsmParams, DeepOpacityParams, DirectionalLight, LayerSpacing, MapParams, OpacityFormat,
@@ -157,45 +158,59 @@ impl LightMap {
                     .create_view(&Default::default())
             };
             let depth = texture("pelage hair depth from the light", DEPTH_FORMAT, size);
-            let pipeline =
-                |label: &str, fragment: Option<wgpu::FragmentState<'_>>, depth_write: bool| {
-                    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                        label: Some(label),
-                        layout: None,
-                        vertex: wgpu::VertexState {
-                            module: &module,
-                            entry_point: Some("vs_main"),
-                            compilation_options: Default::default(),
-                            buffers: &[],
-                        },
-                        primitive: Default::default(),
-                        depth_stencil: depth_write.then(|| wgpu::DepthStencilState {
-                            format: DEPTH_FORMAT,
-                            depth_write_enabled: Some(true),
-                            depth_compare: Some(wgpu::CompareFunction::Less),
-                            stencil: Default::default(),
-                            bias: Default::default(),
-                        }),
-                        multisample: Default::default(),
-                        fragment,
-                        multiview_mask: None,
-                        cache: None,
-                    })
-                };
-            let depth_pipeline = pipeline("pelage hair depth from the light", None, true);
-            let common = [
-                (0, fit.uniforms()),
-                (1, fit.grid()),
-                (2, &strands.vertices),
-                (3, &strands.roots),
-                (4, &uniforms.buffer),
-            ];
-            let depth_group = bind_numbered(
-                device,
-                "pelage hair depth",
-                &depth_pipeline.get_bind_group_layout(0),
-                &common,
+            // hair_light.wgsl: grid uniforms and grid, vertices, roots, map uniforms; the
+            // opacity pass also reads the front depth (5), which the depth pass writes, so
+            // each pass has its own layout.
+            let common_layout =
+                BindLayout::new("pelage hair depth", wgpu::ShaderStages::VERTEX_FRAGMENT)
+                    .uniform(0)
+                    .storage(1)
+                    .storage(2)
+                    .storage(3)
+                    .uniform(4);
+            let depth_layout = common_layout.build(device);
+            let pipeline = |label: &str,
+                            layout: &wgpu::BindGroupLayout,
+                            fragment: Option<wgpu::FragmentState<'_>>,
+                            depth_write: bool| {
+                let layout = pipeline_layout(device, label, &[Some(layout)]);
+                device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                    label: Some(label),
+                    layout: Some(&layout),
+                    vertex: wgpu::VertexState {
+                        module: &module,
+                        entry_point: Some("vs_main"),
+                        compilation_options: Default::default(),
+                        buffers: &[],
+                    },
+                    primitive: Default::default(),
+                    depth_stencil: depth_write.then(|| wgpu::DepthStencilState {
+                        format: DEPTH_FORMAT,
+                        depth_write_enabled: Some(true),
+                        depth_compare: Some(wgpu::CompareFunction::Less),
+                        stencil: Default::default(),
+                        bias: Default::default(),
+                    }),
+                    multisample: Default::default(),
+                    fragment,
+                    multiview_mask: None,
+                    cache: None,
+                })
+            };
+            let depth_pipeline = pipeline(
+                "pelage hair depth from the light",
+                &depth_layout,
+                None,
+                true,
             );
+            let common = [
+                fit.uniforms(),
+                fit.grid(),
+                &strands.vertices,
+                &strands.roots,
+                &uniforms.buffer,
+            ];
+            let depth_group = bind_buffers(device, "pelage hair depth", &depth_layout, &common);
             let layers = layers.map(|format| {
                 let format = match format {
                     OpacityFormat::Unorm8 => wgpu::TextureFormat::Rgba8Unorm,
@@ -223,7 +238,17 @@ impl LightMap {
                     compilation_options: Default::default(),
                     targets: &targets,
                 };
-                let pipeline = pipeline("pelage deep opacity layers", Some(fragment), false);
+                let opacity_layout = common_layout
+                    .clone()
+                    .visible(wgpu::ShaderStages::FRAGMENT)
+                    .depth_2d(5)
+                    .build(device);
+                let pipeline = pipeline(
+                    "pelage deep opacity layers",
+                    &opacity_layout,
+                    Some(fragment),
+                    false,
+                );
                 // The unused second layer texture is 1x1: the lookup binds it but never reads it.
                 let second_side = if two_targets { size } else { 1 };
                 let views = [
@@ -232,8 +257,9 @@ impl LightMap {
                 ];
                 let mut entries: Vec<wgpu::BindGroupEntry<'_>> = common
                     .iter()
-                    .map(|(binding, buffer)| wgpu::BindGroupEntry {
-                        binding: *binding,
+                    .zip(0..)
+                    .map(|(buffer, binding)| wgpu::BindGroupEntry {
+                        binding,
                         resource: buffer.as_entire_binding(),
                     })
                     .collect();
@@ -245,7 +271,7 @@ impl LightMap {
                     device,
                     &wgpu::BindGroupDescriptor {
                         label: Some("pelage deep opacity layers"),
-                        layout: &pipeline.get_bind_group_layout(0),
+                        layout: &opacity_layout,
                         entries: &entries,
                     },
                 );
@@ -381,14 +407,23 @@ impl LightMap {
 
     fn binding(&self, module: &'static str) -> ShaderBinding {
         let mut resources = vec![
-            BoundResource::Buffer(self.fit.uniforms().clone()),
-            BoundResource::Buffer(self.fit.grid().clone()),
-            BoundResource::Buffer(self.uniforms.buffer.clone()),
+            BoundResource::Uniform(self.fit.uniforms().clone()),
+            BoundResource::Storage(self.fit.grid().clone()),
+            BoundResource::Uniform(self.uniforms.buffer.clone()),
         ];
         resources.extend(self.mesh_map.resources());
-        resources.push(BoundResource::TextureView(self.depth.clone()));
+        resources.push(BoundResource::Texture(
+            self.depth.clone(),
+            wgpu::TextureSampleType::Depth,
+        ));
         if let Some(layers) = &self.layers {
-            resources.extend(layers.views.iter().cloned().map(BoundResource::TextureView));
+            // Read with textureLoad: float32 layers need no filtering.
+            resources.extend(layers.views.iter().map(|v| {
+                BoundResource::Texture(
+                    v.clone(),
+                    wgpu::TextureSampleType::Float { filterable: false },
+                )
+            }));
         }
         ShaderBinding {
             contract: crate::CONTRACT,

@@ -3,7 +3,10 @@
 
 use encase::ShaderType;
 use glam::{Mat4, Vec3};
-use pelage_gpu::{BoundResource, Gpu, GpuTimer, PassInfo, UniformBuffer, bind_buffers, wgpu};
+use pelage_gpu::{
+    BindLayout, BoundResource, Gpu, GpuTimer, PassInfo, UniformBuffer, bind_buffers,
+    pipeline_layout, wgpu,
+};
 use pelage_scene::DirectionalLight;
 use pelage_strands::MeshBuffers;
 
@@ -86,9 +89,17 @@ impl MeshShadowMap {
                 ..Default::default()
             });
             let draw = (size > 0).then(|| {
+                // mesh_depth.wgsl (vertex stage only): the light, positions, indices.
+                let layout = BindLayout::new("pelage mesh shadow map", wgpu::ShaderStages::VERTEX)
+                    .uniform(0)
+                    .storage(1)
+                    .storage(2)
+                    .build(device);
+                let pipeline_layout =
+                    pipeline_layout(device, "pelage mesh shadow map", &[Some(&layout)]);
                 let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                     label: Some("pelage mesh shadow map"),
-                    layout: None,
+                    layout: Some(&pipeline_layout),
                     vertex: wgpu::VertexState {
                         module: &module,
                         entry_point: Some("vs_main"),
@@ -115,7 +126,7 @@ impl MeshShadowMap {
                 let bind_group = bind_buffers(
                     device,
                     "pelage mesh shadow map",
-                    &pipeline.get_bind_group_layout(0),
+                    &layout,
                     &[&uniforms.buffer, &mesh.positions, &mesh.indices],
                 );
                 (pipeline, bind_group, mesh.triangle_count.saturating_mul(3))
@@ -203,9 +214,9 @@ impl MeshShadowMap {
     /// The resources `wgsl/shadow/mesh_shadow.wgsl` binds at 3, 4 and 5.
     pub fn resources(&self) -> [BoundResource; 3] {
         [
-            BoundResource::Buffer(self.uniforms.buffer.clone()),
-            BoundResource::TextureView(self.view.clone()),
-            BoundResource::Sampler(self.sampler.clone()),
+            BoundResource::Uniform(self.uniforms.buffer.clone()),
+            BoundResource::Texture(self.view.clone(), wgpu::TextureSampleType::Depth),
+            BoundResource::Sampler(self.sampler.clone(), wgpu::SamplerBindingType::Comparison),
         ]
     }
 

@@ -1,6 +1,9 @@
 //! Measuring a shadow method: its `light_visibility` at given points (`wgsl/shadow/probe.wgsl`).
 
-use pelage_gpu::{Gpu, ShaderBinding, bind_buffers, compute_pipeline, dispatch_size, wgpu};
+use pelage_gpu::{
+    BindLayout, Gpu, ShaderBinding, bind_buffers, compute_pipeline_with_layouts, dispatch_size,
+    wgpu,
+};
 
 /// Evaluates a method's shadow contract at arbitrary points, for tests and labs.
 ///
@@ -9,6 +12,8 @@ use pelage_gpu::{Gpu, ShaderBinding, bind_buffers, compute_pipeline, dispatch_si
 #[derive(Debug)]
 pub struct TransmittanceProbe {
     pipeline: wgpu::ComputePipeline,
+    /// Group 0 (probe.wgsl's points and results), bound per `encode`.
+    layout: wgpu::BindGroupLayout,
     shadow_group: Option<wgpu::BindGroup>,
 }
 
@@ -20,14 +25,25 @@ impl TransmittanceProbe {
             "shadow/probe.wgsl",
             &[binding.redirect()],
         )?;
-        let (pipeline, shadow_group) = gpu.scoped(|device| {
-            let pipeline = compute_pipeline(device, "pelage transmittance probe", &module, "main");
-            let layout = pipeline.get_bind_group_layout(binding.group);
-            let group = binding.bind_group(device, "pelage transmittance probe shadow", &layout);
-            (pipeline, group)
+        let (pipeline, layout, shadow_group) = gpu.scoped(|device| {
+            let label = "pelage transmittance probe";
+            let layout = BindLayout::new(label, wgpu::ShaderStages::COMPUTE)
+                .storage(0)
+                .storage_rw(1)
+                .build(device);
+            let shadow_label = "pelage transmittance probe shadow";
+            let shadow_layout = binding.layout(device, shadow_label, wgpu::ShaderStages::COMPUTE);
+            let mut layouts = vec![Some(&layout)];
+            binding.place(&mut layouts, shadow_layout.as_ref());
+            let pipeline = compute_pipeline_with_layouts(device, label, &module, "main", &layouts);
+            let group = shadow_layout
+                .as_ref()
+                .and_then(|l| binding.bind_group(device, shadow_label, l));
+            (pipeline, layout, group)
         })?;
         Ok(Self {
             pipeline,
+            layout,
             shadow_group,
         })
     }
@@ -55,7 +71,7 @@ impl TransmittanceProbe {
             bind_buffers(
                 device,
                 "pelage transmittance probe",
-                &self.pipeline.get_bind_group_layout(0),
+                &self.layout,
                 &[points, out],
             )
         })?;

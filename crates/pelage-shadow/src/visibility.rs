@@ -2,7 +2,8 @@
 //! vertex (`wgsl/shadow/probe.wgsl`), into that light's slice of a visibility buffer.
 
 use pelage_gpu::{
-    Gpu, GpuTimer, PassInfo, ShaderBinding, compute_pipeline, dispatch_size, wgpu, zeroed_storage,
+    BindLayout, Gpu, GpuTimer, PassInfo, ShaderBinding, compute_pipeline_with_layouts,
+    dispatch_size, wgpu, zeroed_storage,
 };
 use pelage_strands::{PreparedFrame, StrandBuffers, StrandFrame, StrandLayout};
 
@@ -78,12 +79,21 @@ impl LightVisibility {
         )?;
         let label = format!("shadow: light {index} visibility");
         let (pipeline, own, shadow) = gpu.scoped(|device| {
-            let pipeline = compute_pipeline(device, &label, &module, "main");
+            // probe.wgsl: the strand vertices read, this light's slice written; the
+            // method's resources at its own group.
+            let own_layout = BindLayout::new(&label, wgpu::ShaderStages::COMPUTE)
+                .storage(0)
+                .storage_rw(1)
+                .build(device);
+            let shadow_layout = binding.layout(device, &label, wgpu::ShaderStages::COMPUTE);
+            let mut layouts = vec![Some(&own_layout)];
+            binding.place(&mut layouts, shadow_layout.as_ref());
+            let pipeline = compute_pipeline_with_layouts(device, &label, &module, "main", &layouts);
             let own = pelage_gpu::create_bind_group(
                 device,
                 &wgpu::BindGroupDescriptor {
                     label: Some(&label),
-                    layout: &pipeline.get_bind_group_layout(0),
+                    layout: &own_layout,
                     entries: &[
                         wgpu::BindGroupEntry {
                             binding: 0,
@@ -100,11 +110,9 @@ impl LightVisibility {
                     ],
                 },
             );
-            let shadow = binding.bind_group(
-                device,
-                &label,
-                &pipeline.get_bind_group_layout(binding.group),
-            );
+            let shadow = shadow_layout
+                .as_ref()
+                .and_then(|l| binding.bind_group(device, &label, l));
             (pipeline, own, shadow)
         })?;
         Ok(Self {

@@ -2,8 +2,8 @@
 
 use glam::Vec3;
 use pelage_gpu::{
-    BoundResource, Gpu, GpuTimer, PassInfo, ShaderBinding, bind_buffers, compute_pipeline,
-    dispatch_size, wgpu, zeroed_storage,
+    BindLayout, BoundResource, Gpu, GpuTimer, PassInfo, ShaderBinding, bind_buffers,
+    compute_pipeline_with_layouts, dispatch_size, wgpu, zeroed_storage,
 };
 use pelage_scene::{DirectionalLight, Splat, VoxelParams};
 use pelage_strands::{MeshBuffers, StrandBuffers, StrandFrame};
@@ -84,11 +84,25 @@ impl VoxelShadow {
             .library()
             .module(gpu, "shadow/voxel_scan.wgsl")?;
         let (splat, splat_group, scan, scan_group) = gpu.scoped(|device| {
-            let splat = compute_pipeline(device, "pelage voxel splat", &splat_module, "main");
+            // voxel_splat.wgsl: grid uniforms and grid, vertices, roots, the volume written.
+            let splat_layout = BindLayout::new("pelage voxel splat", wgpu::ShaderStages::COMPUTE)
+                .uniform(0)
+                .storage(1)
+                .storage(2)
+                .storage(3)
+                .storage_rw(4)
+                .build(device);
+            let splat = compute_pipeline_with_layouts(
+                device,
+                "pelage voxel splat",
+                &splat_module,
+                "main",
+                &[Some(&splat_layout)],
+            );
             let splat_group = bind_buffers(
                 device,
                 "pelage voxel splat",
-                &splat.get_bind_group_layout(0),
+                &splat_layout,
                 &[
                     fit.uniforms(),
                     fit.grid(),
@@ -97,11 +111,22 @@ impl VoxelShadow {
                     &volume,
                 ],
             );
-            let scan = compute_pipeline(device, "pelage voxel scan", &scan_module, "main");
+            // voxel_scan.wgsl: grid uniforms, the volume scanned in place.
+            let scan_layout = BindLayout::new("pelage voxel scan", wgpu::ShaderStages::COMPUTE)
+                .uniform(0)
+                .storage_rw(1)
+                .build(device);
+            let scan = compute_pipeline_with_layouts(
+                device,
+                "pelage voxel scan",
+                &scan_module,
+                "main",
+                &[Some(&scan_layout)],
+            );
             let scan_group = bind_buffers(
                 device,
                 "pelage voxel scan",
-                &scan.get_bind_group_layout(0),
+                &scan_layout,
                 &[fit.uniforms(), &volume],
             );
             (splat, splat_group, scan, scan_group)
@@ -229,9 +254,9 @@ impl ShadowMethod for VoxelShadow {
 
     fn binding(&self) -> ShaderBinding {
         let mut resources = vec![
-            BoundResource::Buffer(self.fit.uniforms().clone()),
-            BoundResource::Buffer(self.fit.grid().clone()),
-            BoundResource::Buffer(self.volume.clone()),
+            BoundResource::Uniform(self.fit.uniforms().clone()),
+            BoundResource::Storage(self.fit.grid().clone()),
+            BoundResource::Storage(self.volume.clone()),
         ];
         resources.extend(self.mesh_map.resources());
         ShaderBinding {

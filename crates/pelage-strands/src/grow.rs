@@ -4,8 +4,8 @@
 use encase::ShaderType;
 use glam::Vec3;
 use pelage_gpu::{
-    Gpu, GpuTimer, PassInfo, UniformBuffer, bind_buffers, compute_pipeline, dispatch_size,
-    storage_buffer, wgpu, zeroed_storage,
+    BindLayout, Gpu, GpuTimer, PassInfo, UniformBuffer, bind_buffers,
+    compute_pipeline_with_layouts, dispatch_size, storage_buffer, wgpu, zeroed_storage,
 };
 use pelage_scene::{
     Camera, GrowthParams, HairParams, HairType, Mesh, ParamError, SurfaceInterpolation, WindParams,
@@ -460,13 +460,24 @@ impl StrandPass {
         let vertices = zeroed_storage(gpu, "pelage strand vertices", vertex_bytes, storage)?;
         let module = crate::SHADERS.library().module(gpu, shader)?;
         let (pipeline, bind_group) = gpu.scoped(|device| {
-            let pipeline = compute_pipeline(device, label, &module, "main");
+            // grow.wgsl / groom.wgsl: the uniforms (force.wgsl), the read-only inputs,
+            // then the vertices and drawn roots written.
+            let inputs_end = inputs.len() as u32 + 1;
+            let layout = (1..inputs_end)
+                .fold(
+                    BindLayout::new(label, wgpu::ShaderStages::COMPUTE).uniform(0),
+                    BindLayout::storage,
+                )
+                .storage_rw(inputs_end)
+                .storage_rw(inputs_end + 1)
+                .build(device);
+            let pipeline =
+                compute_pipeline_with_layouts(device, label, &module, "main", &[Some(&layout)]);
             let mut entries = vec![&uniforms.buffer];
             entries.extend_from_slice(inputs);
             entries.push(&vertices);
             entries.push(&roots_buffer);
-            let bind_group =
-                bind_buffers(device, label, &pipeline.get_bind_group_layout(0), &entries);
+            let bind_group = bind_buffers(device, label, &layout, &entries);
             (pipeline, bind_group)
         })?;
         let style = StrandStyle {

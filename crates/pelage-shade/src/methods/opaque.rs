@@ -32,6 +32,7 @@ impl Opaque {
                 targets: &[Some(inputs.target.color.into())],
                 depth: depth_state(&inputs.target, true),
                 shades: true,
+                oit: None,
             },
         )?;
         Ok(Self { common, hair })

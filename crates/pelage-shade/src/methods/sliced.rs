@@ -2,7 +2,7 @@
 //! buffers fit one storage binding, and recording each method's passes per band.
 
 use encase::ShaderType;
-use pelage_gpu::{Gpu, GpuError, GpuTimer, PassInfo, wgpu};
+use pelage_gpu::{BindLayout, Gpu, GpuError, GpuTimer, PassInfo, wgpu};
 
 use crate::targets::TargetFormat;
 
@@ -52,6 +52,30 @@ pub(crate) struct SlicedPass {
     pub draw: Draw,
     pub kind: PassKind,
     pub bindings: &'static [u32],
+    /// The pass's own `@group(3)` layout, exactly `bindings` (a pass that writes the
+    /// depth cannot bind it, so passes do not share one layout of the union).
+    pub layout: wgpu::BindGroupLayout,
+}
+
+/// The `@group(3)` layout of a pass of a sliced method using `bindings`, as
+/// `shade/oit/*.wgsl` declares them: 0 the slice's `OitTile` uniform, 1 the opaque
+/// depth (`texture_depth_2d`), every other binding a per-pixel `read_write` storage
+/// buffer (fragment stage only).
+pub(crate) fn oit_layout(label: &str, bindings: &[u32]) -> BindLayout {
+    bindings.iter().fold(
+        BindLayout::new(label, wgpu::ShaderStages::VERTEX_FRAGMENT),
+        |layout, &binding| match binding {
+            0 => layout
+                .visible(wgpu::ShaderStages::VERTEX_FRAGMENT)
+                .uniform(0),
+            1 => layout
+                .visible(wgpu::ShaderStages::VERTEX_FRAGMENT)
+                .depth_2d(1),
+            _ => layout
+                .visible(wgpu::ShaderStages::FRAGMENT)
+                .storage_rw(binding),
+        },
+    )
 }
 
 /// The slices and group-3 resources of a method.
@@ -192,6 +216,9 @@ impl Sliced {
             ),
             _ => (Vec::new(), depth_state(&ctx.inputs.target, false)),
         };
+        let layout = ctx
+            .gpu
+            .scoped(|device| oit_layout(label, bindings).build(device))?;
         let draw = ctx.common.hair_draw(
             ctx.gpu,
             ctx.inputs,
@@ -202,17 +229,20 @@ impl Sliced {
                 targets: &targets,
                 depth,
                 shades: kind != PassKind::DepthOnly,
+                oit: Some(&layout),
             },
         )?;
         self.passes.push(SlicedPass {
             draw,
             kind,
             bindings,
+            layout,
         });
         Ok(())
     }
 
-    /// Adds the full-screen resolve `fragment` of `module`.
+    /// Adds the full-screen resolve `fragment` of `module`, binding `bindings` of
+    /// `@group(3)` ([`oit_layout`]).
     pub fn add_resolve_pass(
         &mut self,
         gpu: &Gpu,
@@ -222,11 +252,32 @@ impl Sliced {
         fragment: &str,
         bindings: &'static [u32],
     ) -> crate::Result<()> {
-        let draw = gpu.scoped(|device| {
+        let layout = oit_layout(label, bindings);
+        self.add_resolve_pass_with(gpu, target, module, label, fragment, bindings, &layout)
+    }
+
+    /// As [`Sliced::add_resolve_pass`], with the `@group(3)` layout `layout` (declaring
+    /// `bindings`).
+    #[allow(clippy::too_many_arguments)]
+    pub fn add_resolve_pass_with(
+        &mut self,
+        gpu: &Gpu,
+        target: &TargetFormat,
+        module: &wgpu::ShaderModule,
+        label: &'static str,
+        fragment: &str,
+        bindings: &'static [u32],
+        layout: &BindLayout,
+    ) -> crate::Result<()> {
+        let (draw, layout) = gpu.scoped(|device| {
+            let layout = layout.build(device);
+            // Only group 3: groups 0 to 2 are left out of the layout, so need no bind group.
+            let layouts = [None, None, None, Some(&layout)];
             let pipeline = raster_pipeline(
                 device,
                 &RasterDesc {
                     label,
+                    layouts: &layouts,
                     module,
                     vertex: "vs_fullscreen",
                     fragment: Some(fragment),
@@ -236,30 +287,19 @@ impl Sliced {
                     cull: None,
                 },
             );
-            // Groups 0 to 2 are empty in the resolve's layout but must still be bound.
-            let groups = (0..3)
-                .map(|g| {
-                    Some(pelage_gpu::create_bind_group(
-                        device,
-                        &wgpu::BindGroupDescriptor {
-                            label: Some(label),
-                            layout: &pipeline.get_bind_group_layout(g),
-                            entries: &[],
-                        },
-                    ))
-                })
-                .collect();
-            Draw {
+            let draw = Draw {
                 label,
                 pipeline,
-                groups,
+                groups: Vec::new(),
                 vertices: Vertices::Fixed(3),
-            }
+            };
+            (draw, layout)
         })?;
         self.passes.push(SlicedPass {
             draw,
             kind: PassKind::Resolve,
             bindings,
+            layout,
         });
         Ok(())
     }
@@ -324,7 +364,7 @@ impl Sliced {
                         device,
                         &wgpu::BindGroupDescriptor {
                             label: Some(pass.draw.label),
-                            layout: &pass.draw.pipeline.get_bind_group_layout(3),
+                            layout: &pass.layout,
                             entries: &entries,
                         },
                     ));

@@ -1,6 +1,6 @@
 //! Weighted blended OIT (McGuire and Bavoil 2013) (`shade/oit/wboit.wgsl`).
 
-use pelage_gpu::{Gpu, GpuTimer, PassInfo, wgpu};
+use pelage_gpu::{BindLayout, Gpu, GpuTimer, PassInfo, wgpu};
 use pelage_scene::{CameraMatrices, Light, WboitWeight};
 use pelage_strands::StrandFrame;
 
@@ -65,6 +65,16 @@ impl Wboit {
                 write_mask: wgpu::ColorWrites::ALL,
             }),
         ];
+        // wboit.wgsl's @group(3): fs_accum reads the tile (its weight function), fs_resolve
+        // loads the two targets; each pass has a layout of what it binds.
+        let accum_layout = gpu.scoped(|device| {
+            BindLayout::new(
+                "pelage wboit accumulate",
+                wgpu::ShaderStages::VERTEX_FRAGMENT,
+            )
+            .uniform(0)
+            .build(device)
+        })?;
         let accum = common.hair_draw(
             gpu,
             inputs,
@@ -75,6 +85,7 @@ impl Wboit {
                 targets: &targets,
                 depth: depth_state(&inputs.target, false),
                 shades: true,
+                oit: Some(&accum_layout),
             },
         )?;
         let weight_index = match weight {
@@ -91,13 +102,17 @@ impl Wboit {
             ..Default::default()
         };
         let mut resolve = Sliced::new(gpu, base, height, height)?;
-        resolve.add_resolve_pass(
+        let float = wgpu::TextureSampleType::Float { filterable: false };
+        resolve.add_resolve_pass_with(
             gpu,
             &inputs.target,
             &module,
             "shade: wboit resolve",
             "fs_resolve",
-            &[0],
+            &[1, 2],
+            &BindLayout::new("shade: wboit resolve", wgpu::ShaderStages::FRAGMENT)
+                .texture_2d(1, float)
+                .texture_2d(2, float),
         )?;
         let (accumulation, revealage, bind_accum, bind_resolve) = gpu.scoped(|device| {
             let texture = |label: &str, format| {
@@ -123,7 +138,7 @@ impl Wboit {
                 device,
                 &wgpu::BindGroupDescriptor {
                     label: Some("pelage wboit resolve"),
-                    layout: &resolve.passes[0].draw.pipeline.get_bind_group_layout(3),
+                    layout: &resolve.passes[0].layout,
                     entries: &[
                         wgpu::BindGroupEntry {
                             binding: 1,
@@ -144,7 +159,7 @@ impl Wboit {
                 device,
                 &wgpu::BindGroupDescriptor {
                     label: Some("pelage wboit accumulate"),
-                    layout: &accum.pipeline.get_bind_group_layout(3),
+                    layout: &accum_layout,
                     entries: &[wgpu::BindGroupEntry {
                         binding: 0,
                         resource: resolve.tile_binding(0),

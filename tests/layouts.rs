@@ -1,0 +1,176 @@
+//! Explicit bind group layouts (issue 17, item 3): every pipeline of every shadow and
+//! transparency method (and every shading model) is built and renders a frame on a
+//! device created with `wgpu::Limits::default()`, the limits WebGPU guarantees; only
+//! the 64-bit atomics some transparency methods declare are requested beyond them.
+//! And no library pipeline asks wgpu for an automatic layout (a scan of the sources).
+
+use pelage::gpu::{Gpu, wgpu};
+use pelage::scene::{ShadingModel, ShadowParams, Transparency};
+use pelage::{Renderer, Scene};
+
+/// The features the k-buffer and random subsets declare (64-bit atomics); nothing else.
+const INT64: wgpu::Features = wgpu::Features::SHADER_INT64
+    .union(wgpu::Features::SHADER_INT64_ATOMIC_MIN_MAX)
+    .union(wgpu::Features::SHADER_INT64_ATOMIC_ALL_OPS);
+
+/// A device with the default limits (and the adapter's 64-bit atomics, if any), wrapped
+/// as an engine would ([`Gpu::from_device`]: wgpu's default handler panics on any error
+/// outside a scope, which fails the test).
+fn default_limits_gpu() -> Gpu {
+    pollster::block_on(async {
+        let instance =
+            wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        let mut adapter = None;
+        for force_fallback_adapter in [false, true] {
+            let options = wgpu::RequestAdapterOptions {
+                power_preference: wgpu::PowerPreference::HighPerformance,
+                force_fallback_adapter,
+                compatible_surface: None,
+                apply_limit_buckets: false,
+            };
+            if let Ok(found) = instance.request_adapter(&options).await {
+                adapter = Some(found);
+                break;
+            }
+        }
+        let adapter = adapter.unwrap_or_else(|| panic!("this test needs a GPU adapter"));
+        let (device, queue) = adapter
+            .request_device(&wgpu::DeviceDescriptor {
+                label: Some("pelage default limits"),
+                required_features: adapter.features() & INT64,
+                required_limits: wgpu::Limits::default(),
+                ..Default::default()
+            })
+            .await
+            .unwrap_or_else(|e| panic!("a device with the default limits: {e}"));
+        Gpu::from_device(device, queue, Some(adapter.get_info()))
+    })
+}
+
+fn scene(shadow: ShadowParams, transparency: Transparency, model: ShadingModel) -> Scene {
+    let mut scene = Scene::default();
+    scene.hair.roots.count = 500;
+    scene.shadow = shadow;
+    scene.shade.transparency = transparency;
+    scene.shade.model = model;
+    scene.shade.sample_count = 1;
+    scene
+}
+
+#[test]
+fn every_method_renders_on_a_device_with_default_limits() {
+    let gpu = default_limits_gpu();
+    assert_eq!(
+        gpu.limits().max_storage_buffers_per_shader_stage,
+        wgpu::Limits::default().max_storage_buffers_per_shader_stage
+    );
+    println!("{}, features {:?}", gpu.describe(), gpu.features() & INT64);
+    let shadows = [
+        ShadowParams::None,
+        ShadowParams::default(),
+        ShadowParams::DeepOpacity(Default::default()),
+        ShadowParams::ShadowMap(Default::default()),
+        ShadowParams::Adsm(Default::default()),
+    ];
+    let methods = [
+        Transparency::Opaque,
+        Transparency::wboit(),
+        Transparency::KBuffer { k: 8 },
+        Transparency::a_buffer(),
+        Transparency::Dbk {
+            depth_shift: 0.05,
+            nodes_per_pixel: 8.0,
+            resolve_k: 16,
+        },
+        Transparency::RandomSubsets { k: 8 },
+    ];
+    // The models with the most bindings (tables in storage buffers), with the method
+    // binding the most storage in the fragment stage (DBK's hair pass: four buffers).
+    let models = [
+        ShadingModel::Marschner {
+            params: Default::default(),
+            lut: true,
+        },
+        ShadingModel::Chiang(Default::default()),
+        ShadingModel::Sadeghi(Default::default()),
+    ];
+    let dbk = methods[4].clone();
+    let cases = shadows
+        .iter()
+        .map(|s| (s.clone(), Transparency::Opaque, ShadingModel::default()))
+        .chain(
+            methods
+                .iter()
+                .map(|m| (ShadowParams::default(), m.clone(), ShadingModel::default())),
+        )
+        .chain(
+            models
+                .iter()
+                .map(|model| (ShadowParams::default(), dbk.clone(), model.clone())),
+        );
+    for (shadow, method, model) in cases {
+        let s = scene(shadow.clone(), method.clone(), model.clone());
+        let mut renderer = match Renderer::new(&gpu, &s, 64, 48) {
+            Ok(r) => r,
+            Err(pelage::Error::Shade(pelage::shade::ShadeError::Unsupported(why))) => {
+                // Only a method declaring a feature this adapter lacks may refuse.
+                assert!(
+                    !gpu.features().contains(INT64),
+                    "{method:?} refused although the 64-bit atomics are enabled: {why}"
+                );
+                println!("{method:?}: skipped, this adapter cannot run it: {why}");
+                continue;
+            }
+            Err(e) => panic!("{shadow:?} / {method:?} / {model:?}: {e}"),
+        };
+        renderer
+            .render(&gpu, 0.0, &s.camera)
+            .unwrap_or_else(|e| panic!("{shadow:?} / {method:?} / {model:?}: {e}"));
+        renderer
+            .finish(&gpu)
+            .unwrap_or_else(|e| panic!("{shadow:?} / {method:?} / {model:?}: {e}"));
+        println!("{shadow:?} / {method:?} / {model:?}: rendered");
+    }
+}
+
+#[test]
+fn no_library_pipeline_has_an_automatic_layout() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let dirs = [
+        "src",
+        "crates/pelage-gpu/src",
+        "crates/pelage-scene/src",
+        "crates/pelage-strands/src",
+        "crates/pelage-shadow/src",
+        "crates/pelage-shade/src",
+    ];
+    let mut found = Vec::new();
+    let mut stack: Vec<_> = dirs.iter().map(|d| root.join(d)).collect();
+    while let Some(path) = stack.pop() {
+        if path.is_dir() {
+            for entry in std::fs::read_dir(&path).unwrap() {
+                stack.push(entry.unwrap().path());
+            }
+            continue;
+        }
+        if path.extension().is_none_or(|e| e != "rs") {
+            continue;
+        }
+        // pelage-gpu's `compute_pipeline` (automatic) stays for tools and benchmarks.
+        let allowed = path.ends_with("crates/pelage-gpu/src/pipelines.rs");
+        let text = std::fs::read_to_string(&path).unwrap();
+        for (i, line) in text.lines().enumerate() {
+            let automatic = line.contains("layout: None")
+                || line.contains(".get_bind_group_layout(")
+                || (line.contains("compute_pipeline(") && !line.contains("fn compute_pipeline("));
+            if automatic && !allowed && !line.trim_start().starts_with("//") {
+                found.push(format!("{}:{}: {}", path.display(), i + 1, line.trim()));
+            }
+        }
+    }
+    assert!(
+        found.is_empty(),
+        "automatic layouts in the library:\n{}",
+        found.join("\n")
+    );
+}
