@@ -500,8 +500,51 @@ impl DeepOpacityMaps {
     }
 }
 
-impl ShadowMethod for DeepOpacityMaps {
-    fn name(&self) -> String {
+/// Implements [`ShadowMethod`] for a method built on a [`LightMap`] (a `map` field) and
+/// described by its own `describe`, sampled through `$lookup`.
+macro_rules! light_map_method {
+    ($method:ident, $lookup:literal) => {
+        impl ShadowMethod for $method {
+            fn name(&self) -> String {
+                self.describe()
+            }
+
+            fn prepare(
+                &self,
+                queue: &wgpu::Queue,
+                strands: &StrandFrame,
+                light: &DirectionalLight,
+            ) -> crate::Result<()> {
+                self.map.prepare(queue, strands, light)
+            }
+
+            fn encode(
+                &self,
+                encoder: &mut wgpu::CommandEncoder,
+                strands: &StrandFrame,
+                timer: Option<&mut GpuTimer>,
+            ) -> crate::Result<()> {
+                self.map.encode(encoder, strands, timer)
+            }
+
+            fn passes(&self) -> Vec<PassInfo> {
+                self.map.passes()
+            }
+
+            fn binding(&self) -> ShaderBinding {
+                self.map.binding($lookup)
+            }
+
+            fn memory_bytes(&self) -> u64 {
+                self.map.memory_bytes()
+            }
+        }
+    };
+}
+
+impl DeepOpacityMaps {
+    /// A short description with its parameters (the [`ShadowMethod::name`]).
+    fn describe(&self) -> String {
         let format = match self.params.format {
             OpacityFormat::Unorm8 => "unorm8",
             OpacityFormat::Float16 => "float16",
@@ -516,37 +559,9 @@ impl ShadowMethod for DeepOpacityMaps {
             self.params.layers, self.params.map.size
         )
     }
-
-    fn prepare(
-        &self,
-        queue: &wgpu::Queue,
-        strands: &StrandFrame,
-        light: &DirectionalLight,
-    ) -> crate::Result<()> {
-        self.map.prepare(queue, strands, light)
-    }
-
-    fn encode(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        strands: &StrandFrame,
-        timer: Option<&mut GpuTimer>,
-    ) -> crate::Result<()> {
-        self.map.encode(encoder, strands, timer)
-    }
-
-    fn passes(&self) -> Vec<PassInfo> {
-        self.map.passes()
-    }
-
-    fn binding(&self) -> ShaderBinding {
-        self.map.binding("shadow/dom_lookup.wgsl")
-    }
-
-    fn memory_bytes(&self) -> u64 {
-        self.map.memory_bytes()
-    }
 }
+
+light_map_method!(DeepOpacityMaps, "shadow/dom_lookup.wgsl");
 
 /// A hair shadow map with percentage-closer filtering: the hair is treated as opaque,
 /// so anything behind the front-most hair (by more than a bias) is in shadow.
@@ -578,8 +593,9 @@ impl HairShadowMap {
     }
 }
 
-impl ShadowMethod for HairShadowMap {
-    fn name(&self) -> String {
+impl HairShadowMap {
+    /// A short description with its parameters (the [`ShadowMethod::name`]).
+    fn describe(&self) -> String {
         let r = self.params.map.pcf_radius;
         format!(
             "shadow map {}^2 pcf {}x{}",
@@ -588,37 +604,9 @@ impl ShadowMethod for HairShadowMap {
             2 * r + 1
         )
     }
-
-    fn prepare(
-        &self,
-        queue: &wgpu::Queue,
-        strands: &StrandFrame,
-        light: &DirectionalLight,
-    ) -> crate::Result<()> {
-        self.map.prepare(queue, strands, light)
-    }
-
-    fn encode(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        strands: &StrandFrame,
-        timer: Option<&mut GpuTimer>,
-    ) -> crate::Result<()> {
-        self.map.encode(encoder, strands, timer)
-    }
-
-    fn passes(&self) -> Vec<PassInfo> {
-        self.map.passes()
-    }
-
-    fn binding(&self) -> ShaderBinding {
-        self.map.binding("shadow/map_lookup.wgsl")
-    }
-
-    fn memory_bytes(&self) -> u64 {
-        self.map.memory_bytes()
-    }
 }
+
+light_map_method!(HairShadowMap, "shadow/map_lookup.wgsl");
 
 /// Approximated deep shadow maps (TressFX): one depth map; the fibres in front of a
 /// point are estimated from its depth behind the front-most hair and a fibre spacing.
@@ -650,8 +638,9 @@ impl Adsm {
     }
 }
 
-impl ShadowMethod for Adsm {
-    fn name(&self) -> String {
+impl Adsm {
+    /// A short description with its parameters (the [`ShadowMethod::name`]).
+    fn describe(&self) -> String {
         let r = self.params.map.pcf_radius;
         format!(
             "adsm {}^2 pcf {}x{} spacing {}",
@@ -661,34 +650,6 @@ impl ShadowMethod for Adsm {
             self.params.fiber_spacing
         )
     }
-
-    fn prepare(
-        &self,
-        queue: &wgpu::Queue,
-        strands: &StrandFrame,
-        light: &DirectionalLight,
-    ) -> crate::Result<()> {
-        self.map.prepare(queue, strands, light)
-    }
-
-    fn encode(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        strands: &StrandFrame,
-        timer: Option<&mut GpuTimer>,
-    ) -> crate::Result<()> {
-        self.map.encode(encoder, strands, timer)
-    }
-
-    fn passes(&self) -> Vec<PassInfo> {
-        self.map.passes()
-    }
-
-    fn binding(&self) -> ShaderBinding {
-        self.map.binding("shadow/adsm_lookup.wgsl")
-    }
-
-    fn memory_bytes(&self) -> u64 {
-        self.map.memory_bytes()
-    }
 }
+
+light_map_method!(Adsm, "shadow/adsm_lookup.wgsl");
