@@ -411,6 +411,48 @@ fn bad_chiang_values_in_a_scene_file_exit_2() {
     }
 }
 
+#[test]
+fn lengths_widths_and_coordinates_whose_squares_overflow_exit_2() {
+    // width = 1e38 drew no hair and length = 1e30 a black mesh, both with exit code 0;
+    // an OBJ with 1e38 coordinates failed only at run time with exit 1.
+    let dir = Scratch::new("overflow");
+    for (i, (table, line, key)) in [
+        ("[hair.growth]", "width = 1e38", "growth.width"),
+        ("[hair.growth]", "length = 1e30", "growth.length"),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let name = format!("overflow_{i}.toml");
+        let scene = dir.file(&name, &format!("{table}\n{line}\n"));
+        exits_2(
+            &[
+                "render",
+                "--scene",
+                &scene.to_string_lossy(),
+                "-o",
+                "/dev/null",
+            ],
+            &[&name, key],
+        );
+    }
+    dir.file(
+        "huge.obj",
+        "v 0 0 0\nv 1e38 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//1 3//1\n",
+    );
+    let scene = dir.file("huge.toml", "[mesh]\nkind = \"obj\"\npath = \"huge.obj\"\n");
+    exits_2(
+        &[
+            "render",
+            "--scene",
+            &scene.to_string_lossy(),
+            "-o",
+            "/dev/null",
+        ],
+        &["huge.obj", "at most 1e9"],
+    );
+}
+
 /// The repository's scenes folder.
 fn scenes() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes")

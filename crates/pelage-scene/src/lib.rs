@@ -24,7 +24,7 @@ pub use camera::{Camera, CameraMatrices};
 pub use groom::{Groom, GroomError, GroomSource, Resampled};
 pub use hair_file::{HairFile, HairFileError};
 pub use light::{DirectionalLight, Light, MAX_LIGHTS, PointLight};
-pub use limits::{MAX_GROOM_FILE_BYTES, MAX_OBJ_FILE_BYTES, MAX_SCENE_FILE_BYTES};
+pub use limits::{MAX_EXTENT, MAX_GROOM_FILE_BYTES, MAX_OBJ_FILE_BYTES, MAX_SCENE_FILE_BYTES};
 pub use lod::{LodParams, Transition};
 pub use mesh::{Mesh, MeshError, MeshReport};
 pub use obj::{ObjError, load_obj, parse_obj};

@@ -12,6 +12,12 @@ pub const MAX_OBJ_FILE_BYTES: u64 = 2 << 30;
 /// Groom files (`.hair`, `.tfx`): 2 GiB.
 pub const MAX_GROOM_FILE_BYTES: u64 = 2 << 30;
 
+/// The largest coordinate, length or width a scene may hold, in scene units. The
+/// shaders square distances in 32-bit floats, which overflow past about 1.8e19, so a
+/// groom with `width = 1e38` drew nothing and a mesh with 1e38 coordinates drew black;
+/// 1e9 keeps every square (1e18) and sum of squares finite with room to spare.
+pub const MAX_EXTENT: f32 = 1e9;
+
 /// `limit` in words: "16 MiB", "2 GiB".
 fn size_words(limit: u64) -> String {
     if limit >= 1 << 30 && limit.is_multiple_of(1 << 30) {

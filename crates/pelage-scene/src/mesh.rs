@@ -102,6 +102,18 @@ pub enum MeshError {
         /// The value found.
         value: Vec3,
     },
+    /// A coordinate is larger than [`crate::MAX_EXTENT`] in magnitude.
+    #[error(
+        "position {vertex} is {value}: coordinates must be at most {:e} in magnitude (larger ones \
+         overflow 32-bit floats where distances are squared); scale the mesh down",
+        crate::MAX_EXTENT
+    )]
+    PositionOutOfRange {
+        /// Vertex index.
+        vertex: usize,
+        /// The value found.
+        value: Vec3,
+    },
     /// A normal is NaN or infinite.
     #[error(
         "normal {vertex} is not finite ({value}); fix it or call recompute_normals to rebuild the normals"
@@ -201,6 +213,9 @@ impl Mesh {
         for (vertex, &value) in self.positions.iter().enumerate() {
             if !value.is_finite() {
                 return Err(MeshError::NonFinitePosition { vertex, value });
+            }
+            if value.abs().max_element() > crate::MAX_EXTENT {
+                return Err(MeshError::PositionOutOfRange { vertex, value });
             }
         }
         for (vertex, &value) in self.normals.iter().enumerate() {

@@ -50,6 +50,24 @@ pub(crate) fn non_negative(name: &str, v: f32) -> Result<(), ParamError> {
     Ok(())
 }
 
+/// Errors unless `v` is finite, > 0 and at most [`crate::MAX_EXTENT`] (a length or width
+/// whose squares the shaders take).
+pub(crate) fn extent(name: &str, v: f32) -> Result<(), ParamError> {
+    positive(name, v)?;
+    if v > crate::MAX_EXTENT {
+        return Err(ParamError::new(
+            name,
+            v,
+            &format!(
+                "must be at most {:e} scene units: larger values overflow 32-bit floats where \
+                 distances are squared",
+                crate::MAX_EXTENT
+            ),
+        ));
+    }
+    Ok(())
+}
+
 pub(crate) fn positive(name: &str, v: f32) -> Result<(), ParamError> {
     finite(name, v)?;
     if v <= 0.0 {
@@ -230,7 +248,7 @@ impl GrowthParams {
                 &format!("must be in 1..={MAX_SEGMENTS}"),
             ));
         }
-        positive("growth.length", self.length)?;
+        extent("growth.length", self.length)?;
         non_negative("growth.length_jitter", self.length_jitter)?;
         if self.length_jitter >= 1.0 {
             return Err(ParamError::new(
@@ -263,7 +281,7 @@ impl GrowthParams {
                 positive("growth.hair_type.pitch", pitch)?;
             }
         }
-        positive("growth.width", self.width)?;
+        extent("growth.width", self.width)?;
         non_negative("growth.tip_width", self.tip_width)?;
         if self.tip_width > 1.0 {
             return Err(ParamError::new(

@@ -296,6 +296,33 @@ fn validate_non_finite_position() {
 }
 
 #[test]
+fn validate_position_beyond_the_largest_extent() {
+    // Finite, but its square overflows f32 where the shaders take distances: refused at
+    // load, naming the vertex, instead of a black mesh at run time.
+    for bad in [1e38f32, -2e9, 1e19] {
+        let mut m = one_triangle();
+        m.positions[2].x = bad;
+        let err = m.validate().unwrap_err();
+        assert!(
+            matches!(err, MeshError::PositionOutOfRange { vertex: 2, .. }),
+            "{bad}: {err:?}"
+        );
+        assert!(err.to_string().contains("at most 1e9"), "{err}");
+    }
+    // The same triangle scaled so its largest coordinate is the limit itself is fine.
+    let mut fine = one_triangle();
+    let largest = fine
+        .positions
+        .iter()
+        .map(|p| p.abs().max_element())
+        .fold(0.0f32, f32::max);
+    for p in &mut fine.positions {
+        *p *= pelage_scene::MAX_EXTENT / largest;
+    }
+    fine.validate().unwrap();
+}
+
+#[test]
 fn validate_non_finite_normal() {
     let mut m = one_triangle();
     m.normals[2] = Vec3::new(0.0, f32::NAN, 1.0);

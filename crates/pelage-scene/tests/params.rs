@@ -41,3 +41,28 @@ fn unknown_key_and_wrong_type_are_named() {
         .to_string();
     assert!(err.contains("frizzy"), "{err}");
 }
+
+#[test]
+fn lengths_and_widths_whose_squares_overflow_are_refused_by_name() {
+    // width = 1e38 drew no hair and length = 1e30 a black mesh, both with exit code 0.
+    for (key, value) in [
+        ("growth.width", 1e38f32),
+        ("growth.width", 1e19),
+        ("growth.length", 1e30),
+        ("growth.length", 2e9),
+    ] {
+        let mut g = pelage_scene::GrowthParams::default();
+        match key {
+            "growth.width" => g.width = value,
+            _ => g.length = value,
+        }
+        let err = g.validate().unwrap_err();
+        assert_eq!(err.name, key, "{err}");
+        assert!(err.to_string().contains("overflow"), "{err}");
+    }
+    let at_limit = pelage_scene::GrowthParams {
+        length: pelage_scene::MAX_EXTENT,
+        ..Default::default()
+    };
+    assert!(at_limit.validate().is_ok());
+}

@@ -312,11 +312,18 @@ fn check_groom(groom: &Resampled) -> Result<(), ParamError> {
             ));
         }
     }
-    if let Some(p) = groom.points.iter().find(|p| !p.is_finite()) {
+    if let Some(p) = groom
+        .points
+        .iter()
+        .find(|p| !p.is_finite() || p.abs().max_element() > pelage_scene::MAX_EXTENT)
+    {
         return Err(ParamError::new(
             "groom.points",
             p,
-            "every point must be finite",
+            &format!(
+                "every point must be finite and at most {:e} in magnitude (scale the groom down)",
+                pelage_scene::MAX_EXTENT
+            ),
         ));
     }
     Ok(())

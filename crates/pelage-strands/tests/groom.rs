@@ -321,6 +321,15 @@ fn inconsistent_grooms_are_refused_naming_what_is_wrong() {
             },
             "groom.segments",
         ),
+        // Finite but past what 32-bit squared distances hold: named, not blamed on
+        // growth.length (the longest strand such points make).
+        (
+            Resampled {
+                points: good.points.iter().map(|p| *p * 1e37).collect(),
+                ..good.clone()
+            },
+            "groom.points",
+        ),
     ];
     for (bad, name) in cases {
         match GroomStrands::new(&gpu, &bad, &hair) {
