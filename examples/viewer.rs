@@ -975,6 +975,7 @@ fn transparency_ui(ui: &mut egui::Ui, c: &mut Controls) {
         "a_buffer",
         "dbk",
         "random_subsets",
+        "strand_raster",
     ];
     let t = &mut c.shade.transparency;
     let current = names.iter().position(|n| *n == t.name()).unwrap_or(0);
@@ -985,6 +986,7 @@ fn transparency_ui(ui: &mut egui::Ui, c: &mut Controls) {
             3 => Transparency::a_buffer(),
             4 => Transparency::dbk(0.05),
             5 => Transparency::random_subsets(8),
+            6 => Transparency::strand_raster(),
             _ => Transparency::Opaque,
         };
     }
@@ -1012,6 +1014,15 @@ fn transparency_ui(ui: &mut egui::Ui, c: &mut Controls) {
         } => {
             slider(ui, nodes_per_pixel, 1.0..=64.0, "node pool per pixel");
             slider(ui, resolve_k, 1..=max_k, "resolve k");
+        }
+        Transparency::StrandRaster { tile, bins, pool } => {
+            ui.horizontal(|ui| {
+                ui.label("tile");
+                ui.radio_value(tile, 8, "8 px");
+                ui.radio_value(tile, 16, "16 px");
+            });
+            slider(ui, bins, 1..=256, "depth bins");
+            slider(ui, pool, 1.0..=64.0, "pool per segment");
         }
     }
 }

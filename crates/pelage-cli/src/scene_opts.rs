@@ -92,6 +92,9 @@ pub enum OitArg {
     Dbk,
     /// Nearest fragment of each of 8 random strand subsets.
     RandomSubsets,
+    /// The strand rasterizer: hair drawn in compute, 16-pixel tiles, 16 depth bins,
+    /// analytic coverage, no 64-bit atomics.
+    StrandRaster,
 }
 
 impl OitArg {
@@ -103,6 +106,7 @@ impl OitArg {
             Self::ABuffer => Transparency::a_buffer(),
             Self::Dbk => Transparency::dbk(0.05),
             Self::RandomSubsets => Transparency::random_subsets(8),
+            Self::StrandRaster => Transparency::strand_raster(),
         }
     }
 }

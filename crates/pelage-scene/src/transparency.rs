@@ -89,6 +89,36 @@ pub enum Transparency {
         #[serde(default = "default_k")]
         k: u32,
     },
+    /// The strand rasterizer: hair drawn in compute, not by the raster pipeline. Strand
+    /// vertices are shaded once each; segments are binned into screen tiles and depth
+    /// bins (32-bit atomics and a prefix sum), sorted by depth per tile in workgroup
+    /// memory, and composited front to back per pixel with analytic coverage (no MSAA,
+    /// no 64-bit atomics). Runs on WebGPU's default limits.
+    StrandRaster {
+        /// Tile edge in pixels, 8 or 16: one workgroup of tile x tile threads per tile.
+        #[serde(default = "default_tile")]
+        tile: u32,
+        /// Depth bins per tile, 1..=256: a tile's segments are sorted bin by bin in
+        /// chunks of 1024, so more bins keep more of a deep tile exactly sorted.
+        #[serde(default = "default_bins")]
+        bins: u32,
+        /// The pool of (tile, segment) references, as references per segment of the
+        /// strands at full detail (> 0, at most 1024). A frame that needs more draws
+        /// what fits, counts the rest (`HairPass::stats`) and the pool grows for the
+        /// next frame, up to the device's storage binding limit.
+        #[serde(default = "default_pool")]
+        pool: f32,
+    },
+}
+
+fn default_tile() -> u32 {
+    16
+}
+fn default_bins() -> u32 {
+    16
+}
+fn default_pool() -> f32 {
+    4.0
 }
 
 fn default_k() -> u32 {
@@ -168,6 +198,16 @@ impl Transparency {
         Self::RandomSubsets { k }
     }
 
+    /// The strand rasterizer with its default tile (16 px), bins (16) and pool (4
+    /// references per segment).
+    pub fn strand_raster() -> Self {
+        Self::StrandRaster {
+            tile: default_tile(),
+            bins: default_bins(),
+            pool: default_pool(),
+        }
+    }
+
     /// Short name, as in file names and the lab's tables (`opaque`, `wboit`, `k_buffer`, ...).
     pub fn name(&self) -> &'static str {
         match self {
@@ -177,6 +217,7 @@ impl Transparency {
             Self::ABuffer { .. } => "a_buffer",
             Self::Dbk { .. } => "dbk",
             Self::RandomSubsets { .. } => "random_subsets",
+            Self::StrandRaster { .. } => "strand_raster",
         }
     }
 
@@ -196,6 +237,9 @@ impl Transparency {
                 ..
             } => format!("dbk shift={depth_shift} pool={nodes_per_pixel}/px"),
             Self::RandomSubsets { k } => format!("random_subsets k={k}"),
+            Self::StrandRaster { tile, bins, pool } => {
+                format!("strand_raster tile={tile} bins={bins} pool={pool}/seg")
+            }
         }
     }
 
@@ -227,6 +271,31 @@ impl Transparency {
             Self::Opaque | Self::Wboit { .. } => Ok(()),
             Self::KBuffer { k } => k_range("transparency.k", k),
             Self::RandomSubsets { k } => k_range("transparency.k", k),
+            Self::StrandRaster { tile, bins, pool } => {
+                if tile != 8 && tile != 16 {
+                    return Err(ParamError::new(
+                        "transparency.tile",
+                        tile,
+                        "must be 8 or 16 pixels",
+                    ));
+                }
+                if !(1..=256).contains(&bins) {
+                    return Err(ParamError::new(
+                        "transparency.bins",
+                        bins,
+                        "must be in 1..=256",
+                    ));
+                }
+                positive("transparency.pool", pool)?;
+                if pool > 1024.0 {
+                    return Err(ParamError::new(
+                        "transparency.pool",
+                        pool,
+                        "must be at most 1024 references per segment",
+                    ));
+                }
+                Ok(())
+            }
             Self::ABuffer {
                 nodes_per_pixel,
                 resolve_k,

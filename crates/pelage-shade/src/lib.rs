@@ -1,7 +1,7 @@
 //! Stage 3 of pelage: strands drawn as camera-facing ribbons and shaded.
 //!
 //! Every method ([`HairPass`]: [`Opaque`], [`Wboit`], [`KBuffer`], [`ABuffer`],
-//! [`Dbk`], [`RandomSubsets`]; [`build`] picks one from
+//! [`Dbk`], [`RandomSubsets`], [`StrandRaster`]; [`build`] picks one from
 //! [`ShadeParams::transparency`]) draws the opaque mesh and then the hair, pulled
 //! straight from stage 1's [`StrandBuffers`](pelage_strands::StrandBuffers) in the
 //! vertex shader (`wgsl/shade/hair.wgsl`), shaded, and composited its own way. They
@@ -21,7 +21,7 @@ pub use draw::{
 pub use hair_model::{HairModel, LUT_RESOLUTION};
 pub use methods::{
     ABuffer, CapturedFragment, Dbk, FragmentCapture, HairPass, KBuffer, OitStats, OitTile, Opaque,
-    RandomSubsets, Wboit, build,
+    RandomSubsets, RasterCapture, StrandRaster, StrandRasterUniforms, Wboit, build,
 };
 pub use models::{
     ChiangTables, ChiangUniforms, KajiyaKayUniforms, MarschnerLut, MarschnerLutInfo,
@@ -62,6 +62,7 @@ pub static SHADERS: pelage_gpu::ShaderSources = pelage_gpu::wgsl_sources!(
     "shade/oit/ppll.wgsl",
     "shade/oit/random_subsets.wgsl",
     "shade/oit/slots.wgsl",
+    "shade/oit/strand_raster.wgsl",
     "shade/oit/tail.wgsl",
     "shade/oit/wboit.wgsl",
     "shade/ribbons.wgsl",

@@ -588,3 +588,66 @@ fn wboit_fails_on_nearly_opaque_strands_where_the_a_buffer_stays_exact() {
         assert!(row[0].flip > 3.0 * row[1].flip);
     }
 }
+
+/// The picture thin strands really make: each ribbon at its true width (no widening to
+/// a pixel), 8 x 8 samples per pixel, every sample composited exactly and the samples
+/// averaged. Neither the ribbon methods (ribbons widened to one pixel, alpha scaled by
+/// the true width, one sample per pixel) nor the strand rasterizer (analytic coverage of
+/// the pixel's centre line) make this picture; both approximate it.
+fn true_width(samples: u32) -> Vec<[f32; 3]> {
+    rasterize(
+        &strands(),
+        &RibbonStyle {
+            min_pixels: 1e-3,
+            ..style(OPACITY)
+        },
+        &RasterView::new(&camera().matrices(W, H), W, H),
+        SamplePattern::grid(samples),
+    )
+    .unwrap()
+    .composite(BACKGROUND)
+}
+
+#[test]
+fn the_strand_rasterizer_is_closer_to_the_true_width_picture_than_widened_ribbons() {
+    let gpu = gpu();
+    let reference = true_width(8);
+    // The reference's own floor: 8 x 8 against 16 x 16 samples.
+    let floor = errors(&reference, &true_width(16));
+    println!("noise floor, 8x8 vs 16x16 samples: {floor}");
+    let fixture = upload(&gpu, &strands(), OPACITY);
+    let mut found = Vec::new();
+    for t in [
+        Transparency::a_buffer(),
+        Transparency::k_buffer(8),
+        Transparency::strand_raster(),
+        Transparency::StrandRaster {
+            tile: 8,
+            bins: 4,
+            pool: 4.0,
+        },
+    ] {
+        let p = shade_params(t.clone());
+        let method = match pelage_shade::build(&gpu, &inputs(&fixture, &p), W, H) {
+            Ok(m) => m,
+            Err(ShadeError::Unsupported(why)) => {
+                println!("{}: SKIPPED, this adapter cannot run it: {why}", t.label());
+                continue;
+            }
+            Err(e) => panic!("{}: {e}", t.label()),
+        };
+        let e = errors(&reference, &draw(&gpu, &fixture, method.as_ref()));
+        println!("{}: {e}", t.label());
+        found.push((t, e));
+    }
+    let a_buffer = &found[0].1;
+    for (t, e) in &found {
+        if t.name() == "strand_raster" {
+            assert!(
+                e.flip < a_buffer.flip && e.mean_abs < a_buffer.mean_abs,
+                "{}: {e}; the exact composite of widened ribbons: {a_buffer}",
+                t.label()
+            );
+        }
+    }
+}

@@ -69,6 +69,7 @@ pub(crate) fn list_stats(gpu: &Gpu, sliced: &Sliced) -> crate::Result<OitStats> 
         dropped: word(1),
         peak_nodes: word(2),
         capacity: u64::from(sliced.capacity),
+        overflowed_frames: 0,
     })
 }
 

@@ -8,6 +8,7 @@
 //! | A-buffer (linked lists) | [`ABuffer`] | `shade/oit/a_buffer.wgsl` |
 //! | DBK-buffer | [`Dbk`] | `shade/oit/dbk.wgsl` |
 //! | random subsets | [`RandomSubsets`] | `shade/oit/random_subsets.wgsl` |
+//! | strand rasterizer (compute) | [`StrandRaster`] | `shade/oit/strand_raster.wgsl` |
 //!
 //! Each draws the opaque mesh first (clearing the caller's colour and depth), then
 //! the hair. Per-pixel storage is sized for the target and sliced into horizontal
@@ -19,6 +20,7 @@ mod k_buffer;
 mod opaque;
 mod random_subsets;
 mod sliced;
+mod strand_raster;
 mod wboit;
 
 pub use a_buffer::{ABuffer, CapturedFragment, FragmentCapture};
@@ -27,6 +29,7 @@ pub use k_buffer::KBuffer;
 pub use opaque::Opaque;
 pub use random_subsets::RandomSubsets;
 pub use sliced::OitTile;
+pub use strand_raster::{RasterCapture, StrandRaster, StrandRasterUniforms};
 pub use wboit::Wboit;
 
 use pelage_gpu::{Gpu, GpuTimer, PassInfo, wgpu};
@@ -44,15 +47,18 @@ pub struct OitStats {
     pub dropped: u64,
     /// The most nodes one slice of one frame asked for: the pool size that would have held everything.
     pub peak_nodes: u64,
-    /// Nodes in the pool per slice.
+    /// Nodes in the pool per slice (the strand rasterizer: segment references).
     pub capacity: u64,
+    /// Frames whose pool overflowed since the method was built (the strand rasterizer).
+    pub overflowed_frames: u64,
 }
 
 /// One stage 3 method: draws the mesh and the hair into the caller's targets. Each
 /// frame: [`HairPass::prepare`] with stage 1's [`StrandFrame`], then
 /// [`HairPass::encode`] with the same frame.
 pub trait HairPass: std::fmt::Debug {
-    /// Short name (`opaque`, `wboit`, `k_buffer`, `a_buffer`, `dbk`, `random_subsets`).
+    /// Short name (`opaque`, `wboit`, `k_buffer`, `a_buffer`, `dbk`, `random_subsets`,
+    /// `strand_raster`).
     fn name(&self) -> &'static str;
 
     /// Writes camera and lights for the next [`HairPass::encode`], and takes the
@@ -153,6 +159,9 @@ pub fn build(
         Transparency::RandomSubsets { k } => {
             Box::new(RandomSubsets::new(gpu, inputs, k, width, height)?)
         }
+        Transparency::StrandRaster { tile, bins, pool } => Box::new(StrandRaster::new(
+            gpu, inputs, tile, bins, pool, width, height,
+        )?),
     })
 }
 
