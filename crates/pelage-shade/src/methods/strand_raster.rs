@@ -190,7 +190,7 @@ struct PoolState {
     buffer: wgpu::Buffer,
     capacity: u32,
     /// The depth view the groups sample and the groups (one per compute pass).
-    groups: Option<(wgpu::TextureView, Vec<wgpu::BindGroup>)>,
+    groups: Option<(wgpu::TextureView, Arc<Vec<wgpu::BindGroup>>)>,
     /// The largest size a frame needed, as read back.
     peak_seen: u32,
 }
@@ -292,6 +292,7 @@ impl StrandRaster {
             ("strand vertices", full.vertices().div_ceil(LINE_GROUP)),
             ("segments", full.segment_count().div_ceil(LINE_GROUP)),
             ("tiles", u64::from(tiles_x) * u64::from(tiles_y)),
+            ("cells", cells.div_ceil(LINE_GROUP)),
             ("scan blocks", scan_blocks),
         ] {
             grid(n, max_dim).ok_or_else(|| too_many(what, n))?;
@@ -635,6 +636,148 @@ impl StrandRaster {
         })?)
     }
 
+    /// The compute passes' bind groups for `target`'s depth, after taking what the
+    /// header readbacks hold (growing the pool when a frame needed more).
+    fn groups(
+        &self,
+        gpu: &Gpu,
+        target: &TargetViews<'_>,
+    ) -> crate::Result<Arc<Vec<wgpu::BindGroup>>> {
+        let mut pool = self.pool.lock().map_err(|_| {
+            GpuError::Validation("a thread panicked while recording this method".into())
+        })?;
+        if let Some(needed) = self.collect_readbacks(gpu) {
+            self.grow(gpu, &mut pool, needed)?;
+        }
+        let depth = target.depth_to_sample();
+        if let Some((view, groups)) = &pool.groups {
+            if view == depth {
+                return Ok(groups.clone());
+            }
+        }
+        let groups = Arc::new(self.bind_groups(gpu, &pool.buffer, depth)?);
+        pool.groups = Some((depth.clone(), groups.clone()));
+        Ok(groups)
+    }
+
+    /// Records the first `count` compute passes (after clearing the cell counts).
+    fn record_compute(
+        &self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        groups: &[wgpu::BindGroup],
+        count: usize,
+        mut timer: Option<&mut GpuTimer>,
+    ) {
+        let layout = StrandLayout::from_bits(self.layout.load(Ordering::Acquire));
+        let u = &self.uniforms_value;
+        let max_dim = gpu.limits().max_compute_workgroups_per_dimension;
+        encoder.clear_buffer(&self.storage.counts, 0, None);
+        for (((label, _, _), (pipeline, _)), (group, grid_kind)) in PASSES
+            .iter()
+            .zip(&self.pipelines)
+            .zip(groups.iter().zip(GRIDS))
+            .take(count)
+        {
+            let n = match grid_kind {
+                Grid::Vertices => layout.vertices().div_ceil(LINE_GROUP),
+                Grid::Segments => layout.segment_count().div_ceil(LINE_GROUP),
+                Grid::Blocks => u64::from(u.scan_blocks),
+                Grid::One => 1,
+                Grid::Tiles => u64::from(u.tiles_x) * u64::from(u.tiles_y),
+            };
+            let (x, y) = grid(n, max_dim).unwrap_or((0, 0));
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some(label),
+                timestamp_writes: timer.as_deref_mut().and_then(|t| t.compute_pass(label)),
+            });
+            pass.set_pipeline(pipeline);
+            if *label == PASSES[0].0 {
+                for (index, g) in self.shade_groups.iter().enumerate() {
+                    if let Some(g) = g {
+                        pass.set_bind_group(index as u32, g, &[]);
+                    }
+                }
+            }
+            pass.set_bind_group(3, group, &[]);
+            if x > 0 && y > 0 {
+                pass.dispatch_workgroups(x, y, 1);
+            }
+        }
+    }
+
+    /// Records the resolve: the composite blended over `target.color`.
+    fn record_resolve(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        target: &TargetViews<'_>,
+        timer: Option<&mut GpuTimer>,
+    ) {
+        {
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some(RESOLVE),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: target.color,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Load,
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: None,
+                timestamp_writes: timer.and_then(|t| t.render_pass(RESOLVE)),
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            self.resolve
+                .record(&mut pass, Some((3, &self.resolve_group)));
+        }
+    }
+
+    /// Wall-clock milliseconds of each pass of the hair (the compute passes, then the
+    /// resolve; not the mesh), for `strands` as last prepared: the frame's passes up to
+    /// each one submitted alone and waited for, `repeats` times, the median of each
+    /// prefix minus the median of the one before. For benchmarks on drivers whose
+    /// timestamps cannot be trusted around compute passes (lavapipe misplaces compute
+    /// timestamps recorded after a render pass). Does not read the pool's header back.
+    pub fn pass_wall_times(
+        &self,
+        gpu: &Gpu,
+        strands: &StrandFrame,
+        target: &TargetViews<'_>,
+        repeats: usize,
+    ) -> crate::Result<Vec<(&'static str, f64)>> {
+        self.common.check(self.name(), strands)?;
+        let groups = self.groups(gpu, target)?;
+        let prefix = |count: usize, resolve: bool| -> crate::Result<f64> {
+            let mut times = Vec::new();
+            for _ in 0..repeats.max(1) {
+                let mut encoder = gpu.device.create_command_encoder(&Default::default());
+                self.record_compute(gpu, &mut encoder, &groups, count, None);
+                if resolve {
+                    self.record_resolve(&mut encoder, target, None);
+                }
+                let commands = encoder.finish();
+                let started = std::time::Instant::now();
+                gpu.submit_and_wait([commands])?;
+                times.push(started.elapsed().as_secs_f64() * 1e3);
+            }
+            times.sort_by(f64::total_cmp);
+            Ok(times[times.len() / 2])
+        };
+        let mut out = Vec::new();
+        let mut before = prefix(0, false)?;
+        for (count, (label, _, _)) in PASSES.iter().enumerate() {
+            let ms = prefix(count + 1, false)?;
+            out.push((*label, (ms - before).max(0.0)));
+            before = ms;
+        }
+        let ms = prefix(PASSES.len(), true)?;
+        out.push((RESOLVE, (ms - before).max(0.0)));
+        Ok(out)
+    }
+
     /// Takes what the header readbacks hold: the largest size a frame needed.
     fn collect_readbacks(&self, gpu: &Gpu) -> Option<u32> {
         // Runs the map callbacks of submissions that have completed; never waits.
@@ -760,78 +903,11 @@ impl HairPass for StrandRaster {
                 given: (target.width, target.height),
             });
         }
-        let mut pool = self.pool.lock().map_err(|_| {
-            GpuError::Validation("a thread panicked while recording this method".into())
-        })?;
-        if let Some(needed) = self.collect_readbacks(gpu) {
-            self.grow(gpu, &mut pool, needed)?;
-        }
-        let depth = target.depth_to_sample();
-        if pool.groups.as_ref().is_none_or(|(view, _)| view != depth) {
-            let groups = self.bind_groups(gpu, &pool.buffer, depth)?;
-            pool.groups = Some((depth.clone(), groups));
-        }
-        let groups = pool
-            .groups
-            .as_ref()
-            .map_or(&[][..], |(_, groups)| groups.as_slice());
-
+        let groups = self.groups(gpu, target)?;
         self.common
             .encode_mesh(encoder, target, None, timer.as_deref_mut());
-        let layout = StrandLayout::from_bits(self.layout.load(Ordering::Acquire));
-        let u = &self.uniforms_value;
-        let max_dim = gpu.limits().max_compute_workgroups_per_dimension;
-        encoder.clear_buffer(&self.storage.counts, 0, None);
-        for (((label, _, _), (pipeline, _)), (group, grid_kind)) in PASSES
-            .iter()
-            .zip(&self.pipelines)
-            .zip(groups.iter().zip(GRIDS))
-        {
-            let n = match grid_kind {
-                Grid::Vertices => layout.vertices().div_ceil(LINE_GROUP),
-                Grid::Segments => layout.segment_count().div_ceil(LINE_GROUP),
-                Grid::Blocks => u64::from(u.scan_blocks),
-                Grid::One => 1,
-                Grid::Tiles => u64::from(u.tiles_x) * u64::from(u.tiles_y),
-            };
-            let (x, y) = grid(n, max_dim).unwrap_or((0, 0));
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some(label),
-                timestamp_writes: timer.as_deref_mut().and_then(|t| t.compute_pass(label)),
-            });
-            pass.set_pipeline(pipeline);
-            if *label == PASSES[0].0 {
-                for (index, g) in self.shade_groups.iter().enumerate() {
-                    if let Some(g) = g {
-                        pass.set_bind_group(index as u32, g, &[]);
-                    }
-                }
-            }
-            pass.set_bind_group(3, group, &[]);
-            if x > 0 && y > 0 {
-                pass.dispatch_workgroups(x, y, 1);
-            }
-        }
-        {
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some(RESOLVE),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: target.color,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Load,
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
-                depth_stencil_attachment: None,
-                timestamp_writes: timer.and_then(|t| t.render_pass(RESOLVE)),
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
-            self.resolve
-                .record(&mut pass, Some((3, &self.resolve_group)));
-        }
+        self.record_compute(gpu, encoder, &groups, PASSES.len(), timer.as_deref_mut());
+        self.record_resolve(encoder, target, timer);
         // The header goes to an idle readback, mapped once the caller's submission of
         // this encoder completes; the next frame's encode reads it.
         if let Some(r) = self

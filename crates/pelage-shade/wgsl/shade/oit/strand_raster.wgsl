@@ -16,11 +16,12 @@
 //   cs_scatter      one thread per segment again: the same cells, each gets the
 //                   segment's index at offsets[cell] + atomicAdd(counts[cell]); indices
 //                   past the pool's capacity are dropped and counted.
-//   cs_fine         one workgroup per screen tile, one thread per pixel: the tile's bins
-//                   front to back, each bin's segments sorted by view depth in workgroup
-//                   memory (bitonic, in chunks of CHUNK), composited front to back with
-//                   analytic coverage, depth tested against the opaque depth; a pixel
-//                   stops below 1/255 transmittance and the tile once all its pixels have.
+//   cs_fine         one workgroup per screen tile, one thread per pixel: the tile's
+//                   segments, bin after bin in key order, drawn in runs: each thread
+//                   puts one segment's fragments (analytic coverage, depth tested against
+//                   the opaque depth) into per-pixel lists, each pixel sorts its list by
+//                   view depth and composites it front to back; a pixel stops below 1/255
+//                   transmittance (and takes no more fragments), the tile once all have.
 //   vs_fullscreen + fs_resolve
 //                   blends the result (premultiplied colour, 1 - transmittance) over the
 //                   caller's colour target.
@@ -33,8 +34,6 @@
 const SCAN_THREADS: u32 = 256u;
 // Cells per scan block: SCAN_THREADS threads x 4.
 const SCAN_BLOCK: u32 = 1024u;
-// Segments sorted together in workgroup memory (key and index: 8 KiB).
-const CHUNK: u32 = 1024u;
 // A pixel is finished once its transmittance drops below this.
 const OPAQUE_ENOUGH: f32 = 0.00392156863;
 // Tile edge in pixels (8 or 16): one workgroup of TILE x TILE threads per tile.
@@ -426,22 +425,42 @@ fn cs_scan_apply(
     }
 }
 
-// ---- per tile: sort and composite ----------------------------------------------------
+// ---- per tile: composite ------------------------------------------------------------
+//
+// A tile's cells are consecutive in the pool, bin after bin (within a bin, in the order
+// cs_scatter's atomics gave): the tile's segments in depth order to the bins' resolution.
+// They are drawn in runs of up to one segment per thread:
+// each thread walks its segment's pixels in the tile (phase A) and appends a fragment
+// (view depth there, the segment's place in the run) to the pixel's list in workgroup
+// memory, skipping pixels already opaque; each thread then sorts its own pixel's list by
+// depth and composites it (phase B). A run whose fragments overflow a pixel's list is
+// drawn again as runs of half the length (for the rest of the tile), so no fragment is
+// lost. The order is exact per pixel within a run (window depth), and by depth bin
+// between runs: only fragments of the same bin drawn in different runs can be out of order.
 
-var<workgroup> sort_keys: array<f32, CHUNK>;
-var<workgroup> sort_ids: array<u32, CHUNK>;
-var<workgroup> tile_range: vec2<u32>;
+// Fragment slots of a tile's lists: FRAG_SLOTS / (TILE x TILE) per pixel.
+const FRAG_SLOTS: u32 = 2048u;
+// Bits of a fragment key holding its entry in the run (runs are at most 512 long).
+const ENTRY_MASK: u32 = 511u;
+const MAX_TILE_PIXELS: u32 = 256u;
+
+// Segments per thread in a run (before halving on overflow).
+const RUN_PER_THREAD: u32 = 2u;
+var<workgroup> run_ids: array<u32, 512>;
+var<workgroup> frag_key: array<u32, FRAG_SLOTS>;
+var<workgroup> frag_count: array<atomic<u32>, MAX_TILE_PIXELS>;
+var<workgroup> tile_opaque: array<f32, MAX_TILE_PIXELS>;
+// 1 while the pixel is inside the target and not yet opaque.
+var<workgroup> tile_open: array<u32, MAX_TILE_PIXELS>;
+var<workgroup> overflowed: atomic<u32>;
 var<workgroup> pixels_done: atomic<u32>;
-var<workgroup> done_total: u32;
+var<workgroup> tile_range: vec2<u32>;
+var<workgroup> shared_word: u32;
 
-// Whether entry i sorts after entry j: by key, then by segment index.
-fn sorts_after(i: u32, j: u32) -> bool {
-    return sort_keys[i] > sort_keys[j] || (sort_keys[i] == sort_keys[j] && sort_ids[i] > sort_ids[j]);
-}
-
-// Coverage of the pixel centred at `p` by the segment, with its window depth and
-// perspective-correct parameter: (coverage, depth, t); coverage 0 outside it.
-fn segment_coverage(seg: RasterSegment, p: vec2<f32>) -> vec3<f32> {
+// Coverage of the pixel centred at `p` by the segment, its window depth, the
+// perspective-correct parameter along it and the view depth there:
+// (coverage, depth, t, view depth); coverage 0 outside it.
+fn segment_coverage(seg: RasterSegment, p: vec2<f32>) -> vec4<f32> {
     let d = seg.b.xy - seg.a.xy;
     let len2 = dot(d, d);
     var u = 0.0;
@@ -449,7 +468,7 @@ fn segment_coverage(seg: RasterSegment, p: vec2<f32>) -> vec3<f32> {
         u = dot(p - seg.a.xy, d) / len2;
         // Half open, so consecutive segments share no pixel at their joint.
         if (u < 0.0 || u >= 1.0) {
-            return vec3<f32>(0.0);
+            return vec4<f32>(0.0);
         }
     }
     let dist = length(p - (seg.a.xy + u * d));
@@ -458,7 +477,80 @@ fn segment_coverage(seg: RasterSegment, p: vec2<f32>) -> vec3<f32> {
     let coverage = clamp(min(dist + half_width, 0.5) - max(dist - half_width, -0.5), 0.0, 1.0);
     let inv_w = mix(seg.color_a.w, seg.color_b.w, u);
     let t = select(0.0, u * seg.color_b.w / inv_w, inv_w > 0.0);
-    return vec3<f32>(coverage, mix(seg.a.z, seg.b.z, u), t);
+    return vec4<f32>(coverage, mix(seg.a.z, seg.b.z, u), t, 1.0 / max(inv_w, 1e-30));
+}
+
+// Whether window depth `z` is in front of the opaque depth `opaque`.
+fn in_front(z: f32, opaque: f32) -> bool {
+    if (raster.reverse_z != 0u) {
+        return z > opaque;
+    }
+    return z < opaque;
+}
+
+// Phase A for one segment: a fragment in every open pixel of the tile it covers.
+fn emit_fragments(seg: RasterSegment, entry: u32, origin: vec2<u32>, slots: u32) {
+    let r = segment_reach(seg);
+    let d = seg.b.xy - seg.a.xy;
+    // Walk the segment's major axis; across it, only the pixels within `r` of the line
+    // (r / cos of the angle to the axis) can be covered.
+    let major = select(1u, 0u, abs(d.x) >= abs(d.y));
+    let minor = 1u - major;
+    let first = vec2<i32>(origin);
+    let last = first + vec2<i32>(i32(TILE) - 1);
+    let lo = max(i32(clamp(floor(min(seg.a[major], seg.b[major]) - r), -1.0, 1.0e9)), first[major]);
+    let hi = min(i32(clamp(floor(max(seg.a[major], seg.b[major]) + r), -1.0, 1.0e9)), last[major]);
+    let along = d[major];
+    let len2 = dot(d, d);
+    let inv_len2 = select(0.0, 1.0 / len2, len2 > 1e-12);
+    let span = select(r, r * length(d) / abs(along), abs(along) > 1e-6);
+    for (var m = lo; m <= hi; m += 1) {
+        var centre_line = seg.a[minor];
+        if (abs(along) > 1e-6) {
+            let t = clamp((f32(m) + 0.5 - seg.a[major]) / along, 0.0, 1.0);
+            centre_line = seg.a[minor] + t * d[minor];
+        }
+        let n0 = max(i32(clamp(floor(centre_line - span), -1.0, 1.0e9)), first[minor]);
+        let n1 = min(i32(clamp(floor(centre_line + span), -1.0, 1.0e9)), last[minor]);
+        for (var n = n0; n <= n1; n += 1) {
+            var pixel = vec2<i32>(m, n);
+            if (major == 1u) {
+                pixel = vec2<i32>(n, m);
+            }
+            let p = u32(pixel.y - first.y) * TILE + u32(pixel.x - first.x);
+            if (tile_open[p] == 0u) {
+                continue;
+            }
+            // Covered (as segment_coverage decides, without its square root) and in
+            // front of the opaque surface.
+            let q = vec2<f32>(pixel) + vec2<f32>(0.5) - seg.a.xy;
+            var u = 0.0;
+            if (len2 > 1e-12) {
+                u = dot(q, d) * inv_len2;
+                if (u < 0.0 || u >= 1.0) {
+                    continue;
+                }
+            }
+            let reach = mix(seg.a.w, seg.b.w, u) + 0.5;
+            if (max(dot(q, q) - u * u * len2, 0.0) >= reach * reach) {
+                continue;
+            }
+            let z = mix(seg.a.z, seg.b.z, u);
+            if (!in_front(z, tile_opaque[p])) {
+                continue;
+            }
+            let slot = atomicAdd(&frag_count[p], 1u);
+            if (slot < slots) {
+                // The window depth's bits (nearer first; non-negative floats order as
+                // integers) with the low bits replaced by the entry: one word sorts by
+                // depth, then run order.
+                let near_first = select(z, 1.0 - z, raster.reverse_z != 0u);
+                frag_key[p * slots + slot] = (bitcast<u32>(max(near_first, 0.0)) & ~ENTRY_MASK) | entry;
+            } else {
+                atomicStore(&overflowed, 1u);
+            }
+        }
+    }
 }
 
 @compute @workgroup_size(TILE, TILE)
@@ -469,106 +561,103 @@ fn cs_fine(
     @builtin(local_invocation_index) lid: u32,
 ) {
     let threads = TILE * TILE;
+    let slots = FRAG_SLOTS / threads;
     let tile_index = wid.x + wid.y * groups.x;
     let tiles = raster.tiles_x * raster.tiles_y;
-    let tile_x = tile_index % raster.tiles_x;
-    let tile_y = tile_index / raster.tiles_x;
-    let px = tile_x * TILE + local.x;
-    let py = tile_y * TILE + local.y;
+    let origin = vec2<u32>(tile_index % raster.tiles_x, tile_index / raster.tiles_x) * TILE;
+    let px = origin.x + local.x;
+    let py = origin.y + local.y;
     let inside = tile_index < tiles && px < raster.width && py < raster.height;
     let centre = vec2<f32>(f32(px) + 0.5, f32(py) + 0.5);
     var opaque = select(1.0, 0.0, raster.reverse_z != 0u);
     if (inside) {
         opaque = textureLoad(opaque_depth, vec2<i32>(i32(px), i32(py)), 0);
     }
-    var color = vec3<f32>(0.0);
-    var transmittance = 1.0;
-    var finished = !inside;
+    tile_opaque[lid] = opaque;
+    tile_open[lid] = select(0u, 1u, inside);
+    atomicStore(&frag_count[lid], 0u);
     if (lid == 0u) {
         atomicStore(&pixels_done, 0u);
+        atomicStore(&overflowed, 0u);
     }
+    var color = vec3<f32>(0.0);
+    var transmittance = 1.0;
     workgroupBarrier();
-    if (finished) {
+    if (!inside) {
         atomicAdd(&pixels_done, 1u);
     }
-    for (var bin = 0u; bin < raster.bins; bin += 1u) {
-        if (lid == 0u) {
-            var range = vec2<u32>(0u, 0u);
-            if (tile_index < tiles) {
-                let cell = tile_index * raster.bins + bin;
-                let start = offsets[cell];
-                let end = min(start + atomicLoad(&counts[cell]), raster.capacity);
-                range = vec2<u32>(start, max(start, end));
-            }
-            tile_range = range;
-            done_total = atomicLoad(&pixels_done);
+    // The tile's cells are consecutive in the pool, bin after bin: one range.
+    if (lid == 0u) {
+        var range = vec2<u32>(0u, 0u);
+        if (tile_index < tiles) {
+            let first_cell = tile_index * raster.bins;
+            let last_cell = first_cell + raster.bins - 1u;
+            let start = min(offsets[first_cell], raster.capacity);
+            let end = min(offsets[last_cell] + atomicLoad(&counts[last_cell]), raster.capacity);
+            range = vec2<u32>(start, max(start, end));
         }
-        let range = workgroupUniformLoad(&tile_range);
-        let all_done = workgroupUniformLoad(&done_total) >= threads;
-        if (all_done) {
+        tile_range = range;
+    }
+    let range = workgroupUniformLoad(&tile_range);
+    var done = range.x;
+    let longest_run = threads * RUN_PER_THREAD;
+    var run = longest_run;
+    loop {
+        if (done >= range.y) {
             break;
         }
-        for (var first = range.x; first < range.y; first += CHUNK) {
-            let n = min(CHUNK, range.y - first);
-            var size = 1u;
-            while (size < n) {
-                size <<= 1u;
-            }
-            for (var i = lid; i < size; i += threads) {
-                if (i < n) {
-                    let s = pool[first + i];
-                    sort_ids[i] = s;
-                    sort_keys[i] = segment_key(raster_segments[s]);
-                } else {
-                    sort_ids[i] = 0xffffffffu;
-                    sort_keys[i] = 3.0e38;
-                }
-            }
-            workgroupBarrier();
-            // Bitonic sort of `size` entries, ascending.
-            for (var k = 2u; k <= size; k <<= 1u) {
-                for (var j = k >> 1u; j > 0u; j >>= 1u) {
-                    for (var i = lid; i < size; i += threads) {
-                        let l = i ^ j;
-                        if (l > i) {
-                            let ascending = (i & k) == 0u;
-                            if (sorts_after(i, l) == ascending) {
-                                let key = sort_keys[i];
-                                let id = sort_ids[i];
-                                sort_keys[i] = sort_keys[l];
-                                sort_ids[i] = sort_ids[l];
-                                sort_keys[l] = key;
-                                sort_ids[l] = id;
-                            }
-                        }
-                    }
-                    workgroupBarrier();
-                }
-            }
-            if (!finished) {
-                for (var i = 0u; i < n; i += 1u) {
-                    let seg = raster_segments[sort_ids[i]];
-                    let c = segment_coverage(seg, centre);
-                    let in_front = select((c.y < opaque), (c.y > opaque), raster.reverse_z != 0u);
-                    if (c.x > 0.0 && in_front) {
-                        let alpha = raster.opacity * c.x;
-                        color += transmittance * alpha * mix(seg.color_a.rgb, seg.color_b.rgb, c.z);
-                        transmittance *= 1.0 - alpha;
-                        if (transmittance < OPAQUE_ENOUGH) {
-                            finished = true;
-                            atomicAdd(&pixels_done, 1u);
-                            break;
-                        }
-                    }
-                }
-            }
+        let count = min(run, range.y - done);
+        for (var entry = lid; entry < count; entry += threads) {
+            let s = pool[done + entry];
+            run_ids[entry] = s;
+            emit_fragments(raster_segments[s], entry, origin, slots);
+        }
+        workgroupBarrier();
+        if (lid == 0u) {
+            shared_word = atomicLoad(&overflowed);
+        }
+        let overflow = workgroupUniformLoad(&shared_word) != 0u;
+        if (overflow && run > 1u) {
+            atomicStore(&frag_count[lid], 0u);
             if (lid == 0u) {
-                done_total = atomicLoad(&pixels_done);
+                atomicStore(&overflowed, 0u);
             }
-            let chunk_done = workgroupUniformLoad(&done_total) >= threads;
-            if (chunk_done) {
+            run = max(run >> 1u, 1u);
+            workgroupBarrier();
+            continue;
+        }
+        // Phase B: this pixel's fragments, sorted by view depth, front to back.
+        let base = lid * slots;
+        let fragments = min(atomicLoad(&frag_count[lid]), slots);
+        for (var i = 1u; i < fragments; i += 1u) {
+            let key = frag_key[base + i];
+            var at = i;
+            while (at > 0u && frag_key[base + at - 1u] > key) {
+                frag_key[base + at] = frag_key[base + at - 1u];
+                at -= 1u;
+            }
+            frag_key[base + at] = key;
+        }
+        for (var i = 0u; i < fragments; i += 1u) {
+            let seg = raster_segments[run_ids[frag_key[base + i] & ENTRY_MASK]];
+            let c = segment_coverage(seg, centre);
+            let alpha = raster.opacity * c.x;
+            color += transmittance * alpha * mix(seg.color_a.rgb, seg.color_b.rgb, c.z);
+            transmittance *= 1.0 - alpha;
+            if (transmittance < OPAQUE_ENOUGH) {
+                tile_open[lid] = 0u;
+                atomicAdd(&pixels_done, 1u);
                 break;
             }
+        }
+        atomicStore(&frag_count[lid], 0u);
+        done += count;
+        workgroupBarrier();
+        if (lid == 0u) {
+            shared_word = atomicLoad(&pixels_done);
+        }
+        if (workgroupUniformLoad(&shared_word) >= threads) {
+            break;
         }
     }
     if (inside) {
