@@ -384,7 +384,14 @@ fn degenerate_charts_do_not_panic() {
         ("many_series", many_series),
     ];
     for (name, chart) in cases {
-        for (w, h) in [(640, 480), (40, 30), (1, 1)] {
+        for (w, h) in [
+            (640, 480),
+            (300, 120),
+            (120, 300),
+            (90, 70),
+            (40, 30),
+            (1, 1),
+        ] {
             let png = dir.join(format!("{name}_{w}.png"));
             chart.write_png(&png, w, h).unwrap();
             let img = image::open(&png).unwrap();
