@@ -6,8 +6,10 @@
 //! - [`pareto_front`]: the Pareto-optimal points of a cost/error cloud.
 //! - [`ScatterChart`]: "error against time" scatter plots with the Pareto
 //!   front marked and marker area encoding a third quantity, written as a
-//!   self-contained SVG or as a PNG. The PNG is rasterised here with a
-//!   built-in bitmap font: no system fonts, no C libraries, works headless.
+//!   self-contained SVG or as a PNG, both drawn with `plotters` (its SVG and
+//!   bitmap backends) and the bundled DejaVu Sans font: no system fonts, no
+//!   C libraries, works headless.
+//! - [`contact_sheet`]: images in a labelled grid, captions in the same font.
 //! - [`write_file_atomically`] and [`AtomicFile`]: every file is written to a
 //!   short temporary name and renamed, so an interrupted run never leaves a
 //!   half-written result (devices are written through, symbolic links

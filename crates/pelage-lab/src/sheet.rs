@@ -1,19 +1,20 @@
 //! Contact sheets: images side by side in a grid, each with a caption.
 
-use image::{Rgba, RgbaImage};
+use image::{Rgb, RgbImage, Rgba, RgbaImage};
+use plotters::prelude::{BitMapBackend, IntoDrawingArea, RGBColor, Text};
 
-use crate::LabError;
-use crate::font::{ADVANCE, GLYPH_ROWS, glyph, pixel};
+use crate::{LabError, font};
 
-/// Caption text scale (font pixels per glyph pixel).
-const SCALE: u32 = 2;
-/// Caption strip height and margins, in pixels.
-const CAPTION: u32 = GLYPH_ROWS * SCALE + 8;
+/// Caption text size and strip height, in pixels.
+const TEXT_SIZE: f64 = 16.0;
+const CAPTION: u32 = 24;
+/// Margin around and between cells, in pixels.
 const MARGIN: u32 = 4;
 
-/// Lays `cells` out `columns` to a row, each with its caption underneath (printable
-/// ASCII; longer captions are cut at the cell's width), on a white background. Cells
-/// may differ in size: every cell gets the largest width and height.
+/// Lays `cells` out `columns` to a row, each with its caption underneath (drawn with
+/// the bundled DejaVu Sans; longer captions are cut at the cell's width, marked `..`),
+/// on a white background. Cells may differ in size: every cell gets the largest width
+/// and height.
 pub fn contact_sheet(cells: &[(String, RgbaImage)], columns: u32) -> Result<RgbaImage, LabError> {
     if cells.is_empty() || columns == 0 {
         return Err(LabError::Invalid(
@@ -31,34 +32,35 @@ pub fn contact_sheet(cells: &[(String, RgbaImage)], columns: u32) -> Result<Rgba
             "a {width}x{height} contact sheet is too large; use smaller images"
         )));
     }
+    font::register()?;
     let mut sheet = RgbaImage::from_pixel(width, height, Rgba([255, 255, 255, 255]));
     for (i, (caption, img)) in cells.iter().enumerate() {
         let (col, row) = (i as u32 % columns, i as u32 / columns);
         let x0 = MARGIN + col * (cell_w + MARGIN);
         let y0 = MARGIN + row * (cell_h + CAPTION + MARGIN);
         image::imageops::overlay(&mut sheet, img, i64::from(x0), i64::from(y0));
-        let max_chars = (cell_w / (ADVANCE * SCALE)) as usize;
-        for (n, c) in caption.chars().take(max_chars).enumerate() {
-            let g = glyph(c);
-            let gx = x0 + n as u32 * ADVANCE * SCALE;
-            let gy = y0 + img.height() + 4;
-            for fy in 0..GLYPH_ROWS {
-                for fx in 0..ADVANCE {
-                    if pixel(g, fx, fy) {
-                        for sy in 0..SCALE {
-                            for sx in 0..SCALE {
-                                let (px, py) = (gx + fx * SCALE + sx, gy + fy * SCALE + sy);
-                                if px < width && py < height {
-                                    sheet.put_pixel(px, py, Rgba([20, 20, 20, 255]));
-                                }
-                            }
-                        }
-                    }
-                }
-            }
+        let strip = caption_strip(caption, cell_w)?;
+        for (x, y, Rgb([r, g, b])) in strip.enumerate_pixels() {
+            sheet.put_pixel(x0 + x, y0 + img.height() + y, Rgba([*r, *g, *b, 255]));
         }
     }
     Ok(sheet)
+}
+
+/// `text` drawn by plotters on a white strip `width` pixels wide.
+fn caption_strip(text: &str, width: u32) -> Result<RgbImage, LabError> {
+    let mut rgb = vec![255u8; width as usize * CAPTION as usize * 3];
+    {
+        let strip = BitMapBackend::with_buffer(&mut rgb, (width, CAPTION)).into_drawing_area();
+        let style = font::style(TEXT_SIZE, RGBColor(20, 20, 20));
+        let text = font::fit(text, f64::from(width), &style);
+        strip
+            .draw(&Text::new(text, (0, 4), style))
+            .and_then(|_| strip.present())
+            .map_err(|e| LabError::Invalid(format!("cannot draw a caption: {e}")))?;
+    }
+    RgbImage::from_raw(width, CAPTION, rgb)
+        .ok_or_else(|| LabError::Invalid("caption buffer has the wrong size".into()))
 }
 
 #[cfg(test)]

@@ -220,7 +220,25 @@ fn svg_has_title_series_and_markers() {
         .count();
     assert_eq!(svg.matches("class=\"point\"").count(), finite);
     assert!(svg.contains("points not shown: 1 NaN/inf"));
+    // The dashed Pareto step line.
     assert!(svg.contains("<polyline"));
+    // Axis names, the size legend, log-axis decade ticks and Pareto labels.
+    for s in [
+        "GPU time per frame (ms)",
+        "mean FLIP error",
+        "area: memory (MB)",
+        "\n10\n",
+        "\n100\n",
+        "\n1000\n",
+        "\n0.001\n",
+        "BVH 64spp",
+    ] {
+        assert!(svg.contains(s), "missing {s:?}");
+    }
+    // Marker area follows size: the largest memory has the largest marker.
+    let voxel = marker(&svg, "voxel 256^3");
+    let small = marker(&svg, "shadow map 256px");
+    assert!(voxel.2 > 3 * small.2, "{voxel:?} {small:?}");
     let dir = scratch("svg");
     chart.write_svg(&dir.join("chart.svg"), 800, 600).unwrap();
     assert_eq!(std::fs::read_to_string(dir.join("chart.svg")).unwrap(), svg);
@@ -231,6 +249,47 @@ fn check_png(path: &Path, w: u32, h: u32) {
     assert_eq!(img.dimensions(), (w, h));
     let first = *img.get_pixel(0, 0);
     assert!(img.pixels().any(|p| *p != first), "flat image");
+}
+
+/// Centre and radius in pixels of the SVG tooltip circle whose title starts
+/// with `title`.
+fn marker(svg: &str, title: &str) -> (u32, u32, u32) {
+    let line = svg
+        .lines()
+        .find(|l| l.contains("class=\"point\"") && l.contains(&format!("<title>{title}")))
+        .unwrap_or_else(|| panic!("no marker {title}"));
+    let attr = |name: &str| -> u32 {
+        let rest = &line[line.find(&format!(" {name}=\"")).unwrap() + name.len() + 3..];
+        rest[..rest.find('"').unwrap()].parse().unwrap()
+    };
+    (attr("cx"), attr("cy"), attr("r"))
+}
+
+#[test]
+fn png_markers_sit_where_the_svg_puts_them() {
+    // Both files are drawn from one layout: the PNG has each series' colour
+    // at the centre the SVG gives for its points, and white elsewhere.
+    let chart = example_chart();
+    let svg = chart.to_svg(900, 600);
+    let img = chart.to_image(900, 600).unwrap();
+    let reddish = |p: image::Rgba<u8>| p[0] > 200 && p[1] < 150 && p[2] < 150;
+    let bluish = |p: image::Rgba<u8>| p[2] > p[0] + 30 && p[2] > 120;
+    for (title, is) in [
+        ("voxel 256^3", &reddish as &dyn Fn(image::Rgba<u8>) -> bool),
+        ("voxel 192^3", &reddish),
+        ("shadow map 512px", &bluish),
+    ] {
+        let (x, y, _) = marker(&svg, title);
+        let p = *img.get_pixel(x, y);
+        assert!(is(p), "{title} at {x},{y} is {p:?}");
+    }
+    assert_eq!(*img.get_pixel(1, 1), image::Rgba([255, 255, 255, 255]));
+    // Text is drawn: the title band holds dark pixels.
+    let dark = (0..900)
+        .flat_map(|x| (0..30).map(move |y| (x, y)))
+        .filter(|&(x, y)| img.get_pixel(x, y)[0] < 80)
+        .count();
+    assert!(dark > 200, "{dark} dark title pixels");
 }
 
 #[test]
@@ -325,7 +384,14 @@ fn degenerate_charts_do_not_panic() {
         ("many_series", many_series),
     ];
     for (name, chart) in cases {
-        for (w, h) in [(640, 480), (40, 30), (1, 1)] {
+        for (w, h) in [
+            (640, 480),
+            (300, 120),
+            (120, 300),
+            (90, 70),
+            (40, 30),
+            (1, 1),
+        ] {
             let png = dir.join(format!("{name}_{w}.png"));
             chart.write_png(&png, w, h).unwrap();
             let img = image::open(&png).unwrap();
