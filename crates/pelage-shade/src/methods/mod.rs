@@ -161,10 +161,12 @@ pub fn build(
 /// backend does not allow.
 const SLICED_DOWNLEVEL: wgpu::DownlevelFlags = wgpu::DownlevelFlags::READ_ONLY_DEPTH_STENCIL;
 
-/// The transparency methods (as `--oit` names them) `gpu` can build: opaque and wboit
-/// everywhere, the per-pixel methods where [`SLICED_DOWNLEVEL`] and their 64-bit
-/// atomics are there.
-pub(crate) fn supported_methods(gpu: &Gpu) -> Vec<&'static str> {
+/// The transparency methods (by [`HairPass::name`]) `gpu` can build: opaque and wboit
+/// everywhere; the k-buffer, A-buffer, DBK and random subsets where the adapter has the
+/// downlevel capability `READ_ONLY_DEPTH_STENCIL` (not wgpu's GL backend), the k-buffer
+/// and random subsets also their 64-bit atomics. The others fail before drawing with
+/// [`ShadeError::Unsupported`](crate::ShadeError::Unsupported), which lists these.
+pub fn supported_methods(gpu: &Gpu) -> Vec<&'static str> {
     let sliced = gpu.downlevel_flags().contains(SLICED_DOWNLEVEL);
     let has = |f| gpu.features().contains(f);
     [
