@@ -79,6 +79,22 @@ pub enum Error {
     /// Writing an output failed.
     #[error(transparent)]
     Output(#[from] OutputError),
+    /// The frame read back was never drawn: every frame starts by clearing to the
+    /// opaque background, so pixels that are not opaque mean the adapter dropped the
+    /// passes (or no frame was rendered yet). Returned instead of a blank picture.
+    #[error(
+        "the frame was not drawn: {transparent} of {pixels} pixels are not opaque, but every \
+         frame clears to an opaque background, so this adapter ({adapter}) dropped the passes \
+         without reporting an error; no image is given"
+    )]
+    Undrawn {
+        /// Pixels whose alpha is below 1.
+        transparent: usize,
+        /// Pixels in the frame.
+        pixels: usize,
+        /// The adapter, as [`gpu::Gpu::describe`] names it.
+        adapter: String,
+    },
 }
 
 /// Result of the frame pipeline.

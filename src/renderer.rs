@@ -459,7 +459,9 @@ impl Renderer {
     /// bottom and no padding: an `Rgba8UnormSrgb` target as it is, a `Bgra8UnormSrgb`
     /// one swizzled, an `Rgba16Float` one clamped to [0, 1] and sRGB-encoded (no tone
     /// mapping beyond the clamp); other formats are an error (bind
-    /// [`Renderer::color_texture`] instead).
+    /// [`Renderer::color_texture`] instead). A frame with any pixel that is not opaque
+    /// was never drawn (every frame clears to an opaque background) and is
+    /// [`Error::Undrawn`](crate::Error::Undrawn), never a blank image.
     pub fn rgba8(&self, gpu: &Gpu) -> crate::Result<(u32, u32, Vec<u8>)> {
         let mut data = self.targets.read_color(gpu)?;
         data.data = match self.targets.format.color {
@@ -490,6 +492,16 @@ impl Renderer {
                 ))));
             }
         };
+        // Every frame clears to an opaque background and every method blends over it
+        // keeping alpha 1: a pixel that is not opaque was never drawn.
+        let transparent = data.data.chunks_exact(4).filter(|p| p[3] != 255).count();
+        if transparent > 0 {
+            return Err(crate::Error::Undrawn {
+                transparent,
+                pixels: data.data.len() / 4,
+                adapter: gpu.describe(),
+            });
+        }
         Ok((data.width, data.height, data.data))
     }
 

@@ -27,7 +27,8 @@ pub enum CliError {
 
 impl CliError {
     /// 2 for input the user can fix (a scene file, options, out-of-range parameters, a
-    /// `WGPU_BACKEND` naming no backend),
+    /// `WGPU_BACKEND` naming no backend, a method this adapter cannot run: the message
+    /// names those that can),
     /// 1 for everything else.
     pub fn exit_code(&self) -> u8 {
         match self {
@@ -37,7 +38,9 @@ impl CliError {
                 pelage::Error::Param(_)
                 | pelage::Error::Strands(pelage::strands::StrandsError::Param(_))
                 | pelage::Error::Shadow(pelage::shadow::ShadowError::Param(_))
-                | pelage::Error::Shade(pelage::shade::ShadeError::Param(_))
+                | pelage::Error::Shade(
+                    pelage::shade::ShadeError::Param(_) | pelage::shade::ShadeError::Unsupported(_),
+                )
                 | pelage::Error::Gpu(GpuError::BadBackend { .. }),
             ) => 2,
             _ => 1,

@@ -170,19 +170,25 @@ pub fn run() -> Result<(), CliError> {
         "  largest image, shadow map or deep opacity map side: {} px",
         limits.max_texture_dimension_2d
     );
-    let k_buffer = features.contains(wgpu::Features::SHADER_INT64_ATOMIC_ALL_OPS);
-    let subsets = features.contains(wgpu::Features::SHADER_INT64_ATOMIC_MIN_MAX);
-    let missing: Vec<&str> = [(k_buffer, "k_buffer"), (subsets, "random_subsets")]
-        .iter()
-        .filter(|(ok, _)| !ok)
-        .map(|(_, name)| *name)
-        .collect();
+    let available = pelage::shade::supported_methods(&gpu);
+    let missing: Vec<&str> = [
+        "opaque",
+        "wboit",
+        "k_buffer",
+        "a_buffer",
+        "dbk",
+        "random_subsets",
+    ]
+    .into_iter()
+    .filter(|name| !available.contains(name))
+    .collect();
     if missing.is_empty() {
         println!("  every transparency method is available");
     } else {
         println!(
-            "  not available on this adapter: --oit {} (the others work)",
-            missing.join(", ")
+            "  not available on this adapter: --oit {} (these work: {})",
+            missing.join(", "),
+            available.join(", ")
         );
     }
     Ok(())

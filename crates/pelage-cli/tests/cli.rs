@@ -814,3 +814,183 @@ fn no_xdg_runtime_dir_warning_without_the_variable() {
         assert!(!stderr.contains("XDG_RUNTIME_DIR"), "{xdg:?}: {stderr}");
     }
 }
+
+/// Runs `pelage args` with `env` set (and `WGPU_BACKEND` removed unless `env` sets it).
+fn pelage_env(args: &[&str], env: &[(&str, &str)]) -> Output {
+    let mut command = Command::new(env!("CARGO_BIN_EXE_pelage"));
+    command.args(args).env_remove("WGPU_BACKEND");
+    if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
+        let runtime = std::env::temp_dir().join(format!("pelage-cli-xdg-{}", std::process::id()));
+        let _ = std::fs::create_dir_all(&runtime);
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            let _ = std::fs::set_permissions(&runtime, std::fs::Permissions::from_mode(0o700));
+        }
+        command.env("XDG_RUNTIME_DIR", &runtime);
+    }
+    for (key, value) in env {
+        command.env(key, value);
+    }
+    command.output().expect("run the pelage binary")
+}
+
+/// Whether `WGPU_BACKEND=gl` finds llvmpipe (the GL cases below run only there: on
+/// another GL driver the pictures could differ); prints why not.
+fn llvmpipe_gl() -> bool {
+    let out = pelage_env(&["info"], &[("WGPU_BACKEND", "gl")]);
+    let stdout = text(&out.stdout);
+    let found =
+        out.status.success() && stdout.contains("llvmpipe") && stdout.contains("backend      Gl");
+    if !found {
+        println!(
+            "skipped: WGPU_BACKEND=gl does not find llvmpipe here ({}; {})",
+            out.status,
+            text(&out.stderr).trim()
+        );
+    }
+    found
+}
+
+/// Renders the default scene, tiny, with `extra` options and `env`; returns the exit
+/// status, stderr and the image when one was written.
+fn render_tiny(
+    dir: &Scratch,
+    name: &str,
+    extra: &[&str],
+    env: &[(&str, &str)],
+) -> (Option<i32>, String, Option<image::RgbaImage>) {
+    let png = dir.0.join(format!("{name}.png"));
+    let png_arg = png.to_string_lossy().into_owned();
+    let mut args = vec![
+        "render",
+        "--size",
+        "96x72",
+        "--strands",
+        "500",
+        "-o",
+        &png_arg,
+    ];
+    args.extend_from_slice(extra);
+    let out = pelage_env(&args, env);
+    let image = out
+        .status
+        .success()
+        .then(|| image::open(&png).expect("decode the PNG").into_rgba8());
+    (out.status.code(), text(&out.stderr), image)
+}
+
+/// Mean absolute difference per channel, in 8-bit steps.
+fn mean_difference(a: &image::RgbaImage, b: &image::RgbaImage) -> f64 {
+    assert_eq!(a.dimensions(), b.dimensions());
+    let sum: u64 = a
+        .as_raw()
+        .iter()
+        .zip(b.as_raw())
+        .map(|(x, y)| u64::from(x.abs_diff(*y)))
+        .sum();
+    sum as f64 / a.as_raw().len() as f64
+}
+
+/// Every shadow method and the transparency methods GL can run draw on llvmpipe's GL
+/// the picture lavapipe draws (issue 22: every pixel was (0,0,0,0) with exit code 0).
+#[test]
+fn gl_draws_what_vulkan_draws() {
+    if !llvmpipe_gl() {
+        return;
+    }
+    let dir = Scratch::new("gl_pictures");
+    let cases: [&[&str]; 8] = [
+        &[],
+        &["--shadow", "none"],
+        &["--shadow", "voxel"],
+        &["--shadow", "map"],
+        &["--shadow", "dom"],
+        &["--shadow", "adsm"],
+        &["--oit", "opaque"],
+        &["--oit", "wboit"],
+    ];
+    for (i, extra) in cases.iter().enumerate() {
+        let (code, stderr, gl) =
+            render_tiny(&dir, &format!("gl{i}"), extra, &[("WGPU_BACKEND", "gl")]);
+        assert_eq!(code, Some(0), "GL {extra:?}:\n{stderr}");
+        let gl = gl.expect("GL wrote a picture");
+        let (code, stderr, vulkan) = render_tiny(
+            &dir,
+            &format!("vk{i}"),
+            extra,
+            &[("WGPU_BACKEND", "vulkan")],
+        );
+        assert_eq!(code, Some(0), "Vulkan {extra:?}:\n{stderr}");
+        let vulkan = vulkan.expect("Vulkan wrote a picture");
+        assert!(
+            gl.pixels().all(|p| p.0[3] == 255),
+            "GL {extra:?}: pixels that are not opaque"
+        );
+        let diff = mean_difference(&gl, &vulkan);
+        println!("{extra:?}: mean difference GL - Vulkan {diff:.3} (8-bit steps)");
+        assert!(diff < 1.0, "GL {extra:?} differs from Vulkan by {diff}");
+        assert_not_blank(&dir.0.join(format!("gl{i}.png")), 96, 72);
+    }
+}
+
+/// The per-pixel transparency methods stop on GL before drawing with exit code 2, a
+/// message naming what is missing and the methods that work there, and no raw wgpu or
+/// naga validation dump.
+#[test]
+fn gl_refuses_the_per_pixel_methods_naming_what_works() {
+    if !llvmpipe_gl() {
+        return;
+    }
+    let dir = Scratch::new("gl_refusals");
+    for (method, feature) in [
+        ("k_buffer", "SHADER_INT64_ATOMIC_ALL_OPS"),
+        ("a_buffer", "READ_ONLY_DEPTH_STENCIL"),
+        ("dbk", "READ_ONLY_DEPTH_STENCIL"),
+        ("random_subsets", "SHADER_INT64_ATOMIC_MIN_MAX"),
+    ] {
+        let (code, stderr, image) =
+            render_tiny(&dir, method, &["--oit", method], &[("WGPU_BACKEND", "gl")]);
+        assert_eq!(code, Some(2), "--oit {method}:\n{stderr}");
+        assert!(image.is_none());
+        assert!(stderr.starts_with("error: "), "--oit {method}:\n{stderr}");
+        assert!(stderr.contains(feature), "--oit {method}:\n{stderr}");
+        assert!(
+            stderr.contains("that work here: opaque, wboit"),
+            "--oit {method}:\n{stderr}"
+        );
+        for dump in [
+            "Caused by",
+            "naga",
+            "Validation Error",
+            "Features {",
+            "Features(",
+        ] {
+            assert!(!stderr.contains(dump), "--oit {method}:\n{stderr}");
+        }
+        assert!(
+            !dir.0.join(format!("{method}.png")).exists(),
+            "--oit {method} wrote a picture"
+        );
+    }
+}
+
+/// With no Vulkan driver wgpu falls back to GL silently: that fallback draws the picture.
+#[test]
+fn the_fallback_to_gl_without_vulkan_draws_the_picture() {
+    if !llvmpipe_gl() {
+        return;
+    }
+    let dir = Scratch::new("gl_fallback");
+    let (code, stderr, fallback) = render_tiny(
+        &dir,
+        "fallback",
+        &[],
+        &[("VK_ICD_FILENAMES", "/nonexistent")],
+    );
+    assert_eq!(code, Some(0), "{stderr}");
+    let fallback = fallback.expect("a picture");
+    let (_, _, vulkan) = render_tiny(&dir, "vk", &[], &[("WGPU_BACKEND", "vulkan")]);
+    let diff = mean_difference(&fallback, &vulkan.expect("a Vulkan picture"));
+    assert!(diff < 1.0, "the fallback differs from Vulkan by {diff}");
+}

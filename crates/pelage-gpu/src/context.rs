@@ -42,6 +42,7 @@ pub struct Gpu {
     pub adapter_info: Option<wgpu::AdapterInfo>,
     features: wgpu::Features,
     limits: wgpu::Limits,
+    downlevel: wgpu::DownlevelFlags,
     recorded: Arc<Mutex<Recorded>>,
 }
 
@@ -132,6 +133,7 @@ impl Gpu {
         Ok(Gpu {
             features: device.features(),
             limits: device.limits(),
+            downlevel: adapter.get_downlevel_capabilities().flags,
             adapter_info: Some(adapter.get_info()),
             device,
             queue,
@@ -146,15 +148,25 @@ impl Gpu {
     /// uncaptured-error and device-lost handlers are left alone: errors inside
     /// [`Gpu::scoped`] are still returned, but errors outside any scope go to
     /// the caller's handler (wgpu's default one panics).
+    ///
+    /// A device does not report its adapter's downlevel flags: they are taken as
+    /// WebGPU-compliant, less `READ_ONLY_DEPTH_STENCIL` on the GL backend (which wgpu's
+    /// GL backend never offers); [`Gpu::with_downlevel_flags`] sets the adapter's own.
     pub fn from_device(
         device: wgpu::Device,
         queue: wgpu::Queue,
         adapter_info: Option<wgpu::AdapterInfo>,
     ) -> Gpu {
+        let adapter_info = adapter_info.unwrap_or_else(|| device.adapter_info());
+        let mut downlevel = wgpu::DownlevelFlags::compliant();
+        if adapter_info.backend == wgpu::Backend::Gl {
+            downlevel.remove(wgpu::DownlevelFlags::READ_ONLY_DEPTH_STENCIL);
+        }
         Gpu {
             features: device.features(),
             limits: device.limits(),
-            adapter_info: adapter_info.or_else(|| Some(device.adapter_info())),
+            downlevel,
+            adapter_info: Some(adapter_info),
             device,
             queue,
             recorded: Arc::default(),
@@ -164,6 +176,21 @@ impl Gpu {
     /// The features enabled on the device.
     pub fn features(&self) -> wgpu::Features {
         self.features
+    }
+
+    /// The adapter's downlevel flags (what of WebGPU it lacks: GL has no read-only
+    /// depth attachment that the same pass samples, for one).
+    pub fn downlevel_flags(&self) -> wgpu::DownlevelFlags {
+        self.downlevel
+    }
+
+    /// This device with the downlevel flags `flags`
+    /// (`adapter.get_downlevel_capabilities().flags`): for a device from
+    /// [`Gpu::from_device`], whose flags are otherwise inferred from the backend.
+    #[must_use]
+    pub fn with_downlevel_flags(mut self, flags: wgpu::DownlevelFlags) -> Self {
+        self.downlevel = flags;
+        self
     }
 
     /// The limits of the device.

@@ -19,6 +19,7 @@ pub use draw::{
     HairInputs, OIT_STORAGE, TARGET_COLOR, TARGET_DEPTH, TargetViews, VISIBILITY, Visibility,
 };
 pub use hair_model::{HairModel, LUT_RESOLUTION};
+pub use methods::supported_methods;
 pub use methods::{
     ABuffer, CapturedFragment, Dbk, FragmentCapture, HairPass, KBuffer, OitStats, OitTile, Opaque,
     RandomSubsets, RasterCapture, StrandRaster, StrandRasterUniforms, Wboit, build,

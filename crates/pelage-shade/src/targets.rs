@@ -222,11 +222,20 @@ impl Targets {
                 1,
                 attach | wgpu::TextureUsages::COPY_SRC | wgpu::TextureUsages::TEXTURE_BINDING,
             ),
+            // Only single-sampled depth is sampled (the transparency methods); a
+            // multisampled one stays a render attachment, which wgpu's GL backend keeps
+            // in a renderbuffer: it attaches a multisampled *texture* with
+            // glFramebufferTexture2DMultisampleEXT, and on llvmpipe that pass then
+            // clears, draws and resolves nothing.
             depth: texture(
                 "pelage depth",
                 format.depth,
                 sample_count,
-                attach | wgpu::TextureUsages::TEXTURE_BINDING,
+                if sample_count == 1 {
+                    attach | wgpu::TextureUsages::TEXTURE_BINDING
+                } else {
+                    attach
+                },
             ),
         })
         .map_err(Into::into)

@@ -241,7 +241,7 @@ impl LightMap {
                 let opacity_layout = common_layout
                     .clone()
                     .visible(wgpu::ShaderStages::FRAGMENT)
-                    .depth_2d(5)
+                    .texture_2d(5, wgpu::TextureSampleType::Float { filterable: false })
                     .build(device);
                 let pipeline = pipeline(
                     "pelage deep opacity layers",
@@ -414,7 +414,8 @@ impl LightMap {
         resources.extend(self.mesh_map.resources());
         resources.push(BoundResource::Texture(
             self.depth.clone(),
-            wgpu::TextureSampleType::Depth,
+            // Read with textureLoad as `texture_2d<f32>` (GL cannot load a texture_depth_2d).
+            wgpu::TextureSampleType::Float { filterable: false },
         ));
         if let Some(layers) = &self.layers {
             // Read with textureLoad: float32 layers need no filtering.

@@ -85,6 +85,7 @@ impl ABuffer {
         height: u32,
     ) -> crate::Result<Self> {
         super::refuse_reverse_z(inputs, "a_buffer")?;
+        super::require_feature(gpu, "the A-buffer", wgpu::Features::empty())?;
         pelage_scene::Transparency::ABuffer {
             nodes_per_pixel,
             resolve_k,

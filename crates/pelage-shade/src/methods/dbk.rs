@@ -26,6 +26,7 @@ impl Dbk {
         height: u32,
     ) -> crate::Result<Self> {
         super::refuse_reverse_z(inputs, "dbk")?;
+        super::require_feature(gpu, "the DBK-buffer", wgpu::Features::empty())?;
         pelage_scene::Transparency::Dbk {
             depth_shift,
             nodes_per_pixel,

@@ -165,16 +165,68 @@ pub fn build(
     })
 }
 
-/// Errors unless the device has `feature`, naming the method and the alternatives.
+/// What a per-pixel (sliced) method needs of every adapter: its passes sample the
+/// opaque depth while holding it as their read-only depth attachment, which wgpu's GL
+/// backend does not allow.
+const SLICED_DOWNLEVEL: wgpu::DownlevelFlags = wgpu::DownlevelFlags::READ_ONLY_DEPTH_STENCIL;
+
+/// The transparency methods (by [`HairPass::name`]) `gpu` can build: opaque and wboit
+/// everywhere; the k-buffer, A-buffer, DBK and random subsets where the adapter has the
+/// downlevel capability `READ_ONLY_DEPTH_STENCIL` (not wgpu's GL backend), the k-buffer
+/// and random subsets also their 64-bit atomics. The others fail before drawing with
+/// [`ShadeError::Unsupported`](crate::ShadeError::Unsupported), which lists these.
+pub fn supported_methods(gpu: &Gpu) -> Vec<&'static str> {
+    let sliced = gpu.downlevel_flags().contains(SLICED_DOWNLEVEL);
+    let has = |f| gpu.features().contains(f);
+    [
+        ("opaque", true),
+        ("wboit", true),
+        (
+            "k_buffer",
+            sliced && has(wgpu::Features::SHADER_INT64_ATOMIC_ALL_OPS),
+        ),
+        ("a_buffer", sliced),
+        ("dbk", sliced),
+        (
+            "random_subsets",
+            sliced && has(wgpu::Features::SHADER_INT64_ATOMIC_MIN_MAX),
+        ),
+    ]
+    .into_iter()
+    .filter_map(|(name, ok)| ok.then_some(name))
+    .collect()
+}
+
+/// Errors, before anything is built, unless the device has `feature` and what every
+/// per-pixel method needs ([`SLICED_DOWNLEVEL`]), naming the method, what is missing
+/// and the methods that work on this adapter.
 fn require_feature(gpu: &Gpu, method: &str, feature: wgpu::Features) -> crate::Result<()> {
-    if gpu.features().contains(feature) {
+    let missing_features = feature - gpu.features();
+    let missing_downlevel = SLICED_DOWNLEVEL - gpu.downlevel_flags();
+    if missing_features.is_empty() && missing_downlevel.is_empty() {
         return Ok(());
     }
+    let mut what = Vec::new();
+    if !missing_features.is_empty() {
+        what.push(format!(
+            "the device feature {}",
+            pelage_gpu::feature_names(missing_features)
+        ));
+    }
+    if !missing_downlevel.is_empty() {
+        let names: Vec<&str> = missing_downlevel.iter_names().map(|(n, _)| n).collect();
+        what.push(format!(
+            "the downlevel capability {} (sampling the depth texture a pass also holds \
+             as its read-only depth attachment)",
+            names.join(" | ")
+        ));
+    }
+    let what = what.join(" and ");
     Err(crate::ShadeError::Unsupported(format!(
-        "{method} needs the device feature {}, which this adapter ({}) lacks; \
-         use the a_buffer, dbk or wboit method instead (they need no 64-bit atomics)",
-        pelage_gpu::feature_names(feature),
-        gpu.describe()
+        "{method} needs {what}, which this adapter ({}) lacks; the transparency methods \
+         that work here: {}",
+        gpu.describe(),
+        supported_methods(gpu).join(", ")
     )))
 }
 

@@ -59,7 +59,7 @@ pub(crate) struct SlicedPass {
 
 /// The `@group(3)` layout of a pass of a sliced method using `bindings`, as
 /// `shade/oit/*.wgsl` declares them: 0 the slice's `OitTile` uniform, 1 the opaque
-/// depth (`texture_depth_2d`), every other binding a per-pixel `read_write` storage
+/// depth (`texture_2d<f32>`, unfilterable: GL has no `textureLoad` of a depth texture), every other binding a per-pixel `read_write` storage
 /// buffer (fragment stage only).
 pub(crate) fn oit_layout(label: &str, bindings: &[u32]) -> BindLayout {
     bindings.iter().fold(
@@ -70,7 +70,7 @@ pub(crate) fn oit_layout(label: &str, bindings: &[u32]) -> BindLayout {
                 .uniform(0),
             1 => layout
                 .visible(wgpu::ShaderStages::VERTEX_FRAGMENT)
-                .depth_2d(1),
+                .texture_2d(1, wgpu::TextureSampleType::Float { filterable: false }),
             _ => layout
                 .visible(wgpu::ShaderStages::FRAGMENT)
                 .storage_rw(binding),

@@ -32,7 +32,7 @@ fn opacity_at(t: vec2<i32>, z: f32) -> f32 {
         return 0.0;
     }
     let extent = map_depth_extent(light_grid_u, light_grid);
-    let behind = (z - textureLoad(light_front_depth, t, 0)) * extent;
+    let behind = (z - textureLoad(light_front_depth, t, 0).r) * extent;
     if behind <= 0.0 {
         return 0.0;
     }
@@ -47,7 +47,7 @@ fn opacity_at(t: vec2<i32>, z: f32) -> f32 {
         before = accumulated(t, k - 1u);
     }
     // The last layer runs to the back of the fitted grid.
-    let back = (1.0 - textureLoad(light_front_depth, t, 0)) * extent;
+    let back = (1.0 - textureLoad(light_front_depth, t, 0).r) * extent;
     let end = select(layer_end(light_map, k, extent), back, k + 1u >= light_map.layers);
     let f = clamp((behind - start) / max(end - start, 1e-12), 0.0, 1.0);
     return mix(before, accumulated(t, k), f);

@@ -22,7 +22,9 @@
 @group(0) @binding(2) var<storage, read> vertices: array<vec4<f32>>;
 @group(0) @binding(3) var<storage, read> roots: array<StrandRoot>;
 @group(0) @binding(4) var<uniform> map: MapUniforms;
-@group(0) @binding(5) var front_depth: texture_depth_2d;
+// A depth texture bound as unfilterable float (WebGPU allows it): textureLoad from a
+// texture_depth_2d has no GLSL translation, so that form would not run on GL.
+@group(0) @binding(5) var front_depth: texture_2d<f32>;
 
 struct VertexOut {
     @builtin(position) clip: vec4<f32>,
@@ -64,7 +66,7 @@ struct Layers {
 
 @fragment
 fn fs_opacity(in: VertexOut) -> Layers {
-    let z0 = textureLoad(front_depth, vec2<i32>(in.clip.xy), 0);
+    let z0 = textureLoad(front_depth, vec2<i32>(in.clip.xy), 0).r;
     let extent = map_depth_extent(u, grid);
     let behind = max(in.clip.z - z0, 0.0) * extent;
     var layer = 0u;

@@ -7,7 +7,9 @@
 @group(1) @binding(0) var<uniform> light_grid_u: LightGridUniforms;
 @group(1) @binding(1) var<storage, read> light_grid: LightGrid;
 @group(1) @binding(2) var<uniform> light_map: MapUniforms;
-@group(1) @binding(6) var light_front_depth: texture_depth_2d;
+// A depth texture bound as unfilterable float (WebGPU allows it): textureLoad from a
+// texture_depth_2d has no GLSL translation, so that form would not run on GL.
+@group(1) @binding(6) var light_front_depth: texture_2d<f32>;
 
 // The 2x2 texels around map position `m` (in texels) and their bilinear weights.
 struct Footprint {
@@ -30,5 +32,5 @@ fn front_depth_at(t: vec2<i32>) -> f32 {
     if any(t < vec2<i32>(0)) || any(t >= size) {
         return 1.0;
     }
-    return textureLoad(light_front_depth, t, 0);
+    return textureLoad(light_front_depth, t, 0).r;
 }

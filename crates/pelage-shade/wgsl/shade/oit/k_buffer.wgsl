@@ -1,5 +1,5 @@
 // Stage 3, transparency: the k-buffer. Each pixel keeps its k nearest hair fragments
-// in k 64-bit words (fragment_key in shade/oit/common.wgsl: nearer is larger, an empty
+// in k 64-bit words (fragment_key in shade/oit/slots.wgsl: nearer is larger, an empty
 // word, 0, is the farthest), inserted without locks by a cascade of atomicMax: each
 // step keeps the larger value and carries the smaller one on. What falls off the end is
 // behind all k kept ones; it goes to the approximate tail (shade/oit/tail.wgsl) instead

@@ -1,6 +1,6 @@
 // Stage 3, transparency: Hunz 2016's random subsets. Strands fall into k subsets by a
 // hash of their index; each pixel keeps the nearest fragment of each subset (one
-// 64-bit atomicMax per fragment of fragment_key, shade/oit/common.wgsl), and
+// 64-bit atomicMax per fragment of fragment_key, shade/oit/slots.wgsl), and
 // the resolve sorts the k survivors and blends them. Fragments behind a subset's
 // nearest are lost: the method's approximation.
 //
