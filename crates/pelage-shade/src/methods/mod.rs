@@ -171,7 +171,7 @@ pub fn build(
 const SLICED_DOWNLEVEL: wgpu::DownlevelFlags = wgpu::DownlevelFlags::READ_ONLY_DEPTH_STENCIL;
 
 /// The transparency methods (by [`HairPass::name`]) `gpu` can build: opaque and wboit
-/// everywhere; the k-buffer, A-buffer, DBK and random subsets where the adapter has the
+/// everywhere; the strand rasterizer wherever compute shaders run; the k-buffer, A-buffer, DBK and random subsets where the adapter has the
 /// downlevel capability `READ_ONLY_DEPTH_STENCIL` (not wgpu's GL backend), the k-buffer
 /// and random subsets also their 64-bit atomics. The others fail before drawing with
 /// [`ShadeError::Unsupported`](crate::ShadeError::Unsupported), which lists these.
@@ -190,6 +190,11 @@ pub fn supported_methods(gpu: &Gpu) -> Vec<&'static str> {
         (
             "random_subsets",
             sliced && has(wgpu::Features::SHADER_INT64_ATOMIC_MIN_MAX),
+        ),
+        (
+            "strand_raster",
+            gpu.downlevel_flags()
+                .contains(wgpu::DownlevelFlags::COMPUTE_SHADERS),
         ),
     ]
     .into_iter()

@@ -145,7 +145,7 @@ fn raster_layout(label: &str, bindings: &[u32]) -> BindLayout {
         BindLayout::new(label, wgpu::ShaderStages::COMPUTE),
         |layout, &binding| match binding {
             0 => layout.uniform(0),
-            8 => layout.depth_2d(8),
+            8 => layout.texture_2d(8, wgpu::TextureSampleType::Float { filterable: false }),
             9 => layout.entry(
                 9,
                 wgpu::BindingType::StorageTexture {

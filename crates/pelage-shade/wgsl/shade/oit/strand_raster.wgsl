@@ -99,7 +99,8 @@ struct Header {
 @group(3) @binding(5) var<storage, read_write> pool: array<u32>;
 @group(3) @binding(6) var<storage, read_write> block_sums: array<u32>;
 @group(3) @binding(7) var<storage, read_write> header: Header;
-@group(3) @binding(8) var opaque_depth: texture_depth_2d;
+// The opaque depth, read as unfilterable float (GL has no textureLoad of a depth texture).
+@group(3) @binding(8) var opaque_depth: texture_2d<f32>;
 @group(3) @binding(9) var composite: texture_storage_2d<rgba16float, write>;
 @group(3) @binding(10) var composite_read: texture_2d<f32>;
 
@@ -571,7 +572,7 @@ fn cs_fine(
     let centre = vec2<f32>(f32(px) + 0.5, f32(py) + 0.5);
     var opaque = select(1.0, 0.0, raster.reverse_z != 0u);
     if (inside) {
-        opaque = textureLoad(opaque_depth, vec2<i32>(i32(px), i32(py)), 0);
+        opaque = textureLoad(opaque_depth, vec2<i32>(i32(px), i32(py)), 0).r;
     }
     tile_opaque[lid] = opaque;
     tile_open[lid] = select(0u, 1u, inside);
