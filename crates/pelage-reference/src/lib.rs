@@ -13,6 +13,10 @@
 //!
 //! [`oit_raster`] rasterises strands as ribbons on the CPU, so the exact composite of
 //! [`oit`] can be fed fragments that do not come from the GPU.
+//!
+//! [`strand_raster`] mirrors the compute strand rasterizer's binning and compositing
+//! (`shade/oit/strand_raster.wgsl`) from the segments the GPU projected: its tile lists
+//! equal the GPU's exactly and its composite matches within 1/255.
 
 pub mod chiang;
 pub mod flip;
@@ -21,6 +25,7 @@ pub mod oit;
 pub mod oit_raster;
 pub mod path_tracer;
 pub mod shading;
+pub mod strand_raster;
 pub mod strands;
 pub mod transmittance;
 pub mod voxel;
