@@ -5,33 +5,21 @@
 //! `StrandRaster::capture` in pelage-shade reads them back): projection and shading are
 //! checked elsewhere. [`bin`] walks every segment's footprint over the screen tiles as
 //! `cs_bin` and `cs_scatter` do and lists, per (tile, depth bin) cell, the segments that
-//! touch it; [`composite`] runs `cs_fine` for every pixel: bins front to back, each
-//! bin's entries sorted by (view depth, index) in chunks of [`CHUNK`], analytic coverage,
-//! the depth test against the opaque depth, front-to-back compositing stopped once the
-//! transmittance drops below [`OPAQUE_ENOUGH`].
+//! touch it; [`composite`] runs `cs_fine` tile by tile: the tile's cells bin after bin,
+//! in runs of segments whose fragments each pixel sorts by window depth and composites
+//! front to back with analytic coverage, the depth test against the opaque depth, until
+//! the transmittance drops below [`OPAQUE_ENOUGH`].
 //!
 //! Every function follows its WGSL twin in plain `f32` with the same operation order, so
 //! the tile lists equal the GPU's exactly and the composite matches within float noise
-//! (the GPU stores it as `rgba16float`, and may fuse multiply-adds).
-//!
-//! Exactness of [`composite`] against the GPU: the GPU's cells hold their segments in
-//! atomic order, and `cs_fine` sorts each chunk of [`CHUNK`] entries separately. For a
-//! cell of at most [`CHUNK`] entries the order of the list does not matter (the one chunk
-//! is sorted by (key, index), a total order), so the mirror is exact for any order; for a
-//! longer cell the split into chunks depends on the order the cell holds its entries, and
-//! the mirror matches the GPU only when given the cell in the GPU's own order.
-//!
-//! Measured on Mesa lavapipe (`crates/pelage-shade/tests/strand_raster.rs`): with the
-//! GPU's cells in pool order, every pixel of [`composite`] equals the GPU's bit for bit
-//! once rounded toward zero to f16 (what lavapipe's `rgba16float` store does); the test
-//! asserts 1/255, which a driver that fuses multiply-adds also meets.
+//! (the GPU stores it as `rgba16float`, and may fuse multiply-adds). Which segments share
+//! a run depends on the order the pool holds a cell's entries (atomic order on the GPU),
+//! so [`composite`] is given the GPU's own cells to match it; `emit_fragments`' walk over
+//! the pixels near a segment only prunes, so the mirror tests every pixel of the tile.
 //!
 //! The tile-level early exit of `cs_fine` (a workgroup stops once every pixel of its
 //! tile is finished) skips only pixels that are already finished, so it does not change
-//! any pixel: the mirror simply composites every pixel.
-
-/// Segments `cs_fine` sorts together in workgroup memory (`CHUNK` in the WGSL).
-pub const CHUNK: usize = 1024;
+//! any pixel.
 
 /// A pixel is finished once its transmittance drops below this (`OPAQUE_ENOUGH`).
 pub const OPAQUE_ENOUGH: f32 = 0.003_921_568_6;
@@ -327,29 +315,24 @@ pub fn segment_coverage(seg: &RasterSegment, p: [f32; 2]) -> [f32; 3] {
     [coverage, mix(seg.a[2], seg.b[2], u), t]
 }
 
-/// The order of `sorts_after`: by key, then by index; a NaN key (which no projected
-/// segment has) sorts after every other, where the GPU's bitonic sort has no defined
-/// order.
-fn sort_order(a: &(f32, u32), b: &(f32, u32)) -> std::cmp::Ordering {
-    use std::cmp::Ordering;
-    let key = match (a.0.is_nan(), b.0.is_nan()) {
-        (false, false) => a.0.partial_cmp(&b.0).unwrap_or(Ordering::Equal),
-        (x, y) => x.cmp(&y),
-    };
-    key.then(a.1.cmp(&b.1))
-}
-
 /// `cs_fine` for every pixel: per pixel (row-major) the premultiplied linear colour
 /// and 1 - transmittance, what the GPU stores in its `rgba16float` composite.
 ///
-/// `cells` holds every cell's segment indices as the pool does (`bin`'s output, or the
-/// GPU's lists); each cell is composited in chunks of [`CHUNK`] entries in the order
-/// given, each chunk sorted by (key, index). Exact against the GPU for cells of at most
-/// [`CHUNK`] entries in any order; longer cells must come in the GPU's order (see the
-/// module documentation). `opaque_depth` is the window depth of the opaque scene per
-/// pixel, row-major: a strand is drawn where its depth is `<` it (`>` with reverse-Z).
-/// Pixels outside the tiles (`tiles_x` or `tiles_y` smaller than the target needs) stay
-/// zero, as the GPU leaves them unwritten.
+/// `cells` holds every cell's segment indices in the order the pool does (the GPU's
+/// lists from `StrandRaster::capture`, or [`bin`]'s): a tile's cells read bin after bin
+/// are its sequence of segments, drawn in runs of up to [`RUN_PER_THREAD`] segments per
+/// thread of a `tile x tile` workgroup. A run puts a fragment into a pixel's list for
+/// every segment that covers the pixel (`emit_fragments`: projection onto the segment in
+/// `[0, 1)`, distance below the half width plus half a pixel, in front of the opaque
+/// depth), unless the pixel is already finished; if any list would pass its
+/// [`FRAG_SLOTS`]` / tile²` slots the run is drawn again at half the length (and runs
+/// stay that long for the rest of the tile). Each pixel then sorts its list by window
+/// depth (nearer first, then run order) and composites it front to back with
+/// [`segment_coverage`], finishing once the transmittance drops below
+/// [`OPAQUE_ENOUGH`]. The result depends on the order of the cells' entries (which
+/// segments share a run), so it matches the GPU when given the GPU's order.
+/// `opaque_depth` is the window depth of the opaque scene per pixel, row-major. Pixels
+/// outside the tiles stay zero, as the GPU leaves them unwritten.
 ///
 /// Errors when `cells` is not one list per cell, `opaque_depth` not one value per
 /// pixel, a cell names a segment past `segments`, or the sizes cannot be allocated.
@@ -378,93 +361,176 @@ pub fn composite(
             given: opaque_depth.len(),
         });
     }
-    // Every cell sorted chunk by chunk once (what each of the tile's workgroups sorts).
-    let mut sorted: Vec<Vec<(f32, u32)>> = Vec::new();
-    sorted
-        .try_reserve_exact(cell_count)
-        .map_err(|_| params.too_many_cells())?;
     for (c, list) in cells.iter().enumerate() {
-        let mut entries = Vec::with_capacity(list.len());
-        for &s in list {
-            let seg = segments
-                .get(s as usize)
-                .ok_or(StrandRasterError::SegmentIndex {
-                    cell: c,
-                    segment: s,
-                    segments: segments.len(),
-                })?;
-            entries.push((segment_key(seg), s));
+        if let Some(&s) = list.iter().find(|&&s| s as usize >= segments.len()) {
+            return Err(StrandRasterError::SegmentIndex {
+                cell: c,
+                segment: s,
+                segments: segments.len(),
+            });
         }
-        for chunk in entries.chunks_mut(CHUNK) {
-            chunk.sort_by(sort_order);
-        }
-        sorted.push(entries);
     }
-
     let mut out: Vec<[f32; 4]> = Vec::new();
     out.try_reserve_exact(pixels)
         .map_err(|_| too_many_pixels.clone())?;
-    let tile = params.tile.max(1);
-    for py in 0..params.height {
-        for px in 0..params.width {
-            let (tile_x, tile_y) = (px / tile, py / tile);
-            if params.tile == 0 || tile_x >= params.tiles_x || tile_y >= params.tiles_y {
-                out.push([0.0; 4]);
-                continue;
-            }
-            let opaque = opaque_depth[py as usize * params.width as usize + px as usize];
-            let centre = [px as f32 + 0.5, py as f32 + 0.5];
-            out.push(composite_pixel(
+    out.resize(pixels, [0.0; 4]);
+    if params.tile == 0 || params.tile > 16 {
+        return Ok(out);
+    }
+    for tile_y in 0..params.tiles_y {
+        for tile_x in 0..params.tiles_x {
+            let sequence: Vec<u32> = (0..params.bins)
+                .flat_map(|bin| cells[params.cell(tile_x, tile_y, bin)].iter().copied())
+                .collect();
+            composite_tile(
                 params,
                 segments,
-                &sorted,
+                &sequence,
                 (tile_x, tile_y),
-                centre,
-                opaque,
-            ));
+                opaque_depth,
+                &mut out,
+            );
         }
     }
     Ok(out)
 }
 
-/// One pixel of `cs_fine`: the tile's bins front to back, each cell's sorted chunks in
-/// order, until the transmittance drops below [`OPAQUE_ENOUGH`].
-fn composite_pixel(
-    params: &RasterParams,
-    segments: &[RasterSegment],
-    sorted: &[Vec<(f32, u32)>],
-    (tile_x, tile_y): (u32, u32),
+/// Segments per thread in a run before an overflow halves it (`RUN_PER_THREAD`).
+pub const RUN_PER_THREAD: usize = 2;
+/// Fragment slots of a tile's lists (`FRAG_SLOTS`).
+pub const FRAG_SLOTS: usize = 2048;
+/// Bits of a fragment key holding its run entry (`ENTRY_MASK`).
+const ENTRY_MASK: u32 = 511;
+
+/// One pixel of a tile as `cs_fine` keeps it.
+#[derive(Clone, Copy)]
+struct Pixel {
+    index: usize,
     centre: [f32; 2],
     opaque: f32,
-) -> [f32; 4] {
-    let mut color = [0.0f32; 3];
-    let mut transmittance = 1.0f32;
-    for bin in 0..params.bins {
-        let cell = params.cell(tile_x, tile_y, bin);
-        for &(_, s) in sorted.get(cell).map_or(&[][..], Vec::as_slice) {
-            let Some(seg) = segments.get(s as usize) else {
-                continue;
-            };
-            let c = segment_coverage(seg, centre);
-            let in_front = if params.reverse_z {
-                c[1] > opaque
-            } else {
-                c[1] < opaque
-            };
-            if c[0] > 0.0 && in_front {
-                let alpha = params.opacity * c[0];
-                let weight = transmittance * alpha;
-                for (k, channel) in color.iter_mut().enumerate() {
-                    *channel += weight * mix(seg.color_a[k], seg.color_b[k], c[2]);
-                }
-                transmittance *= 1.0 - alpha;
-                if transmittance < OPAQUE_ENOUGH {
-                    return [color[0], color[1], color[2], 1.0 - transmittance];
-                }
+    open: bool,
+    color: [f32; 3],
+    transmittance: f32,
+}
+
+/// `emit_fragments`' test: the key of the fragment `seg` (run entry `entry`) puts into
+/// the pixel centred at `centre`, if it covers it in front of `opaque`.
+fn fragment_key(
+    params: &RasterParams,
+    seg: &RasterSegment,
+    entry: u32,
+    centre: [f32; 2],
+    opaque: f32,
+) -> Option<u32> {
+    let d = [seg.b[0] - seg.a[0], seg.b[1] - seg.a[1]];
+    let len2 = d[0] * d[0] + d[1] * d[1];
+    let inv_len2 = if len2 > 1e-12 { 1.0 / len2 } else { 0.0 };
+    let q = [centre[0] - seg.a[0], centre[1] - seg.a[1]];
+    let mut u = 0.0f32;
+    if len2 > 1e-12 {
+        u = (q[0] * d[0] + q[1] * d[1]) * inv_len2;
+        #[allow(clippy::manual_range_contains)]
+        if u < 0.0 || u >= 1.0 {
+            return None;
+        }
+    }
+    let reach = mix(seg.a[3], seg.b[3], u) + 0.5;
+    if ((q[0] * q[0] + q[1] * q[1]) - u * u * len2).max(0.0) >= reach * reach {
+        return None;
+    }
+    let z = mix(seg.a[2], seg.b[2], u);
+    let in_front = if params.reverse_z {
+        z > opaque
+    } else {
+        z < opaque
+    };
+    if !in_front {
+        return None;
+    }
+    let near_first = if params.reverse_z { 1.0 - z } else { z };
+    Some((near_first.max(0.0).to_bits() & !ENTRY_MASK) | entry)
+}
+
+/// `cs_fine` for one tile: its sequence of segments in runs, as [`composite`] describes.
+fn composite_tile(
+    params: &RasterParams,
+    segments: &[RasterSegment],
+    sequence: &[u32],
+    (tile_x, tile_y): (u32, u32),
+    opaque_depth: &[f32],
+    out: &mut [[f32; 4]],
+) {
+    let tile = params.tile;
+    let threads = (tile * tile) as usize;
+    let slots = FRAG_SLOTS / threads;
+    let mut pixels: Vec<Pixel> = Vec::with_capacity(threads);
+    for y in 0..tile {
+        for x in 0..tile {
+            let (px, py) = (tile_x * tile + x, tile_y * tile + y);
+            if px < params.width && py < params.height {
+                let index = py as usize * params.width as usize + px as usize;
+                pixels.push(Pixel {
+                    index,
+                    centre: [px as f32 + 0.5, py as f32 + 0.5],
+                    opaque: opaque_depth[index],
+                    open: true,
+                    color: [0.0; 3],
+                    transmittance: 1.0,
+                });
             }
         }
     }
-    [color[0], color[1], color[2], 1.0 - transmittance]
+    let longest = threads * RUN_PER_THREAD;
+    let mut run = longest;
+    let mut done = 0;
+    while done < sequence.len() {
+        let count = run.min(sequence.len() - done);
+        let mut lists: Vec<Vec<u32>> = vec![Vec::new(); pixels.len()];
+        for (entry, &s) in sequence[done..done + count].iter().enumerate() {
+            let seg = &segments[s as usize];
+            for (list, pixel) in lists.iter_mut().zip(&pixels) {
+                if !pixel.open {
+                    continue;
+                }
+                if let Some(key) =
+                    fragment_key(params, seg, entry as u32, pixel.centre, pixel.opaque)
+                {
+                    list.push(key);
+                }
+            }
+        }
+        if run > 1 && lists.iter().any(|l| l.len() > slots) {
+            run = (run / 2).max(1);
+            continue;
+        }
+        for (list, pixel) in lists.iter_mut().zip(pixels.iter_mut()) {
+            list.truncate(slots);
+            list.sort_unstable();
+            for &key in list.iter() {
+                let seg = &segments[sequence[done + (key & ENTRY_MASK) as usize] as usize];
+                let c = segment_coverage(seg, pixel.centre);
+                let alpha = params.opacity * c[0];
+                let weight = pixel.transmittance * alpha;
+                for (k, channel) in pixel.color.iter_mut().enumerate() {
+                    *channel += weight * mix(seg.color_a[k], seg.color_b[k], c[2]);
+                }
+                pixel.transmittance *= 1.0 - alpha;
+                if pixel.transmittance < OPAQUE_ENOUGH {
+                    pixel.open = false;
+                    break;
+                }
+            }
+        }
+        done += count;
+    }
+    for pixel in &pixels {
+        out[pixel.index] = [
+            pixel.color[0],
+            pixel.color[1],
+            pixel.color[2],
+            1.0 - pixel.transmittance,
+        ];
+    }
 }
 
 #[cfg(test)]
@@ -497,9 +563,11 @@ mod tests {
         hw: f32,
         rgb: [f32; 3],
     ) -> RasterSegment {
+        // Window depth increasing with the view depth w, as a perspective projection's.
+        let z = 1.0 - 1.0 / w;
         RasterSegment {
-            a: [x0, y0, 0.5, hw],
-            b: [x1, y1, 0.5, hw],
+            a: [x0, y0, z, hw],
+            b: [x1, y1, z, hw],
             color_a: [rgb[0], rgb[1], rgb[2], 1.0 / w],
             color_b: [rgb[0], rgb[1], rgb[2], 1.0 / w],
         }
@@ -537,18 +605,33 @@ mod tests {
         assert_eq!(image[8 * 32 + 5], [0.5, 0.0, 0.25, 0.75]);
         // Far from the line: nothing.
         assert_eq!(image[20 * 32 + 5], [0.0; 4]);
-        // Everything behind an opaque depth of 0.25 (the segments are at 0.5).
+        // Everything behind an opaque depth of 0.25 (the segments are at 0.5 and 0.67).
         let near = vec![0.25; 32 * 24];
         let hidden = composite(&p, &segments, &cells, &near).unwrap();
         assert!(hidden.iter().all(|px| *px == [0.0; 4]));
-        // Reverse-Z: the test flips.
+        // Reverse-Z: nearer is larger, the test flips.
         let reversed = RasterParams {
             reverse_z: true,
             ..p
         };
+        let flip = |mut s: RasterSegment| {
+            s.a[2] = 1.0 - s.a[2];
+            s.b[2] = 1.0 - s.b[2];
+            s
+        };
+        let flipped = [flip(blue), flip(red)];
+        let far = vec![0.0; 32 * 24];
         assert_eq!(
-            composite(&reversed, &segments, &cells, &near).unwrap()[8 * 32 + 5],
+            composite(&reversed, &flipped, &cells, &far).unwrap()[8 * 32 + 5],
             [0.5, 0.0, 0.25, 0.75]
+        );
+        // Behind an opaque depth of 0.75 (the flipped segments are at 0.5 and 0.33).
+        let near_reversed = vec![0.75; 32 * 24];
+        assert!(
+            composite(&reversed, &flipped, &cells, &near_reversed)
+                .unwrap()
+                .iter()
+                .all(|px| *px == [0.0; 4])
         );
     }
 

