@@ -190,7 +190,7 @@ fn to_i32(v: f32) -> i32 {
 
 /// `segment_key`: the view depth at the segment's midpoint, the sort key.
 pub fn segment_key(seg: &RasterSegment) -> f32 {
-    0.5 * (1.0 / seg.color_a[3] + 1.0 / seg.color_b[3])
+    0.5 * (seg.color_a[3] + seg.color_b[3])
 }
 
 /// `segment_bin`: `clamp(floor((key - bin_near) * bin_scale), 0, bins - 1)`.
@@ -306,12 +306,9 @@ pub fn segment_coverage(seg: &RasterSegment, p: [f32; 2]) -> [f32; 3] {
         0.0,
         1.0,
     );
-    let inv_w = mix(seg.color_a[3], seg.color_b[3], u);
-    let t = if inv_w > 0.0 {
-        u * seg.color_b[3] / inv_w
-    } else {
-        0.0
-    };
+    let inv_b = 1.0 / seg.color_b[3];
+    let inv_w = mix(1.0 / seg.color_a[3], inv_b, u);
+    let t = if inv_w > 0.0 { u * inv_b / inv_w } else { 0.0 };
     [coverage, mix(seg.a[2], seg.b[2], u), t]
 }
 
@@ -434,8 +431,9 @@ fn fragment_key(
             return None;
         }
     }
+    let cross = q[0] * d[1] - q[1] * d[0];
     let reach = mix(seg.a[3], seg.b[3], u) + 0.5;
-    if ((q[0] * q[0] + q[1] * q[1]) - u * u * len2).max(0.0) >= reach * reach {
+    if cross * cross * inv_len2 >= reach * reach {
         return None;
     }
     let z = mix(seg.a[2], seg.b[2], u);
@@ -568,8 +566,8 @@ mod tests {
         RasterSegment {
             a: [x0, y0, z, hw],
             b: [x1, y1, z, hw],
-            color_a: [rgb[0], rgb[1], rgb[2], 1.0 / w],
-            color_b: [rgb[0], rgb[1], rgb[2], 1.0 / w],
+            color_a: [rgb[0], rgb[1], rgb[2], w],
+            color_b: [rgb[0], rgb[1], rgb[2], w],
         }
     }
 

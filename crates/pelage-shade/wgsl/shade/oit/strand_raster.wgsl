@@ -73,7 +73,7 @@ struct ShadedVertex {
 }
 
 // A segment clipped and projected. a, b: x and y in pixels (y down), window depth, half
-// width in pixels (negative: culled). color_a, color_b: radiance and 1 / view depth.
+// width in pixels (negative: culled). color_a, color_b: radiance and view depth.
 struct RasterSegment {
     a: vec4<f32>,
     b: vec4<f32>,
@@ -189,7 +189,7 @@ fn project_end(p: ShadedVertex, q: ShadedVertex, t: f32) -> array<vec4<f32>, 2> 
     let half_width = mix(p.color.w, q.color.w, t) / (raster.pixel_scale * w);
     return array<vec4<f32>, 2>(
         vec4<f32>(x, y, ndc.z, half_width),
-        vec4<f32>(mix(p.color.rgb, q.color.rgb, t), 1.0 / w),
+        vec4<f32>(mix(p.color.rgb, q.color.rgb, t), w),
     );
 }
 
@@ -199,7 +199,7 @@ fn segment_vertex(s: u32) -> u32 {
 
 // The sort key of a projected segment: view depth at its midpoint.
 fn segment_key(seg: RasterSegment) -> f32 {
-    return 0.5 * (1.0 / seg.color_a.w + 1.0 / seg.color_b.w);
+    return 0.5 * (seg.color_a.w + seg.color_b.w);
 }
 
 fn segment_bin(seg: RasterSegment) -> u32 {
@@ -476,8 +476,10 @@ fn segment_coverage(seg: RasterSegment, p: vec2<f32>) -> vec4<f32> {
     let half_width = mix(seg.a.w, seg.b.w, u);
     // Overlap of the strand's cross-section [dist - w, dist + w] with the pixel's [-1/2, 1/2].
     let coverage = clamp(min(dist + half_width, 0.5) - max(dist - half_width, -0.5), 0.0, 1.0);
-    let inv_w = mix(seg.color_a.w, seg.color_b.w, u);
-    let t = select(0.0, u * seg.color_b.w / inv_w, inv_w > 0.0);
+    // Perspective correct: 1 / view depth is linear on the screen.
+    let inv_b = 1.0 / seg.color_b.w;
+    let inv_w = mix(1.0 / seg.color_a.w, inv_b, u);
+    let t = select(0.0, u * inv_b / inv_w, inv_w > 0.0);
     return vec4<f32>(coverage, mix(seg.a.z, seg.b.z, u), t, 1.0 / max(inv_w, 1e-30));
 }
 
@@ -533,8 +535,11 @@ fn emit_fragments(seg: RasterSegment, entry: u32, origin: vec2<u32>, slots: u32)
                     continue;
                 }
             }
+            // Squared distance to the line from the cross product (well conditioned
+            // however long the segment; |q|^2 - u^2 |d|^2 is not).
+            let cross = q.x * d.y - q.y * d.x;
             let reach = mix(seg.a.w, seg.b.w, u) + 0.5;
-            if (max(dot(q, q) - u * u * len2, 0.0) >= reach * reach) {
+            if (cross * cross * inv_len2 >= reach * reach) {
                 continue;
             }
             let z = mix(seg.a.z, seg.b.z, u);
