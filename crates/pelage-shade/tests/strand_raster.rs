@@ -597,7 +597,7 @@ fn an_8192_square_target_dispatches_its_tiles_in_two_dimensions() {
     let n = size as usize;
     let quadrant = |qx: usize, qy: usize| {
         (0..n / 2)
-            .flat_map(|y| (0..n / 2).map(move |x| ((qy * n / 2 + y) * n + qx * n / 2 + x)))
+            .flat_map(|y| (0..n / 2).map(move |x| (qy * n / 2 + y) * n + qx * n / 2 + x))
             .filter(|&i| capture.composite[i][3] > 0.0)
             .count()
     };
