@@ -47,6 +47,7 @@ fn the_plan_declares_the_passes_a_frame_records() {
             Transparency::RandomSubsets { k: 8 },
             1,
         ),
+        (ShadowParams::default(), Transparency::strand_raster(), 2),
     ];
     for (shadow, method, lights) in cases {
         let s = scene(shadow.clone(), method.clone(), lights);

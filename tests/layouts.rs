@@ -83,6 +83,7 @@ fn every_method_renders_on_a_device_with_default_limits() {
             resolve_k: 16,
         },
         Transparency::RandomSubsets { k: 8 },
+        Transparency::strand_raster(),
     ];
     // The models with the most bindings (tables in storage buffers), with the method
     // binding the most storage in the fragment stage (DBK's hair pass: four buffers).
@@ -130,6 +131,70 @@ fn every_method_renders_on_a_device_with_default_limits() {
             .finish(&gpu)
             .unwrap_or_else(|e| panic!("{shadow:?} / {method:?} / {model:?}: {e}"));
         println!("{shadow:?} / {method:?} / {model:?}: rendered");
+    }
+}
+
+/// A device with WebGPU's default limits and no optional feature at all.
+fn bare_gpu() -> Gpu {
+    pollster::block_on(async {
+        let instance =
+            wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        let options = wgpu::RequestAdapterOptions {
+            power_preference: wgpu::PowerPreference::HighPerformance,
+            force_fallback_adapter: false,
+            compatible_surface: None,
+            apply_limit_buckets: false,
+        };
+        let adapter = instance
+            .request_adapter(&options)
+            .await
+            .unwrap_or_else(|e| panic!("this test needs a GPU adapter: {e}"));
+        let (device, queue) = adapter
+            .request_device(&wgpu::DeviceDescriptor {
+                label: Some("pelage bare device"),
+                required_features: wgpu::Features::empty(),
+                required_limits: wgpu::Limits::default(),
+                ..Default::default()
+            })
+            .await
+            .unwrap_or_else(|e| panic!("a device with the default limits: {e}"));
+        Gpu::from_device(device, queue, Some(adapter.get_info()))
+    })
+}
+
+#[test]
+fn the_strand_rasterizer_needs_no_feature_and_no_more_than_webgpu_limits() {
+    // Issue 18: no 64-bit atomics, no timestamp queries, WebGPU's limits (128 MiB per
+    // binding, 8 storage buffers per stage, 16 KiB of workgroup memory): every pipeline
+    // validates (an error outside a scope panics through wgpu's default handler) and
+    // the picture has hair, with every shading model and both tile sizes.
+    let gpu = bare_gpu();
+    assert!(gpu.features().is_empty());
+    assert!(pelage::shade::supported_methods(&gpu).contains(&"strand_raster"));
+    let models = [
+        ShadingModel::default(),
+        ShadingModel::Marschner {
+            params: Default::default(),
+            lut: true,
+        },
+        ShadingModel::Chiang(Default::default()),
+    ];
+    for (tile, model) in [(16, &models[0]), (8, &models[1]), (16, &models[2])] {
+        let transparency = Transparency::StrandRaster {
+            tile,
+            bins: 16,
+            pool: 4.0,
+        };
+        let s = scene(ShadowParams::default(), transparency, model.clone());
+        let mut renderer = Renderer::new(&gpu, &s, 64, 48)
+            .unwrap_or_else(|e| panic!("tile {tile}, {model:?}: {e}"));
+        renderer.render(&gpu, 0.0, &s.camera).unwrap();
+        renderer.finish(&gpu).unwrap();
+        let (_, _, pixels) = renderer.rgba8(&gpu).unwrap();
+        let background = &pixels[..4];
+        let hair = pixels.chunks(4).filter(|p| *p != background).count();
+        println!("tile {tile}, {model:?}: {hair} pixels differ from the background");
+        assert!(hair > 100, "tile {tile}: no hair drawn");
     }
 }
 

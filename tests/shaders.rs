@@ -50,6 +50,7 @@ fn shading_passes_compose_with_every_shadow_implementation() {
         "shade/oit/a_buffer.wgsl",
         "shade/oit/dbk.wgsl",
         "shade/oit/random_subsets.wgsl",
+        "shade/oit/strand_raster.wgsl",
     ] {
         // Only the passes that shade with the key light's shadow (the mesh) import the
         // contract; the hair reads stage 2's per-vertex visibility buffer instead.

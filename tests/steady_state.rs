@@ -37,6 +37,7 @@ fn frames_in_steady_state_create_no_buffer_and_no_bind_group() {
             resolve_k: 16,
         },
         Transparency::RandomSubsets { k: 8 },
+        Transparency::strand_raster(),
     ];
     let cases = shadows
         .iter()

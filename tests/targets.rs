@@ -50,6 +50,7 @@ fn every_target_format_gives_the_default_picture() {
             nodes_per_pixel: 24.0,
             resolve_k: 16,
         },
+        Transparency::strand_raster(),
     ];
     for transparency in methods {
         let s = scene(transparency.clone());

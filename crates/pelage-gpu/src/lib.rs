@@ -32,8 +32,8 @@ pub use counters::{Created, create_bind_group, create_buffer, create_buffer_init
 pub use error::{GpuError, Result};
 pub use frame::{FramePlan, PassInfo, PlanError};
 pub use pipelines::{
-    BindLayout, bind_buffers, bind_numbered, compute_pipeline, compute_pipeline_with_layouts,
-    dispatch_size, pipeline_layout,
+    BindLayout, bind_buffers, bind_numbered, compute_pipeline, compute_pipeline_with_constants,
+    compute_pipeline_with_layouts, dispatch_size, pipeline_layout,
 };
 pub use readback::{TextureData, f16_to_f32, read_buffer, read_buffer_range, read_texture};
 pub use shaders::{

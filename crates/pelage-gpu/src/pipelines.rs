@@ -167,13 +167,29 @@ pub fn compute_pipeline_with_layouts(
     entry: &str,
     layouts: &[Option<&wgpu::BindGroupLayout>],
 ) -> wgpu::ComputePipeline {
+    compute_pipeline_with_constants(device, label, module, entry, layouts, &[])
+}
+
+/// As [`compute_pipeline_with_layouts`], with values for the module's pipeline-overridable
+/// constants (`override NAME: T;` in WGSL, e.g. a workgroup size), by name.
+pub fn compute_pipeline_with_constants(
+    device: &wgpu::Device,
+    label: &str,
+    module: &wgpu::ShaderModule,
+    entry: &str,
+    layouts: &[Option<&wgpu::BindGroupLayout>],
+    constants: &[(&str, f64)],
+) -> wgpu::ComputePipeline {
     let layout = pipeline_layout(device, label, layouts);
     device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
         label: Some(label),
         layout: Some(&layout),
         module,
         entry_point: Some(entry),
-        compilation_options: Default::default(),
+        compilation_options: wgpu::PipelineCompilationOptions {
+            constants,
+            ..Default::default()
+        },
         cache: None,
     })
 }

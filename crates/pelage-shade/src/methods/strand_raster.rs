@@ -23,8 +23,7 @@ use std::sync::{Arc, Mutex};
 use encase::ShaderType;
 use glam::Vec3;
 use pelage_gpu::{
-    BindLayout, Gpu, GpuError, GpuTimer, PassInfo, UniformBuffer, pipeline_layout, wgpu,
-    zeroed_storage,
+    BindLayout, Gpu, GpuError, GpuTimer, PassInfo, UniformBuffer, wgpu, zeroed_storage,
 };
 use pelage_scene::{CameraMatrices, Light};
 use pelage_strands::{StrandFrame, StrandLayout};
@@ -411,19 +410,9 @@ impl StrandRaster {
                         layouts.resize(4, None);
                     }
                     layouts[3] = Some(&own);
-                    let layout = pipeline_layout(device, label, &layouts);
-                    let pipeline =
-                        device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                            label: Some(label),
-                            layout: Some(&layout),
-                            module: &module,
-                            entry_point: Some(entry),
-                            compilation_options: wgpu::PipelineCompilationOptions {
-                                constants: &constants,
-                                ..Default::default()
-                            },
-                            cache: None,
-                        });
+                    let pipeline = pelage_gpu::compute_pipeline_with_constants(
+                        device, label, &module, entry, &layouts, &constants,
+                    );
                     (pipeline, own)
                 })
                 .collect();
