@@ -900,7 +900,7 @@ fn gl_draws_what_vulkan_draws() {
         return;
     }
     let dir = Scratch::new("gl_pictures");
-    let cases: [&[&str]; 8] = [
+    let cases: [&[&str]; 9] = [
         &[],
         &["--shadow", "none"],
         &["--shadow", "voxel"],
@@ -909,6 +909,8 @@ fn gl_draws_what_vulkan_draws() {
         &["--shadow", "adsm"],
         &["--oit", "opaque"],
         &["--oit", "wboit"],
+        // The compute rasterizer: compute passes and a storage texture on GLES.
+        &["--oit", "strand_raster"],
     ];
     for (i, extra) in cases.iter().enumerate() {
         let (code, stderr, gl) =
@@ -956,7 +958,7 @@ fn gl_refuses_the_per_pixel_methods_naming_what_works() {
         assert!(stderr.starts_with("error: "), "--oit {method}:\n{stderr}");
         assert!(stderr.contains(feature), "--oit {method}:\n{stderr}");
         assert!(
-            stderr.contains("that work here: opaque, wboit"),
+            stderr.contains("that work here: opaque, wboit, strand_raster"),
             "--oit {method}:\n{stderr}"
         );
         for dump in [
