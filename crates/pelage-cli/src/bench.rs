@@ -448,6 +448,13 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
         }
     }
 
+    // 2b. The strand rasterizer against the raster pipeline: the hair passes alone, wall
+    //     clock (compute timestamps are wrong on lavapipe), on the default scene: the
+    //     opaque method at 4x MSAA, the k-buffer of 8, the strand rasterizer; then the
+    //     strand rasterizer's time against strands and against pixels.
+    let raster = strand_raster_section(opts, frames, &bar)?;
+    rows.extend(raster.rows);
+
     // 3. Scaling.
     let frame_exponent = exponent(&frame_points);
     let raster_exponent = exponent(&raster_points);
@@ -751,6 +758,9 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
             );
         }
     }
+    for line in &raster.summary {
+        println!("  {line}");
+    }
     for (name, ratio) in &overheads {
         println!(
             "  {name}: {ratio:.2}x the bare lit strand pass (target <= 3; seed 000: 8.4x to 12.6x)"
@@ -765,6 +775,153 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
         started.elapsed().as_secs_f64()
     );
     Ok(())
+}
+
+/// What [`strand_raster_section`] measured.
+struct RasterSection {
+    rows: Vec<Row>,
+    summary: Vec<String>,
+}
+
+/// Section 2b of the benchmark (see [`run`]).
+fn strand_raster_section(
+    opts: &LabOpts,
+    frames: usize,
+    bar: &progress::Progress,
+) -> Result<RasterSection, Error> {
+    use crate::hair_timing::{HairCase, hair_wall_ms};
+    let frames = frames.min(9);
+    let mut rows = Vec::new();
+    let mut summary = Vec::new();
+    let time = |strands: u32, transparency: Transparency, samples: u32, size: (u32, u32)| {
+        let mut s = Scene::default();
+        s.hair.roots.count = strands;
+        s.shade.transparency = transparency;
+        s.shade.sample_count = samples;
+        let gpu = Gpu::headless()?;
+        let case = HairCase {
+            mesh: &s.mesh,
+            hair: &s.hair,
+            shade: &s.shade,
+            camera: &s.camera,
+        };
+        hair_wall_ms(&gpu, &case, size.0, size.1, frames)
+    };
+    let default_strands = if opts.quick {
+        4_000
+    } else {
+        Scene::default().hair.roots.count
+    };
+    let size = if opts.quick { (160, 120) } else { (480, 360) };
+    let pixels = u64::from(size.0) * u64::from(size.1);
+    let raster = Transparency::strand_raster();
+    let opaque = time(default_strands, Transparency::Opaque, 4, size)?;
+    let k_buffer = time(default_strands, Transparency::k_buffer(8), 1, size).ok();
+    let ours = time(default_strands, raster.clone(), 1, size)?;
+    let mut push = |stage: String, strands: u32, pixels: u64, ms: f64, ratio: f64, note: &str| {
+        bar.println(format!(
+            "  {strands:>7} strands {pixels:>8} px  {stage:<34} {ms:9.3} ms"
+        ));
+        rows.push(Row {
+            section: "strand_raster",
+            stage,
+            strands,
+            pixels,
+            gpu_ms: ms,
+            bytes: 0,
+            copy_ratio: ratio,
+            note: note.into(),
+        });
+    };
+    push(
+        "hair: opaque 4x MSAA".into(),
+        default_strands,
+        pixels,
+        opaque,
+        1.0,
+        "wall clock of the hair passes alone; ratio column = ratio to opaque 4x MSAA",
+    );
+    if let Some(k) = k_buffer {
+        push(
+            "hair: k-buffer k=8".into(),
+            default_strands,
+            pixels,
+            k,
+            k / opaque,
+            "wall clock of the hair passes alone; ratio column = ratio to opaque 4x MSAA",
+        );
+    }
+    push(
+        format!("hair: {}", raster.label()),
+        default_strands,
+        pixels,
+        ours,
+        ours / opaque,
+        "wall clock of the hair passes alone; ratio column = ratio to opaque 4x MSAA",
+    );
+    summary.push(format!(
+        "default scene ({default_strands} strands, {}x{}), hair passes alone: strand rasterizer {ours:.1} ms = {:.2}x opaque 4x MSAA ({opaque:.1} ms; target <= 0.25){}",
+        size.0,
+        size.1,
+        ours / opaque,
+        k_buffer.map_or(String::new(), |k| format!(", {:.2}x the k-buffer k=8 ({k:.1} ms)", ours / k))
+    ));
+    // Against strands, at the default size.
+    let counts: &[u32] = if opts.quick {
+        &[2_000, 8_000]
+    } else {
+        &[10_000, 40_000, 160_000]
+    };
+    let mut by_strands = Vec::new();
+    for &n in counts {
+        let ms = time(n, raster.clone(), 1, size)?;
+        push(
+            "strand raster vs strands".into(),
+            n,
+            pixels,
+            ms,
+            f64::NAN,
+            "wall clock of the hair passes alone",
+        );
+        by_strands.push((f64::from(n), ms));
+    }
+    // Against pixels, at the default strand count.
+    let sizes: &[(u32, u32)] = if opts.quick {
+        &[(80, 60), (160, 120), (320, 240)]
+    } else {
+        &[(240, 180), (480, 360), (960, 720)]
+    };
+    let mut by_pixels = Vec::new();
+    for &(w, h) in sizes {
+        let ms = time(default_strands, raster.clone(), 1, (w, h))?;
+        let px = u64::from(w) * u64::from(h);
+        push(
+            "strand raster vs pixels".into(),
+            default_strands,
+            px,
+            ms,
+            f64::NAN,
+            "wall clock of the hair passes alone",
+        );
+        by_pixels.push((px as f64, ms));
+    }
+    let (es, ep) = (exponent(&by_strands), exponent(&by_pixels));
+    summary.push(format!(
+        "strand rasterizer time grows as strands^{es:.2} and pixels^{ep:.2} (targets <= 1.0)"
+    ));
+    for (name, value) in [("strands", es), ("pixels", ep)] {
+        rows.push(Row {
+            section: "summary",
+            stage: format!("scaling: strand raster exponent against {name}"),
+            strands: 0,
+            pixels: 0,
+            gpu_ms: f64::NAN,
+            bytes: 0,
+            copy_ratio: value,
+            note: "least squares of log time against log count".into(),
+        });
+    }
+    Ok(RasterSection { rows, summary })
 }
 
 #[cfg(test)]

@@ -13,6 +13,7 @@ mod animate;
 mod auto;
 mod bench;
 mod error;
+mod hair_timing;
 mod info;
 mod lab;
 mod progress;

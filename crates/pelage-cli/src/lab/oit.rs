@@ -12,8 +12,12 @@
 //! memory), `oit_memory.csv` (every method built at 656x861 and 1920x1080), and prints
 //! both tables. `--quick` runs one small scene and a few configurations (CI).
 //!
-//! GPU time is the median over the frames of the method's hair passes (timestamp
-//! queries around each render pass; the opaque mesh pass is left out). Flicker is
+//! Time is the median wall clock of the method's hair passes recorded alone (the method
+//! built without the mesh, drawing over loaded targets) and submitted alone
+//! (`crate::hair_timing`), the same measure for every method: lavapipe misplaces the
+//! timestamps of compute passes recorded after a render pass, which the strand
+//! rasterizer's are. `gpu_ms` keeps the timestamp sum of the passes (the mesh left
+//! out), which is right for the raster methods only. Flicker is
 //! the mean absolute change of linear RGB between consecutive frames while the camera
 //! turns 0.25 degrees a frame around the scene, per method; the exact composite's
 //! own flicker is the A-buffer row with the largest resolve depth.
@@ -23,13 +27,17 @@ use std::time::Instant;
 use glam::{Quat, Vec3};
 use pelage::gpu::{Gpu, GpuTimer};
 use pelage::scene::{
-    Camera, HairParams, Light, Mesh, ShadeParams, Transparency, WboitWeight, WindParams,
+    Camera, DirectionalLight, HairParams, Light, Mesh, ShadeParams, Transparency, WboitWeight,
+    WindParams,
 };
 use pelage::shade::{ABuffer, HairInputs, HairPass, TargetFormat, Targets};
 use pelage::strands::{GrowStrands, MeshBuffers, StrandFrame, StrandStage};
 use pelage_lab::{ScatterChart, ScatterPoint, Table, pareto_front};
 use pelage_reference::flip::{DEFAULT_PIXELS_PER_DEGREE, LinearImage, flip, rmse_linear};
 use pelage_reference::oit::{Fragment, composite_sorted, linear_to_srgb8, srgb8_to_linear};
+use pelage_reference::oit_raster::{
+    RasterView, RibbonStrand, RibbonStyle, SamplePattern, rasterize,
+};
 
 use super::LabOpts;
 use crate::progress;
@@ -114,6 +122,21 @@ fn configurations(quick: bool) -> Vec<Transparency> {
         nodes_per_pixel: 16.0,
         resolve_k,
     }));
+    // The strand rasterizer's tile size and depth bins, swept.
+    let rasters: &[(u32, u32)] = if quick {
+        &[(16, 16)]
+    } else {
+        &[(8, 4), (8, 16), (8, 64), (16, 4), (16, 16), (16, 64)]
+    };
+    out.extend(
+        rasters
+            .iter()
+            .map(|&(tile, bins)| Transparency::StrandRaster {
+                tile,
+                bins,
+                pool: 4.0,
+            }),
+    );
     out
 }
 
@@ -159,6 +182,7 @@ fn linear(
 struct Measured {
     frames: Vec<Vec<u8>>,
     gpu_ms: f64,
+    wall_ms: f64,
     memory_mb: f64,
     slices: u32,
     dropped: u64,
@@ -220,9 +244,22 @@ fn render_method(
         images.push(targets.read_color(gpu)?.data);
     }
     times.sort_by(f64::total_cmp);
+    let wall_ms = crate::hair_timing::hair_wall_ms(
+        gpu,
+        &crate::hair_timing::HairCase {
+            mesh: &case.mesh,
+            hair: &case.hair,
+            shade,
+            camera: &case.camera,
+        },
+        width,
+        height,
+        frames,
+    )?;
     Ok(Measured {
         frames: images,
         gpu_ms: times.get(times.len() / 2).copied().unwrap_or(f64::NAN),
+        wall_ms,
         memory_mb: method.memory_bytes() as f64 / 1e6,
         slices: method.slices(),
         dropped: method.stats(gpu)?.dropped,
@@ -334,6 +371,7 @@ pub fn run(opts: &LabOpts) -> Result<(), Box<dyn std::error::Error>> {
         "method",
         "config",
         "gpu_ms",
+        "wall_ms",
         "memory_mb",
         "slices",
         "mean_flip",
@@ -343,6 +381,7 @@ pub fn run(opts: &LabOpts) -> Result<(), Box<dyn std::error::Error>> {
         "dropped",
     ]);
     let mut notes = String::new();
+    let mut true_rows: Vec<Vec<String>> = Vec::new();
     let all_cases = cases(opts.quick);
     let bar = progress::bar(
         (all_cases.len() * opacities.len() * configs.len()) as u64,
@@ -393,6 +432,7 @@ pub fn run(opts: &LabOpts) -> Result<(), Box<dyn std::error::Error>> {
                     config.name().into(),
                     config.label(),
                     format!("{:.3}", m.gpu_ms),
+                    format!("{:.3}", m.wall_ms),
                     format!("{:.3}", m.memory_mb),
                     m.slices.to_string(),
                     format!("{mean:.4}"),
@@ -402,15 +442,15 @@ pub fn run(opts: &LabOpts) -> Result<(), Box<dyn std::error::Error>> {
                     m.dropped.to_string(),
                 ])?;
                 bar.println(format!(
-                    "  {:<40} {:8.2} ms {:7.2} MB  FLIP {mean:.4} (p99 {p99:.3})  flicker {flicker:.5}",
+                    "  {:<44} {:8.2} ms {:7.2} MB  FLIP {mean:.4} (p99 {p99:.3})  flicker {flicker:.5}",
                     config.label(),
-                    m.gpu_ms,
+                    m.wall_ms,
                     m.memory_mb
                 ));
                 points.push(ScatterPoint {
                     series: config.name().into(),
                     label: config.label(),
-                    x: m.gpu_ms,
+                    x: m.wall_ms,
                     y: mean,
                     size: Some(m.memory_mb.max(0.01)),
                 });
@@ -429,6 +469,38 @@ pub fn run(opts: &LabOpts) -> Result<(), Box<dyn std::error::Error>> {
                     pelage::save_png(&img, &opts.out.join("oit_exact.png"))?;
                 }
             }
+            // The strand rasterizer against the k-buffer of 8 (issue 18's targets): time
+            // ratio and mean FLIP, each configuration.
+            if let Some(k8) = points.iter().find(|p| p.label == "k_buffer k=8") {
+                for p in points.iter().filter(|p| p.series == "strand_raster") {
+                    let line = format!(
+                        "  {} opacity {opacity}: {} {:.3}x the k-buffer k=8's time, FLIP {:.4} against its {:.4}\n",
+                        case.name,
+                        p.label,
+                        p.x / k8.x,
+                        p.y,
+                        k8.y
+                    );
+                    bar.println(line.trim_end());
+                    notes.push_str(&line);
+                }
+            }
+            // Coverage and compositing alone, against a reference that shares neither the
+            // ribbons' widening nor the rasterizer's analytic coverage.
+            for (label, f) in against_true_width(&gpu, &grown, &case, &configs, size)? {
+                let line = format!(
+                    "  {} opacity {opacity}, flat, against the true-width picture: {label}: mean FLIP {f:.4}\n",
+                    case.name
+                );
+                bar.println(line.trim_end());
+                notes.push_str(&line);
+                true_rows.push(vec![
+                    case.name.into(),
+                    format!("{opacity}"),
+                    label,
+                    format!("{f:.4}"),
+                ]);
+            }
             let xy: Vec<(f64, f64)> = points.iter().map(|p| (p.x, p.y)).collect();
             notes.push_str(&format!(
                 "  Pareto front ({} opacity {opacity}):",
@@ -446,7 +518,7 @@ pub fn run(opts: &LabOpts) -> Result<(), Box<dyn std::error::Error>> {
                     "Transparency on {} (opacity {opacity}): error against GPU time (lavapipe)",
                     case.name.replace('_', " ")
                 ),
-                x_label: "hair passes GPU time, ms (log)".into(),
+                x_label: "hair passes, wall clock submitted alone, ms (log)".into(),
                 y_label: "mean FLIP vs exact sorted composite".into(),
                 x_log: true,
                 y_log: false,
@@ -461,6 +533,11 @@ pub fn run(opts: &LabOpts) -> Result<(), Box<dyn std::error::Error>> {
     }
     bar.finish_and_clear();
     table.write_csv(&opts.out.join("oit.csv"))?;
+    let mut truth = Table::new(&["scene", "opacity", "config", "mean_flip_true_width"]);
+    for row in true_rows {
+        truth.push(row)?;
+    }
+    truth.write_csv(&opts.out.join("oit_true_width.csv"))?;
     println!("{}", table.to_text());
     print!("{notes}");
 
@@ -504,4 +581,149 @@ pub fn run(opts: &LabOpts) -> Result<(), Box<dyn std::error::Error>> {
         started.elapsed().as_secs_f64()
     );
     Ok(())
+}
+
+/// The picture the strands really make, flat and unlit: each ribbon at its true width
+/// (no widening to a pixel), `samples` x `samples` samples per pixel composited exactly
+/// and averaged (`pelage_reference::oit_raster`, on the CPU, from the strands read back),
+/// with no mesh. Linear RGB.
+fn true_width(
+    gpu: &Gpu,
+    grown: &Grown,
+    case: &Case,
+    size: (u32, u32),
+    samples: u32,
+) -> Result<Vec<[f32; 3]>, Box<dyn std::error::Error>> {
+    let buffers = grown.strands.buffers();
+    let vertices: Vec<[f32; 4]> =
+        bytemuck::cast_slice::<u8, [f32; 4]>(&pelage::gpu::read_buffer(gpu, &buffers.vertices)?)
+            .to_vec();
+    let per = (buffers.segments + 1) as usize;
+    let strands: Vec<RibbonStrand> = grown
+        .strands
+        .roots()
+        .iter()
+        .zip(vertices.chunks_exact(per))
+        .map(|(root, points)| RibbonStrand {
+            points: points.iter().map(|p| Vec3::new(p[0], p[1], p[2])).collect(),
+            width: root.width,
+            color: root.color.into(),
+        })
+        .collect();
+    let style = RibbonStyle {
+        tip_width: buffers.style.tip_width,
+        min_pixels: 1e-3,
+        opacity: buffers.style.opacity,
+    };
+    let view = RasterView::new(&case.camera.matrices(size.0, size.1), size.0, size.1);
+    let background = ShadeParams::default().background;
+    Ok(
+        rasterize(&strands, &style, &view, SamplePattern::grid(samples))?.composite([
+            background.x,
+            background.y,
+            background.z,
+        ]),
+    )
+}
+
+/// `transparency` drawn flat and unlit (ambient 1, no root occlusion, a light of no
+/// intensity: every strand its base colour) without the mesh: linear RGB.
+fn render_flat(
+    gpu: &Gpu,
+    grown: &Grown,
+    case: &Case,
+    transparency: &Transparency,
+    size: (u32, u32),
+) -> Result<Vec<[f32; 3]>, Box<dyn std::error::Error>> {
+    let params = ShadeParams {
+        transparency: transparency.clone(),
+        ambient: 1.0,
+        root_occlusion: 0.0,
+        sample_count: 1,
+        ..ShadeParams::default()
+    };
+    let inputs = HairInputs {
+        params: &params,
+        mesh: &grown.mesh,
+        strands: grown.strands.buffers(),
+        shadow: None,
+        visibility: None,
+        target: TargetFormat::for_params(&params),
+        draw_mesh: false,
+    };
+    let method = pelage::shade::build(gpu, &inputs, size.0, size.1)?;
+    let targets = Targets::new(gpu, size.0, size.1, 1)?;
+    let dark = Light::Directional(DirectionalLight {
+        intensity: 0.0,
+        ..Default::default()
+    });
+    method.prepare(
+        &gpu.queue,
+        &grown.frame,
+        &case.camera.matrices(size.0, size.1),
+        &[dark],
+        size.0,
+        size.1,
+    )?;
+    let (color, resolve) = targets.color_views();
+    let depth = targets.depth_view();
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    method.encode(
+        gpu,
+        &mut encoder,
+        &grown.frame,
+        &targets.views(&color, resolve.as_ref(), &depth),
+        None,
+    )?;
+    gpu.submit_and_wait([encoder.finish()])?;
+    Ok(targets
+        .read_color(gpu)?
+        .data
+        .chunks_exact(4)
+        .map(|p| {
+            [
+                srgb8_to_linear(p[0]),
+                srgb8_to_linear(p[1]),
+                srgb8_to_linear(p[2]),
+            ]
+        })
+        .collect())
+}
+
+/// Mean FLIP of flat, unlit pictures of the A-buffer (every widened-ribbon fragment),
+/// the k-buffer of 8 and each strand rasterizer configuration against the true-width
+/// picture ([`true_width`], 8 x 8 samples), with that reference's own floor (8 x 8
+/// against 16 x 16 samples): `(label, mean FLIP)`, the floor first.
+fn against_true_width(
+    gpu: &Gpu,
+    grown: &Grown,
+    case: &Case,
+    configs: &[Transparency],
+    size: (u32, u32),
+) -> Result<Vec<(String, f64)>, Box<dyn std::error::Error>> {
+    let image = |pixels: Vec<[f32; 3]>| LinearImage::new(size.0, size.1, pixels);
+    let reference = image(true_width(gpu, grown, case, size, 8)?)?;
+    let finer = image(true_width(gpu, grown, case, size, 16)?)?;
+    let mut out = vec![(
+        "reference floor (8x8 against 16x16 samples)".to_string(),
+        flip(&reference, &finer, DEFAULT_PIXELS_PER_DEGREE)?.mean(),
+    )];
+    let wanted = configs.iter().filter(|t| {
+        matches!(
+            t,
+            Transparency::ABuffer { .. } | Transparency::StrandRaster { .. }
+        ) || **t == Transparency::k_buffer(8)
+    });
+    for t in wanted {
+        let picture = match render_flat(gpu, grown, case, t, size) {
+            Ok(p) => p,
+            Err(e) if e.to_string().contains("lacks") => continue,
+            Err(e) => return Err(e),
+        };
+        out.push((
+            t.label(),
+            flip(&reference, &image(picture)?, DEFAULT_PIXELS_PER_DEGREE)?.mean(),
+        ));
+    }
+    Ok(out)
 }
