@@ -92,7 +92,7 @@ pub enum OitArg {
     Dbk,
     /// Nearest fragment of each of 8 random strand subsets.
     RandomSubsets,
-    /// The strand rasterizer: hair drawn in compute, 16-pixel tiles, 16 depth bins,
+    /// The strand rasterizer: hair drawn in compute, 16-pixel tiles, 64 depth bins,
     /// analytic coverage, no 64-bit atomics.
     StrandRaster,
 }

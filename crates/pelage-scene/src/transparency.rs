@@ -115,7 +115,7 @@ fn default_tile() -> u32 {
     16
 }
 fn default_bins() -> u32 {
-    16
+    64
 }
 fn default_pool() -> f32 {
     4.0
@@ -198,8 +198,9 @@ impl Transparency {
         Self::RandomSubsets { k }
     }
 
-    /// The strand rasterizer with its default tile (16 px), bins (16) and pool (4
-    /// references per segment).
+    /// The strand rasterizer with its default tile (16 px), bins (64) and pool (4
+    /// references per segment): the OIT lab's sweep (`pelage lab oit`) found 64 bins
+    /// the most accurate everywhere, at the time of 16.
     pub fn strand_raster() -> Self {
         Self::StrandRaster {
             tile: default_tile(),

@@ -4,12 +4,23 @@
 //! Per frame: every strand vertex is projected and shaded once; every segment is
 //! clipped, projected and counted into the (screen tile, depth bin) cells its footprint
 //! touches; a prefix sum turns the counts into offsets in a pool of segment indices the
-//! caller sizes; the segments are scattered into it; one workgroup per tile sorts its
-//! segments by view depth and composites them front to back per pixel with analytic
-//! coverage; a full-screen pass blends the result over the colour target.
+//! caller sizes; the segments are scattered into it; one workgroup per tile takes its
+//! segments bin after bin (front to back) in runs: each thread puts one segment's
+//! fragments (analytic coverage: the pixel centre's distance to the centre line against
+//! the projected half width) into per-pixel lists in workgroup memory, each pixel sorts
+//! its list by depth and composites it front to back; a full-screen pass blends the
+//! result over the colour target.
 //!
-//! Memory: 8 bytes per pixel (the composite, `rgba16float`), 12 bytes per cell (counts,
-//! offsets, block sums), 32 bytes per strand vertex, 64 per segment, 4 per pool entry.
+//! What shading once per vertex loses against shading per fragment: the shading model
+//! is evaluated at the strand's centre line at each vertex and interpolated along the
+//! segment, so a highlight narrower than a segment is blurred along it, and the view
+//! direction does not vary across the strand's width (it does not across a ribbon a
+//! pixel wide either). The OIT lab measures the lit pictures against the per-fragment
+//! exact composite, and the flat ones (no shading) against a true-width reference.
+//!
+//! Memory: 8 bytes per pixel (the composite, `rgba16float`), 8 bytes per (tile, bin)
+//! cell (counts, offsets) and 4 per 1024 cells (block sums), 32 bytes per strand
+//! vertex, 64 per segment, 4 per pool entry.
 //!
 //! The pool follows vello's pattern: the scan records the size a frame needed in a
 //! header; [`StrandRaster`] reads it back a frame later (a buffer mapped when the
