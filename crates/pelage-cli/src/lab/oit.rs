@@ -515,7 +515,7 @@ pub fn run(opts: &LabOpts) -> Result<(), Box<dyn std::error::Error>> {
             notes.push('\n');
             let chart = ScatterChart {
                 title: format!(
-                    "Transparency on {} (opacity {opacity}): error against GPU time (lavapipe)",
+                    "Transparency on {} (opacity {opacity}): error against time",
                     case.name.replace('_', " ")
                 ),
                 x_label: "hair passes, wall clock submitted alone, ms (log)".into(),
