@@ -647,8 +647,16 @@ fn a_pool_ten_times_too_small_drops_a_frame_visibly_then_grows() {
     let before = raster.capacity();
     let (first, stats1) = render_with(&gpu, &s, &raster, 1);
     let (second, stats2) = render_with(&gpu, &s, &raster, 1);
-    // A pool that holds everything from the start.
-    let (whole, _) = render(&gpu, &s, Transparency::strand_raster());
+    // The same tiles and bins with a pool that holds everything from the start.
+    let (whole, _) = render(
+        &gpu,
+        &s,
+        Transparency::StrandRaster {
+            tile: 16,
+            bins: 16,
+            pool: 4.0,
+        },
+    );
     let f1 = mean_flip(&truth.image, &first);
     let f2 = mean_flip(&truth.image, &second);
     let fw = mean_flip(&truth.image, &whole);
@@ -671,5 +679,5 @@ fn a_pool_ten_times_too_small_drops_a_frame_visibly_then_grows() {
     );
     assert!(stats2.capacity >= stats1.peak_nodes);
     // Not equal: which segments share a run follows the scatter's atomic order.
-    assert!(same < 0.01, "the grown pool's frame differs: {same}");
+    assert!(same < 0.02, "the grown pool's frame differs: {same}");
 }
