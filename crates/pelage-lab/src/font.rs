@@ -13,7 +13,8 @@ use crate::LabError;
 pub(crate) const FAMILY: &str = "sans-serif";
 
 /// DejaVu Sans 2.37 (Debian's `fonts-dejavu-core`).
-static DEJAVU_SANS: &[u8] = include_bytes!("../fonts/DejaVuSans.ttf");
+static DEJAVU_SANS: &[u8] =
+    include_bytes!(concat!(env!("CARGO_MANIFEST_DIR"), "/fonts/DejaVuSans.ttf"));
 
 /// Registers the bundled font with plotters (once per process).
 pub(crate) fn register() -> Result<(), LabError> {
