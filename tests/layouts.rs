@@ -17,6 +17,12 @@ const INT64: wgpu::Features = wgpu::Features::SHADER_INT64
 /// as an engine would ([`Gpu::from_device`]: wgpu's default handler panics on any error
 /// outside a scope, which fails the test).
 fn default_limits_gpu() -> Gpu {
+    gpu_with(|adapter| adapter.features() & INT64)
+}
+
+/// A device with WebGPU's default limits and the features `features` picks from the
+/// adapter's.
+fn gpu_with(features: impl FnOnce(&wgpu::Adapter) -> wgpu::Features) -> Gpu {
     pollster::block_on(async {
         let instance =
             wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
@@ -37,7 +43,7 @@ fn default_limits_gpu() -> Gpu {
         let (device, queue) = adapter
             .request_device(&wgpu::DeviceDescriptor {
                 label: Some("pelage default limits"),
-                required_features: adapter.features() & INT64,
+                required_features: features(&adapter),
                 required_limits: wgpu::Limits::default(),
                 ..Default::default()
             })
@@ -134,41 +140,13 @@ fn every_method_renders_on_a_device_with_default_limits() {
     }
 }
 
-/// A device with WebGPU's default limits and no optional feature at all.
-fn bare_gpu() -> Gpu {
-    pollster::block_on(async {
-        let instance =
-            wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
-        let options = wgpu::RequestAdapterOptions {
-            power_preference: wgpu::PowerPreference::HighPerformance,
-            force_fallback_adapter: false,
-            compatible_surface: None,
-            apply_limit_buckets: false,
-        };
-        let adapter = instance
-            .request_adapter(&options)
-            .await
-            .unwrap_or_else(|e| panic!("this test needs a GPU adapter: {e}"));
-        let (device, queue) = adapter
-            .request_device(&wgpu::DeviceDescriptor {
-                label: Some("pelage bare device"),
-                required_features: wgpu::Features::empty(),
-                required_limits: wgpu::Limits::default(),
-                ..Default::default()
-            })
-            .await
-            .unwrap_or_else(|e| panic!("a device with the default limits: {e}"));
-        Gpu::from_device(device, queue, Some(adapter.get_info()))
-    })
-}
-
 #[test]
 fn the_strand_rasterizer_needs_no_feature_and_no_more_than_webgpu_limits() {
     // Issue 18: no 64-bit atomics, no timestamp queries, WebGPU's limits (128 MiB per
     // binding, 8 storage buffers per stage, 16 KiB of workgroup memory): every pipeline
     // validates (an error outside a scope panics through wgpu's default handler) and
     // the picture has hair, with every shading model and both tile sizes.
-    let gpu = bare_gpu();
+    let gpu = gpu_with(|_| wgpu::Features::empty());
     assert!(gpu.features().is_empty());
     assert!(pelage::shade::supported_methods(&gpu).contains(&"strand_raster"));
     let models = [

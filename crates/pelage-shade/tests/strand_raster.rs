@@ -30,7 +30,9 @@ fn draws_the_creature_close_to_exact() {
             .filter(|&p| raster[4 * p..4 * p + 3] != truth.background[4 * p..4 * p + 3])
             .count();
         println!("  {differs} pixels differ from the background");
-        assert!(fr < 0.1);
+        // Measured 0.0034 and 0.0049 (k=8: 0.0024): analytic coverage against the
+        // widened ribbons the exact composite is made of.
+        assert!(fr < 0.01, "opacity {opacity}: mean FLIP {fr}");
     }
 }
 

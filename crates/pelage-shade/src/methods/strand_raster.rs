@@ -28,7 +28,7 @@
 //! frame it records. A frame that overflows draws the references that fit and counts
 //! the rest ([`HairPass::stats`]).
 
-use std::sync::atomic::{AtomicU8, AtomicU64, Ordering};
+use std::sync::atomic::{AtomicU8, Ordering};
 use std::sync::{Arc, Mutex};
 
 use encase::ShaderType;
@@ -99,7 +99,8 @@ pub struct StrandRasterUniforms {
 /// The compute passes in recording order: (label, entry point, `@group(3)` bindings).
 const PASSES: [(&str, &str, &[u32]); 7] = [
     ("shade: strand raster shade", "cs_shade", &[0, 1]),
-    ("shade: strand raster bin", "cs_bin", &[0, 1, 2, 3]),
+    // cs_bin and cs_scatter share walk_cells, which names offsets and the pool.
+    ("shade: strand raster bin", "cs_bin", &[0, 1, 2, 3, 4, 5]),
     (
         "shade: strand raster scan reduce",
         "cs_scan_reduce",
@@ -248,8 +249,6 @@ pub struct StrandRaster {
     resolve: Draw,
     resolve_group: wgpu::BindGroup,
     readbacks: [Readback; 2],
-    /// This frame's [`StrandLayout`] in bits, from `prepare`.
-    layout: AtomicU64,
     /// The uniforms `prepare` last wrote (the pool's growth rewrites their capacity).
     prepared: Mutex<StrandRasterUniforms>,
     /// The strands' box, for the depth range of the bins.
@@ -520,7 +519,6 @@ impl StrandRaster {
             resolve,
             resolve_group,
             readbacks,
-            layout: AtomicU64::new(full.to_bits()),
             prepared: Mutex::new(uniforms_value),
             reach: strands.reach,
             width,
@@ -669,8 +667,12 @@ impl StrandRaster {
         count: usize,
         mut timer: Option<&mut GpuTimer>,
     ) {
-        let layout = StrandLayout::from_bits(self.layout.load(Ordering::Acquire));
-        let u = &self.uniforms_value;
+        // This frame's strands and segments, as `prepare` wrote them.
+        let u = self.prepared.lock().map_or(self.uniforms_value, |p| *p);
+        let layout = StrandLayout {
+            strands: u.strands,
+            segments: u.segments,
+        };
         let max_dim = gpu.limits().max_compute_workgroups_per_dimension;
         encoder.clear_buffer(&self.storage.counts, 0, None);
         for (((label, _, _), (pipeline, _)), (group, grid_kind)) in PASSES
@@ -733,49 +735,6 @@ impl StrandRaster {
             self.resolve
                 .record(&mut pass, Some((3, &self.resolve_group)));
         }
-    }
-
-    /// Wall-clock milliseconds of each pass of the hair (the compute passes, then the
-    /// resolve; not the mesh), for `strands` as last prepared: the frame's passes up to
-    /// each one submitted alone and waited for, `repeats` times, the median of each
-    /// prefix minus the median of the one before. For benchmarks on drivers whose
-    /// timestamps cannot be trusted around compute passes (lavapipe misplaces compute
-    /// timestamps recorded after a render pass). Does not read the pool's header back.
-    pub fn pass_wall_times(
-        &self,
-        gpu: &Gpu,
-        strands: &StrandFrame,
-        target: &TargetViews<'_>,
-        repeats: usize,
-    ) -> crate::Result<Vec<(&'static str, f64)>> {
-        self.common.check(self.name(), strands)?;
-        let groups = self.groups(gpu, target)?;
-        let prefix = |count: usize, resolve: bool| -> crate::Result<f64> {
-            let mut times = Vec::new();
-            for _ in 0..repeats.max(1) {
-                let mut encoder = gpu.device.create_command_encoder(&Default::default());
-                self.record_compute(gpu, &mut encoder, &groups, count, None);
-                if resolve {
-                    self.record_resolve(&mut encoder, target, None);
-                }
-                let commands = encoder.finish();
-                let started = std::time::Instant::now();
-                gpu.submit_and_wait([commands])?;
-                times.push(started.elapsed().as_secs_f64() * 1e3);
-            }
-            times.sort_by(f64::total_cmp);
-            Ok(times[times.len() / 2])
-        };
-        let mut out = Vec::new();
-        let mut before = prefix(0, false)?;
-        for (count, (label, _, _)) in PASSES.iter().enumerate() {
-            let ms = prefix(count + 1, false)?;
-            out.push((*label, (ms - before).max(0.0)));
-            before = ms;
-        }
-        let ms = prefix(PASSES.len(), true)?;
-        out.push((RESOLVE, (ms - before).max(0.0)));
-        Ok(out)
     }
 
     /// Takes what the header readbacks hold: the largest size a frame needed.
@@ -845,7 +804,6 @@ impl HairPass for StrandRaster {
         self.common
             .prepare(queue, strands, camera, lights, width, height)?;
         let layout = strands.layout;
-        self.layout.store(layout.to_bits(), Ordering::Release);
         // Bins span the view depths of the strands' box (clamped in front of the eye).
         let view_proj = camera.view_projection();
         let (lo, hi) = self.reach;

@@ -243,6 +243,28 @@ fn segment_rows(seg: RasterSegment, r: f32) -> vec2<i32> {
     return vec2<i32>(max(y0, 0), min(y1, i32(raster.tiles_y) - 1));
 }
 
+// Every (tile, bin) cell segment `s` (projected as `seg`) touches: counted into `counts`
+// (cs_bin), or, with `scatter`, its index written at the cell's offset plus the count so
+// far (cs_scatter). One walk, so both passes visit the same cells.
+fn walk_cells(seg: RasterSegment, s: u32, scatter: bool) {
+    let bin = segment_bin(seg);
+    let r = segment_reach(seg);
+    let rows = segment_rows(seg, r);
+    for (var row = rows.x; row <= rows.y; row += 1) {
+        let cols = row_columns(seg, r, u32(row));
+        for (var col = cols.x; col <= cols.y; col += 1) {
+            let cell = (u32(row) * raster.tiles_x + u32(col)) * raster.bins + bin;
+            let before = atomicAdd(&counts[cell], 1u);
+            if (scatter) {
+                let slot = offsets[cell] + before;
+                if (slot < raster.capacity) {
+                    pool[slot] = s;
+                }
+            }
+        }
+    }
+}
+
 @compute @workgroup_size(64)
 fn cs_bin(
     @builtin(workgroup_id) wid: vec3<u32>,
@@ -273,16 +295,7 @@ fn cs_bin(
     seg.color_a = a[1];
     seg.color_b = b[1];
     raster_segments[s] = seg;
-    let bin = segment_bin(seg);
-    let r = segment_reach(seg);
-    let rows = segment_rows(seg, r);
-    for (var row = rows.x; row <= rows.y; row += 1) {
-        let cols = row_columns(seg, r, u32(row));
-        for (var col = cols.x; col <= cols.y; col += 1) {
-            let cell = (u32(row) * raster.tiles_x + u32(col)) * raster.bins + bin;
-            atomicAdd(&counts[cell], 1u);
-        }
-    }
+    walk_cells(seg, s, false);
 }
 
 @compute @workgroup_size(64)
@@ -299,19 +312,7 @@ fn cs_scatter(
     if (seg.a.w < 0.0) {
         return;
     }
-    let bin = segment_bin(seg);
-    let r = segment_reach(seg);
-    let rows = segment_rows(seg, r);
-    for (var row = rows.x; row <= rows.y; row += 1) {
-        let cols = row_columns(seg, r, u32(row));
-        for (var col = cols.x; col <= cols.y; col += 1) {
-            let cell = (u32(row) * raster.tiles_x + u32(col)) * raster.bins + bin;
-            let slot = offsets[cell] + atomicAdd(&counts[cell], 1u);
-            if (slot < raster.capacity) {
-                pool[slot] = s;
-            }
-        }
-    }
+    walk_cells(seg, s, true);
 }
 
 // ---- exclusive prefix sum of the cell counts ----------------------------------------
@@ -458,10 +459,9 @@ var<workgroup> pixels_done: atomic<u32>;
 var<workgroup> tile_range: vec2<u32>;
 var<workgroup> shared_word: u32;
 
-// Coverage of the pixel centred at `p` by the segment, its window depth, the
-// perspective-correct parameter along it and the view depth there:
-// (coverage, depth, t, view depth); coverage 0 outside it.
-fn segment_coverage(seg: RasterSegment, p: vec2<f32>) -> vec4<f32> {
+// Coverage of the pixel centred at `p` by the segment, its window depth and the
+// perspective-correct parameter along it: (coverage, depth, t); coverage 0 outside it.
+fn segment_coverage(seg: RasterSegment, p: vec2<f32>) -> vec3<f32> {
     let d = seg.b.xy - seg.a.xy;
     let len2 = dot(d, d);
     var u = 0.0;
@@ -469,7 +469,7 @@ fn segment_coverage(seg: RasterSegment, p: vec2<f32>) -> vec4<f32> {
         u = dot(p - seg.a.xy, d) / len2;
         // Half open, so consecutive segments share no pixel at their joint.
         if (u < 0.0 || u >= 1.0) {
-            return vec4<f32>(0.0);
+            return vec3<f32>(0.0);
         }
     }
     let dist = length(p - (seg.a.xy + u * d));
@@ -480,7 +480,7 @@ fn segment_coverage(seg: RasterSegment, p: vec2<f32>) -> vec4<f32> {
     let inv_b = 1.0 / seg.color_b.w;
     let inv_w = mix(1.0 / seg.color_a.w, inv_b, u);
     let t = select(0.0, u * inv_b / inv_w, inv_w > 0.0);
-    return vec4<f32>(coverage, mix(seg.a.z, seg.b.z, u), t, 1.0 / max(inv_w, 1e-30));
+    return vec3<f32>(coverage, mix(seg.a.z, seg.b.z, u), t);
 }
 
 // Whether window depth `z` is in front of the opaque depth `opaque`.
