@@ -681,3 +681,25 @@ fn a_few_zero_area_triangles_are_skipped_and_counted() {
             .all(|r| !collapsed.contains(&r.triangle))
     );
 }
+
+/// The safety net behind "no blank picture with exit code 0": a frame read back before
+/// anything was drawn into it (wgpu zero-fills the target, so every pixel has alpha 0)
+/// is `Error::Undrawn`, counting every pixel, and never an image.
+#[test]
+fn a_frame_never_drawn_is_refused() {
+    let gpu = Gpu::headless().expect("an adapter");
+    let mut scene = Scene::default();
+    scene.hair.roots.count = 200;
+    let renderer = Renderer::new(&gpu, &scene, 32, 24).expect("a renderer");
+    match renderer.rgba8(&gpu) {
+        Err(Error::Undrawn {
+            transparent,
+            pixels,
+            ..
+        }) => {
+            assert_eq!((transparent, pixels), (32 * 24, 32 * 24));
+        }
+        Err(other) => panic!("expected Undrawn, got {other}"),
+        Ok(_) => panic!("an undrawn frame was read back as a picture"),
+    }
+}

@@ -236,6 +236,7 @@ struct Row {
 /// prints the tables.
 pub fn run(opts: &LabOpts) -> Result<(), Error> {
     let started = Instant::now();
+    pelage_lab::create_dir(&opts.out)?;
     let counts: &[u32] = if opts.quick {
         &[2_000, 8_000]
     } else {
@@ -704,7 +705,7 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
             note.into(),
         ])?;
     }
-    std::fs::create_dir_all(&opts.out)?;
+    pelage_lab::create_dir(&opts.out)?;
     table.write_csv(&opts.out.join("bench.csv"))?;
 
     let mut points = Vec::new();

@@ -604,6 +604,41 @@ fn a_folder_as_output_is_refused_naming_it() {
     assert!(dir.0.is_dir());
 }
 
+/// Every lab and the bench create their output folder before any work and name it when
+/// they cannot (`lab lod` on a read-only folder printed "Read-only file system (os error
+/// 30)" and nothing else). A regular file as the parent fails the same way for root.
+#[test]
+fn an_output_folder_that_cannot_be_made_is_named() {
+    let dir = Scratch::new("unwritable_out");
+    let file = dir.0.join("a_file");
+    std::fs::write(&file, b"not a folder").unwrap();
+    let out = file.join("lab");
+    let out = out.to_string_lossy();
+    for args in [
+        &["lab", "lod", "--quick", "--out", &out][..],
+        &["lab", "shadows", "--quick", "--out", &out],
+        &["lab", "scattering", "--quick", "--out", &out],
+        &["bench", "--quick", "--out", &out],
+    ] {
+        let started = std::time::Instant::now();
+        let stderr = fails(args);
+        assert!(
+            stderr.contains("cannot create the folder") && stderr.contains(&*out),
+            "{args:?}:\n{stderr}"
+        );
+        // Refused before the work: no adapter line, no reference render.
+        assert!(
+            stderr.lines().count() == 1,
+            "{args:?} did work before refusing:\n{stderr}"
+        );
+        eprintln!(
+            "{args:?}: {:.2} s: {}",
+            started.elapsed().as_secs_f64(),
+            stderr.trim()
+        );
+    }
+}
+
 #[cfg(target_os = "linux")]
 #[test]
 fn stale_temporaries_of_dead_processes_are_swept() {
@@ -772,6 +807,65 @@ fn a_scene_file_from_dev_zero_stops_at_the_limit() {
         &["render", "--scene", "/dev/zero", "-o", "/dev/null"],
         &["/dev/zero", "16 MiB", "scene files"],
     );
+}
+
+/// A groom or OBJ path that is a stream: the groom stops at its signature after the
+/// 128-byte header (the header declares the size to read), the OBJ at its documented
+/// 2 GiB cap; both exit 2 naming the file.
+#[cfg(unix)]
+#[test]
+fn groom_and_obj_paths_to_dev_zero_stop() {
+    let dir = Scratch::new("dev_zero_inputs");
+    std::os::unix::fs::symlink("/dev/zero", dir.0.join("zero.hair")).unwrap();
+    std::os::unix::fs::symlink("/dev/zero", dir.0.join("zero.obj")).unwrap();
+    let groom = dir.file("groom.toml", "[groom]\npath = \"zero.hair\"\n");
+    let started = std::time::Instant::now();
+    exits_2(
+        &[
+            "render",
+            "--scene",
+            &groom.to_string_lossy(),
+            "-o",
+            "/dev/null",
+        ],
+        &["zero.hair", "signature"],
+    );
+    let groom_s = started.elapsed().as_secs_f64();
+    let mesh = dir.file("mesh.toml", "[mesh]\nkind = \"obj\"\npath = \"zero.obj\"\n");
+    let started = std::time::Instant::now();
+    exits_2(
+        &[
+            "render",
+            "--scene",
+            &mesh.to_string_lossy(),
+            "-o",
+            "/dev/null",
+        ],
+        &["zero.obj", "2 GiB", "OBJ files"],
+    );
+    eprintln!(
+        "groom from /dev/zero refused in {groom_s:.2} s, OBJ in {:.2} s",
+        started.elapsed().as_secs_f64()
+    );
+}
+
+/// A mesh of one zero-area triangle says so in the singular, at load (exit 2).
+#[test]
+fn a_single_degenerate_triangle_is_named() {
+    let dir = Scratch::new("one_flat_triangle");
+    dir.file("flat.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n");
+    let scene = dir.file("flat.toml", "[mesh]\nkind = \"obj\"\npath = \"flat.obj\"\n");
+    let stderr = exits_2(
+        &[
+            "render",
+            "--scene",
+            &scene.to_string_lossy(),
+            "-o",
+            "/dev/null",
+        ],
+        &["flat.obj", "only triangle has zero or near-zero area"],
+    );
+    assert!(!stderr.contains("all 1 triangles"), "{stderr}");
 }
 
 #[test]

@@ -6,15 +6,23 @@ use std::path::PathBuf;
 #[derive(Debug, thiserror::Error)]
 pub enum LabError {
     /// Reading or writing a file (or creating its folder) failed.
-    #[error("I/O error on {}: {source}", path.display())]
+    #[error("cannot read or write {}: {source}", path.display())]
     Io {
         /// The file or folder involved.
         path: PathBuf,
         /// The underlying error.
         source: std::io::Error,
     },
-    /// Encoding an image failed.
-    #[error("cannot encode {}: {message}", path.display())]
+    /// Creating an output folder failed.
+    #[error("cannot create the folder {}: {source}", path.display())]
+    CreateDir {
+        /// The folder.
+        path: PathBuf,
+        /// The underlying error.
+        source: std::io::Error,
+    },
+    /// Drawing or encoding an image, or writing it, failed.
+    #[error("cannot write the image {}: {message}", path.display())]
     Encode {
         /// The file that was being written.
         path: PathBuf,

@@ -23,3 +23,12 @@ impl From<WriteError> for LabError {
 pub fn write_file_atomically(path: &Path, bytes: &[u8]) -> Result<(), LabError> {
     write_bytes_atomically(path, bytes).map_err(LabError::from)
 }
+
+/// Creates the folder `path` and its parents (nothing to do when it exists); the error
+/// names the folder (`cannot create the folder out/lod: Read-only file system`).
+pub fn create_dir(path: &Path) -> Result<(), LabError> {
+    std::fs::create_dir_all(path).map_err(|source| LabError::CreateDir {
+        path: path.to_path_buf(),
+        source,
+    })
+}

@@ -29,7 +29,7 @@ mod table;
 pub use chart::{ScatterChart, ScatterPoint};
 pub use error::LabError;
 pub use fs::{
-    AtomicFile, WriteError, remove_pending_temporaries, remove_stale_temporaries,
+    AtomicFile, WriteError, create_dir, remove_pending_temporaries, remove_stale_temporaries,
     write_bytes_atomically, write_file_atomically,
 };
 pub use pareto::pareto_front;

@@ -474,14 +474,37 @@ impl HairFile {
     }
 
     /// Reads and parses the `.hair` file at `path` (see [`HairFile::read`]).
-    /// At most [`MAX_GROOM_FILE_BYTES`](crate::MAX_GROOM_FILE_BYTES) are read.
+    ///
+    /// Reads the header first and then only the bytes it declares, at most
+    /// [`MAX_GROOM_FILE_BYTES`](crate::MAX_GROOM_FILE_BYTES): a path to a stream such
+    /// as `/dev/zero` stops at its signature after 128 bytes.
     pub fn read_path(path: &Path) -> Result<HairFile, HairFileError> {
-        let bytes = crate::limits::read_capped(path, crate::MAX_GROOM_FILE_BYTES, "groom files")
-            .map_err(|source| HairFileError::Io {
-                action: "read",
-                path: path.to_path_buf(),
-                source,
-            })?;
+        use std::io::Read;
+        let io = |source| HairFileError::Io {
+            action: "read",
+            path: path.to_path_buf(),
+            source,
+        };
+        let mut file = std::fs::File::open(path).map_err(io)?;
+        let mut bytes = Vec::with_capacity(HEADER_SIZE);
+        (&mut file)
+            .take(HEADER_SIZE as u64)
+            .read_to_end(&mut bytes)
+            .map_err(io)?;
+        if bytes.len() == HEADER_SIZE && bytes[..4] == SIGNATURE {
+            let word = |at: usize| u32::from_le_bytes(fixed(&bytes[at..at + 4]));
+            if let Some(size) = file_size(word(4), word(8), word(12)) {
+                let limit = crate::MAX_GROOM_FILE_BYTES;
+                if size > limit {
+                    return Err(io(crate::limits::too_large(limit, "groom files")));
+                }
+                (&mut file)
+                    .take(size - HEADER_SIZE as u64)
+                    .read_to_end(&mut bytes)
+                    .map_err(io)?;
+            }
+        }
+        // A bad signature, a short file or counts that overflow are `read`'s to name.
         HairFile::read(&bytes)
     }
 

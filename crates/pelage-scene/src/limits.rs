@@ -38,15 +38,20 @@ pub(crate) fn read_capped(path: &Path, limit: u64, kind: &str) -> io::Result<Vec
     let mut bytes = Vec::with_capacity(expected.min(limit) as usize + 1);
     file.take(limit + 1).read_to_end(&mut bytes)?;
     if bytes.len() as u64 > limit {
-        return Err(io::Error::new(
-            io::ErrorKind::InvalidData,
-            format!(
-                "larger than {}, the limit for {kind} (is it a device or a stream?)",
-                size_words(limit)
-            ),
-        ));
+        return Err(too_large(limit, kind));
     }
     Ok(bytes)
+}
+
+/// The error for a file larger than `limit`, the limit for `kind`.
+pub(crate) fn too_large(limit: u64, kind: &str) -> io::Error {
+    io::Error::new(
+        io::ErrorKind::InvalidData,
+        format!(
+            "larger than {}, the limit for {kind} (is it a device or a stream?)",
+            size_words(limit)
+        ),
+    )
 }
 
 #[cfg(test)]

@@ -136,7 +136,8 @@ pub enum MeshError {
     },
     /// Every triangle has (near) zero area: there is no surface to grow on.
     #[error(
-        "all {triangles} triangles of the mesh have zero or near-zero area; the mesh has no surface (check its scale and that its vertices are not all collinear)"
+        "{} zero or near-zero area; the mesh has no surface (check its scale and that its vertices are not all collinear)",
+        if *triangles == 1 { "the mesh's only triangle has".to_string() } else { format!("all {triangles} triangles of the mesh have") }
     )]
     AllTrianglesDegenerate {
         /// Number of triangles.

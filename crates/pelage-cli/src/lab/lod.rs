@@ -257,7 +257,7 @@ fn background(scene: &Scene) -> [u8; 3] {
 
 /// Runs the lab.
 pub fn run(opts: &LabOpts) -> LabResult<()> {
-    std::fs::create_dir_all(&opts.out)?;
+    pelage_lab::create_dir(&opts.out)?;
     let (size, frames, coverages, strands): ((u32, u32), usize, &[f32], u32) = if opts.quick {
         ((240, 180), 3, &[0.1], 6_000)
     } else {

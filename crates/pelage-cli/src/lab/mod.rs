@@ -114,6 +114,13 @@ pub struct ScatteringOpts {
 impl Lab {
     /// Runs the chosen lab.
     pub fn run(&self) -> Result<(), Box<dyn std::error::Error>> {
+        // The output folder first, so an unwritable one stops the lab before its work,
+        // naming the folder.
+        let out = match self {
+            Lab::Shadows(o) | Lab::Oit(o) | Lab::Shading(o) | Lab::Lod(o) => &o.out,
+            Lab::Scattering(o) => &o.lab.out,
+        };
+        pelage_lab::create_dir(out)?;
         match self {
             Lab::Shadows(opts) => shadows::run(opts),
             Lab::Oit(opts) => oit::run(opts),

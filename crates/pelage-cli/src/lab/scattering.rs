@@ -259,12 +259,7 @@ pub fn run(opts: &LabOpts, spp: Option<u32>) -> Result<(), Box<dyn std::error::E
         &["fur", "long_hair"]
     };
     let hair: &[(&str, f32, f32)] = if quick { &HAIR[1..] } else { &HAIR };
-    std::fs::create_dir_all(opts.out.join("scattering")).map_err(|e| {
-        format!(
-            "cannot create {}: {e}",
-            opts.out.join("scattering").display()
-        )
-    })?;
+    pelage_lab::create_dir(&opts.out.join("scattering"))?;
     println!("adapter: {}", Gpu::headless()?.describe());
     let mut table = Table::new(&[
         "groom",
