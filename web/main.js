@@ -68,23 +68,31 @@ async function main() {
   const draw = (now) => {
     try {
       demo.frame(fixedT ?? (now - start) / 1000);
+      frames += 1;
+      if (frames % 10 === 1) showTimings();
     } catch (e) {
       fail(e);
       return;
     }
-    frames += 1;
-    if (frames % 10 === 1) showTimings();
     if (frames < maxFrames) {
       requestAnimationFrame(draw);
     } else {
       // The last frame has been shown when the next animation frame runs; its GPU times
-      // arrive a little later (up to 2 s is waited for them).
-      requestAnimationFrame(() => finish(20));
+      // arrive later (up to 30 s is waited for them: SwiftShader takes seconds a frame).
+      requestAnimationFrame(() => finish(300));
     }
   };
   const showTimings = () => {
     const timings = demo.timings();
-    $('timings').textContent = demo.has_timestamps() ? (timings || 'waiting...') : 'n/a';
+    const table = timings
+      .split('\n')
+      .filter((line) => line.includes('\t'))
+      .map((line) => {
+        const [label, ms] = line.split('\t');
+        return `${label.padEnd(34)}${ms.padStart(10)}`;
+      })
+      .join('\n');
+    $('timings').textContent = demo.has_timestamps() ? (timings ? table : 'waiting...') : 'n/a';
     return timings !== '' || !demo.has_timestamps();
   };
   const finish = (tries) => {
@@ -103,4 +111,7 @@ async function main() {
   requestAnimationFrame(draw);
 }
 
+// Anything thrown outside main's own handling ends the test at once.
+window.addEventListener('error', (event) => fail(event.error ?? event.message));
+window.addEventListener('unhandledrejection', (event) => fail(event.reason));
 main().catch(fail);
