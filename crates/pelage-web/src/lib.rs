@@ -3,7 +3,7 @@
 //! and the transparency method, and the GPU time per pass where the browser offers
 //! timestamp queries.
 //!
-//! Built for `wasm32-unknown-unknown` this crate exports [`Demo`] to JavaScript
+//! Built for `wasm32-unknown-unknown` this crate exports `Demo` to JavaScript
 //! (through wasm-bindgen). On every target it exports the scene the page draws
 //! ([`scene`]), so the native reference frame of the browser test
 //! (`examples/browser_compare.rs`, run by `.ci/browser-test`) is the same scene by
