@@ -1,10 +1,11 @@
 //! The page's side of the demo: a WebGPU device with the default limits, the canvas,
 //! and a [`pelage::Renderer`] whose frame is copied into the canvas's texture.
 
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 
 use pelage::gpu::{Gpu, wgpu};
-use pelage::{Renderer, Scene, Update};
+use pelage::{FRAMES_IN_FLIGHT, Renderer, Scene, Update};
 use wasm_bindgen::prelude::*;
 
 use crate::{DemoError, Settings};
@@ -39,6 +40,10 @@ pub struct Demo {
     passes: Vec<(String, f64)>,
     /// Errors the device raised outside any scope since the last frame.
     errors: Arc<Mutex<Vec<String>>>,
+    /// Frames submitted that the GPU has not finished (`on_submitted_work_done`
+    /// answers in the event loop): the web's form of the renderer's wait, which is a
+    /// no-op there.
+    in_flight: Arc<AtomicUsize>,
 }
 
 #[wasm_bindgen]
@@ -116,6 +121,7 @@ impl Demo {
             renderer,
             passes: Vec::new(),
             errors,
+            in_flight: Arc::new(AtomicUsize::new(0)),
         })
     }
 
@@ -184,9 +190,15 @@ impl Demo {
         self.take_errors()
     }
 
-    /// Draws the frame of time `t` (seconds) and shows it in the canvas. Submits and
-    /// returns; nothing waits for the GPU.
-    pub fn frame(&mut self, t: f32) -> Result<(), JsValue> {
+    /// Draws the frame of time `t` (seconds) and shows it in the canvas, and answers
+    /// true; or, while [`FRAMES_IN_FLIGHT`] frames are still on the GPU, draws nothing
+    /// and answers false (a slow GPU, SwiftShader's among them, would otherwise queue
+    /// a frame per animation frame without bound). Submits and returns; nothing waits.
+    pub fn frame(&mut self, t: f32) -> Result<bool, JsValue> {
+        if self.in_flight.load(Ordering::Acquire) >= FRAMES_IN_FLIGHT {
+            self.take_errors()?;
+            return Ok(false);
+        }
         let stats = self
             .renderer
             .render(&self.gpu, t, &self.scene.camera)
@@ -220,7 +232,13 @@ impl Demo {
         );
         self.gpu.queue.submit([encoder.finish()]);
         self.gpu.queue.present(texture);
-        self.take_errors()
+        self.in_flight.fetch_add(1, Ordering::AcqRel);
+        let done = self.in_flight.clone();
+        self.gpu.queue.on_submitted_work_done(move || {
+            done.fetch_sub(1, Ordering::AcqRel);
+        });
+        self.take_errors()?;
+        Ok(true)
     }
 
     /// The newest GPU time per pass, one `label<TAB>milliseconds` line each; empty
