@@ -6,8 +6,10 @@ pub use update::{Change, Update};
 
 use pelage_gpu::{FramePlan, Gpu, GpuTimer, wgpu};
 use pelage_scene::{Camera, HairParams, Light, Mesh, Resampled, ShadeParams, ShadowParams};
+#[cfg(not(target_arch = "wasm32"))]
+use pelage_shade::TargetViews;
 use pelage_shade::{
-    HairInputs, HairPass, OitStats, TargetFormat, TargetViewSet, TargetViews, Targets, Visibility,
+    HairInputs, HairPass, OitStats, TargetFormat, TargetViewSet, Targets, Visibility,
 };
 use pelage_shadow::{LightVisibility, ShadowMethod};
 use pelage_strands::{GroomStrands, GrowStrands, MeshBuffers, StrandFrame, StrandStage};
@@ -404,7 +406,9 @@ impl Renderer {
     /// `repeats` runs, in milliseconds: an upper bound on the stage's GPU time that does
     /// not rely on the driver's timestamps. (lavapipe in Mesa 22.3 reports about 0.05 ms
     /// for a compute pass once any render pass has run on the device, whatever the pass
-    /// costs; this is the cross-check.)
+    /// costs; this is the cross-check.) Not on the web (`wasm32`), where nothing may
+    /// wait for the GPU and there is no clock to time it with.
+    #[cfg(not(target_arch = "wasm32"))]
     pub fn stage_wall_times(
         &mut self,
         gpu: &Gpu,
@@ -621,6 +625,7 @@ fn linear_to_srgb8(v: f32) -> u8 {
 }
 
 /// Median wall-clock milliseconds of `repeats` submissions of what `encode` records, each waited for.
+#[cfg(not(target_arch = "wasm32"))]
 fn time_alone(
     gpu: &Gpu,
     repeats: usize,

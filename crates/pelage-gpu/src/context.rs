@@ -59,7 +59,9 @@ impl Gpu {
     /// this device instead records them (and device loss), and the next
     /// [`Gpu::scoped`], [`Gpu::submit_and_wait`] or [`Gpu::check`] returns them.
     ///
-    /// Blocks the calling thread (pollster); see [`Gpu::headless_async`].
+    /// Blocks the calling thread (pollster); see [`Gpu::headless_async`]. Not on the
+    /// web (`wasm32`), where nothing may block: call [`Gpu::headless_async`] there.
+    #[cfg(not(target_arch = "wasm32"))]
     pub fn headless() -> Result<Gpu> {
         pollster::block_on(Self::headless_async())
     }
@@ -232,11 +234,30 @@ impl Gpu {
         Ok(())
     }
 
+    /// Run `f`; an error recorded earlier outside a scope, or a lost device, becomes
+    /// `Err`.
+    ///
+    /// On the web (`wasm32`) a popped scope answers only after control returns to the
+    /// browser's event loop, so waiting for it would block the page forever: there no
+    /// scope is pushed, `f` runs, and errors it raises reach the device's
+    /// uncaptured-error handler (the one [`Gpu::headless_async`] installs records them
+    /// for a later [`Gpu::check`]; an engine's own handler gets them otherwise).
+    #[cfg(target_arch = "wasm32")]
+    pub fn scoped<R>(&self, f: impl FnOnce(&wgpu::Device) -> R) -> Result<R> {
+        let value = f(&self.device);
+        self.check()?;
+        Ok(value)
+    }
+
     /// Run `f` inside validation, out-of-memory and internal error scopes; any
     /// error captured there (or recorded earlier outside a scope, or a lost
     /// device) becomes `Err`. Blocks on the scopes' futures (pollster).
     ///
     /// Error scopes are per thread: `f` must do its wgpu calls on this thread.
+    ///
+    /// On the web (`wasm32`) no scope is pushed (nothing may block there); errors
+    /// reach the device's uncaptured-error handler instead.
+    #[cfg(not(target_arch = "wasm32"))]
     pub fn scoped<R>(&self, f: impl FnOnce(&wgpu::Device) -> R) -> Result<R> {
         let oom = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
         let internal = self.device.push_error_scope(wgpu::ErrorFilter::Internal);

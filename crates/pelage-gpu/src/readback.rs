@@ -182,8 +182,22 @@ fn staging_buffer(gpu: &Gpu, size: u64) -> Result<wgpu::Buffer> {
     })
 }
 
+/// On the web (`wasm32`) a map answers only after control returns to the browser's
+/// event loop, so a blocking read can never finish: every readback is
+/// [`GpuError::Map`] there (draw the frame to a canvas instead).
+#[cfg(target_arch = "wasm32")]
+pub(crate) fn map_read(_gpu: &Gpu, _buffer: &wgpu::Buffer, _range: Range<u64>) -> Result<Vec<u8>> {
+    Err(GpuError::Map(
+        "reading a buffer back waits for the GPU, which a web page cannot do (the map \
+         answers only after control returns to the browser's event loop); draw the frame \
+         to a canvas instead"
+            .into(),
+    ))
+}
+
 /// Map `range` of a `MAP_READ` buffer, copy it out and unmap. Waits for the GPU.
 /// `range` must lie inside the buffer, start on 8 bytes and span a multiple of 4.
+#[cfg(not(target_arch = "wasm32"))]
 pub(crate) fn map_read(gpu: &Gpu, buffer: &wgpu::Buffer, range: Range<u64>) -> Result<Vec<u8>> {
     let (sender, receiver) = std::sync::mpsc::channel();
     gpu.scoped(|_| {

@@ -87,12 +87,25 @@ impl AtomicFile {
     /// file; for a regular file or a new path, creates the temporary
     /// `.pelage-<pid>-<n>.tmp` in the target's folder (after removing stale
     /// temporaries there, see the module documentation).
+    ///
+    /// On the web (`wasm32-unknown-unknown`) there is no file system: every path is a
+    /// [`WriteError`] of kind [`io::ErrorKind::Unsupported`] (instead of the panic
+    /// the standard library's process id would raise there).
     pub fn create(path: &Path) -> Result<Self, WriteError> {
         let err = |action, source| WriteError {
             action,
             path: path.to_path_buf(),
             source,
         };
+        if cfg!(all(target_arch = "wasm32", target_os = "unknown")) {
+            return Err(err(
+                "write",
+                io::Error::new(
+                    io::ErrorKind::Unsupported,
+                    "this platform (the web) has no file system",
+                ),
+            ));
+        }
         let target = resolve_links(path).map_err(|e| err("follow the links of", e))?;
         match fs::metadata(&target) {
             Ok(meta) if meta.is_dir() => {
