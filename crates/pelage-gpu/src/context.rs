@@ -208,9 +208,16 @@ impl Gpu {
     /// One line naming the adapter, e.g. `llvmpipe (LLVM 15.0.6, 256 bits) / Vulkan / Cpu`.
     pub fn describe(&self) -> String {
         match &self.adapter_info {
+            // Browsers hide the adapter's name (WebGPU gives an empty one).
             Some(info) => format!(
                 "{} / {:?} / {:?}",
-                info.name, info.backend, info.device_type
+                if info.name.is_empty() {
+                    "unnamed adapter"
+                } else {
+                    &info.name
+                },
+                info.backend,
+                info.device_type
             ),
             None => "unknown adapter".into(),
         }
