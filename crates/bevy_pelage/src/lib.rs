@@ -315,6 +315,23 @@ struct ViewHair {
     ready: bool,
 }
 
+/// The 3D cameras of this frame, with their targets.
+type CameraViews<'w, 's> = Query<
+    'w,
+    's,
+    (
+        Entity,
+        &'static ExtractedView,
+        &'static ExtractedCamera,
+        &'static ViewTarget,
+        &'static ViewDepthStencilTexture,
+    ),
+    With<Camera3d>,
+>;
+
+/// (entity, camera) pairs whose hair pass failed, with the targets it failed for.
+type FailedViews = HashMap<(Entity, Entity), (TargetFormat, (u32, u32))>;
+
 /// Every furred entity's render-world state, and the errors already logged.
 #[derive(Resource, Default)]
 struct FurInstances {
@@ -322,7 +339,7 @@ struct FurInstances {
     /// Entities (and the generation) whose error was logged: skipped until they change.
     failed: HashMap<Entity, u64>,
     /// (entity, view) pairs whose hair pass failed for the given targets.
-    failed_views: HashMap<(Entity, Entity), (TargetFormat, (u32, u32))>,
+    failed_views: FailedViews,
 }
 
 impl FurInstance {
@@ -428,16 +445,7 @@ fn prepare_furs(
     adapter: Res<RenderAdapterInfo>,
     extracted: Res<ExtractedFurs>,
     mut state: ResMut<FurInstances>,
-    views: Query<
-        (
-            Entity,
-            &ExtractedView,
-            &ExtractedCamera,
-            &ViewTarget,
-            &ViewDepthStencilTexture,
-        ),
-        With<Camera3d>,
-    >,
+    views: CameraViews,
 ) {
     let Some(gpu) = gpu else {
         let gpu = Gpu::from_device(
@@ -498,17 +506,8 @@ fn prepare_instance(
     instance: &mut FurInstance,
     fur: &ExtractedFur,
     extracted: &ExtractedFurs,
-    views: &Query<
-        (
-            Entity,
-            &ExtractedView,
-            &ExtractedCamera,
-            &ViewTarget,
-            &ViewDepthStencilTexture,
-        ),
-        With<Camera3d>,
-    >,
-    failed_views: &mut HashMap<(Entity, Entity), (TargetFormat, (u32, u32))>,
+    views: &CameraViews,
+    failed_views: &mut FailedViews,
 ) -> Result<(), FurError> {
     let queue = &gpu.queue;
     let frame = instance
