@@ -4,7 +4,7 @@
 //! [`DirectionalLight`] and draws them in each 3D camera's render schedule
 //! ([`Core3d`], after Bevy's main transparent pass, before post-processing) into
 //! Bevy's own view targets: its main colour texture (HDR or not, multisampled as the
-//! camera's [`Msaa`](bevy::render::view::Msaa) says) and its reverse-Z depth, with
+//! camera's [`Msaa`] says) and its reverse-Z depth, with
 //! the camera's own view and projection.
 //!
 //! ```no_run
