@@ -2,11 +2,13 @@
 //! and an entity with a `Mesh3d` and [`Fur`], rendered headless into an `Image`.
 //!
 //! ```text
-//! cargo run -p bevy_pelage --example fur -- [--frames N] [--out DIR] [--msaa] [--hdr]
+//! cargo run -p bevy_pelage --example fur -- [--frames N] [--out DIR] [--msaa] [--hdr] [--without-plugin]
 //! ```
 //!
 //! Renders N frames (default 8, 1/12 s apart) of 320 x 240 and writes
-//! `DIR/fur_NNNN.png` (default `out/bevy`). No window: Bevy is built without winit,
+//! `DIR/fur_NNNN.png` (default `out/bevy`), then the median time of Bevy's whole frame
+//! (`App::update`) after the first two; `--without-plugin` times the same app without
+//! `PelagePlugin`. No window: Bevy is built without winit,
 //! so the example runs on a machine without a display (lavapipe included).
 //! `tests/fur.rs` renders the same scene and compares it with pelage's own frame.
 
@@ -58,6 +60,8 @@ pub struct View {
     pub msaa: bool,
     /// An HDR main target (Bevy then tone maps it; pelage's own frame does not).
     pub hdr: bool,
+    /// Leave `PelagePlugin` out (the same app without fur: Bevy's own frame time).
+    pub without_plugin: bool,
 }
 
 /// A Bevy app, headless, that renders `scene()` into an image each `update`: returns
@@ -80,8 +84,10 @@ pub fn app(view: View) -> Result<(App, Handle<Image>)> {
             // The frame is rendered inside `update`, so it can be read right after.
             .disable::<PipelinedRenderingPlugin>(),
     )
-    .add_plugins(PelagePlugin)
     .insert_resource(TimeUpdateStrategy::ManualDuration(FRAME_STEP));
+    if !view.without_plugin {
+        app.add_plugins(PelagePlugin);
+    }
     let bg = scene.shade.background;
     app.insert_resource(ClearColor(Color::linear_rgb(bg.x, bg.y, bg.z)));
 
@@ -191,23 +197,52 @@ fn run() -> Result<()> {
         match flag.as_str() {
             "--msaa" => view.msaa = true,
             "--hdr" => view.hdr = true,
+            "--without-plugin" => view.without_plugin = true,
             "--frames" => frames = args.next().ok_or("--frames needs a value")?.parse()?,
             "--out" => out = PathBuf::from(args.next().ok_or("--out needs a value")?),
             other => {
-                return Err(
-                    format!("unknown argument {other} (--frames, --out, --msaa, --hdr)").into(),
-                );
+                return Err(format!(
+                    "unknown argument {other} (--frames, --out, --msaa, --hdr, --without-plugin)"
+                )
+                .into());
             }
         }
     }
     let (mut app, image) = app(view)?;
     std::fs::create_dir_all(&out)?;
+    let mut update_ms = Vec::new();
+    let mut plugin_ms = Vec::new();
     for frame in 0..frames {
+        let start = std::time::Instant::now();
         app.update();
+        update_ms.push(start.elapsed().as_secs_f64() * 1e3);
+        let render = app.sub_app(bevy::render::RenderApp).world();
+        if let Some(cpu) = render.get_resource::<bevy_pelage::PelageCpuTime>() {
+            plugin_ms.push((cpu.prepare + cpu.record).as_secs_f64() * 1e3);
+        }
         let picture = read(&mut app, &image)?;
         let path = out.join(format!("fur_{frame:04}.png"));
         picture.save(&path)?;
         println!("t = {:.3} s: wrote {}", time(&app), path.display());
+    }
+    // Bevy's whole frame (`App::update`: main world, extraction, render schedule,
+    // submit), the first two frames (pipelines, pelage's set-up) left out.
+    let median = |mut ms: Vec<f64>| {
+        let mut steady = ms.split_off(ms.len().min(2));
+        steady.sort_by(f64::total_cmp);
+        steady.get(steady.len() / 2).copied()
+    };
+    let which = if view.without_plugin {
+        "without"
+    } else {
+        "with"
+    };
+    if let Some(update) = median(update_ms) {
+        println!("App::update: median {update:.2} ms ({which} the plugin)");
+    }
+    // The plugin's own systems (PelageCpuTime: preparing and recording).
+    if let Some(plugin) = median(plugin_ms) {
+        println!("the plugin's systems: median {plugin:.3} ms of CPU per frame");
     }
     Ok(())
 }

@@ -127,6 +127,7 @@ impl Plugin for PelagePlugin {
         render_app
             .init_resource::<ExtractedFurs>()
             .init_resource::<FurInstances>()
+            .init_resource::<PelageCpuTime>()
             .add_systems(ExtractSchedule, extract_furs)
             .add_systems(
                 Render,
@@ -283,6 +284,18 @@ fn extract_furs(
             light.illuminance,
         )
     });
+}
+
+/// The CPU time the plugin spent in Bevy's last frame (a render-world resource):
+/// preparing (uniform writes, and building stages when a fur or camera is new) and
+/// recording into Bevy's encoder, summed over cameras. Neither includes a wait for the
+/// GPU: the plugin never waits.
+#[derive(Resource, Clone, Copy, Debug, Default)]
+pub struct PelageCpuTime {
+    /// `RenderSystems::PrepareBindGroups`: stages built or prepared.
+    pub prepare: std::time::Duration,
+    /// The `Core3d` schedules: passes recorded.
+    pub record: std::time::Duration,
 }
 
 /// pelage on Bevy's device.
@@ -446,7 +459,10 @@ fn prepare_furs(
     extracted: Res<ExtractedFurs>,
     mut state: ResMut<FurInstances>,
     views: CameraViews,
+    mut cpu: ResMut<PelageCpuTime>,
 ) {
+    let start = std::time::Instant::now();
+    cpu.record = std::time::Duration::ZERO;
     let Some(gpu) = gpu else {
         let gpu = Gpu::from_device(
             device.wgpu_device().clone(),
@@ -498,6 +514,7 @@ fn prepare_furs(
             instances.remove(&entity);
         }
     }
+    cpu.prepare = start.elapsed();
 }
 
 /// One fur's frame: stage 1 and the shadow once, then each camera's hair pass.
@@ -599,8 +616,10 @@ fn draw_fur(
     view: ViewQuery<(&ViewTarget, &ViewDepthStencilTexture)>,
     gpu: Option<Res<PelageGpu>>,
     mut state: ResMut<FurInstances>,
+    mut cpu: ResMut<PelageCpuTime>,
     mut ctx: RenderContext,
 ) {
+    let start = std::time::Instant::now();
     let Some(gpu) = gpu else {
         return;
     };
@@ -658,4 +677,5 @@ fn draw_fur(
         state.instances.remove(&entity);
         state.failed.insert(entity, generation);
     }
+    cpu.record += start.elapsed();
 }
