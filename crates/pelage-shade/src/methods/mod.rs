@@ -55,8 +55,9 @@ pub struct OitStats {
 
 /// One stage 3 method: draws the mesh and the hair into the caller's targets. Each
 /// frame: [`HairPass::prepare`] with stage 1's [`StrandFrame`], then
-/// [`HairPass::encode`] with the same frame.
-pub trait HairPass: std::fmt::Debug {
+/// [`HairPass::encode`] with the same frame. `Send + Sync`, so that an engine keeps a
+/// boxed method in shared state (a Bevy resource, say) and records it from any thread.
+pub trait HairPass: std::fmt::Debug + Send + Sync {
     /// Short name (`opaque`, `wboit`, `k_buffer`, `a_buffer`, `dbk`, `random_subsets`,
     /// `strand_raster`).
     fn name(&self) -> &'static str;

@@ -1,0 +1,248 @@
+//! pelage's creature with fur in wind, in a Bevy app: a camera, a directional light
+//! and an entity with a `Mesh3d` and [`Fur`], rendered headless into an `Image`.
+//!
+//! ```text
+//! cargo run -p bevy_pelage --example fur -- [--frames N] [--out DIR] [--msaa] [--hdr] [--without-plugin]
+//! ```
+//!
+//! Renders N frames (default 8, 1/12 s apart) of 320 x 240 and writes
+//! `DIR/fur_NNNN.png` (default `out/bevy`), then the median time of Bevy's whole frame
+//! (`App::update`) after the first two; `--without-plugin` times the same app without
+//! `PelagePlugin`. No window: Bevy is built without winit,
+//! so the example runs on a machine without a display (lavapipe included).
+//! `tests/fur.rs` renders the same scene and compares it with pelage's own frame.
+
+use std::path::PathBuf;
+use std::time::Duration;
+
+use bevy::app::PluginsState;
+use bevy::camera::{Exposure, Hdr, RenderTarget};
+use bevy::image::Image;
+use bevy::light::DirectionalLight;
+use bevy::prelude::*;
+use bevy::render::RenderPlugin;
+use bevy::render::pipelined_rendering::PipelinedRenderingPlugin;
+use bevy::render::render_asset::RenderAssets;
+use bevy::render::render_resource::{TextureFormat, TextureUsages};
+use bevy::render::renderer::{RenderDevice, RenderQueue};
+use bevy::render::texture::GpuImage;
+use bevy::render::view::{DebandDither, Msaa, Tonemapping};
+use bevy::time::TimeUpdateStrategy;
+use bevy::window::{ExitCondition, WindowPlugin};
+use bevy_pelage::{Fur, PelagePlugin};
+
+type Result<T> = std::result::Result<T, Box<dyn std::error::Error>>;
+
+/// The frame size.
+pub const WIDTH: u32 = 320;
+/// The frame size.
+pub const HEIGHT: u32 = 240;
+/// Time between frames.
+pub const FRAME_STEP: Duration = Duration::from_millis(1000 / 12);
+
+/// The scene, as pelage's own renderer takes it: the creature, 12,000 strands in
+/// pelage's default gusting wind, one directional key light, pelage's default camera,
+/// single-sampled shading.
+pub fn scene() -> pelage::Scene {
+    let mut scene = pelage::Scene::default();
+    scene.hair.roots.count = 12_000;
+    scene.shade.sample_count = 1;
+    scene.lights = vec![pelage::scene::Light::Directional(
+        pelage::scene::DirectionalLight::default(),
+    )];
+    scene
+}
+
+/// The camera options the Bevy app renders with.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct View {
+    /// 4x MSAA instead of none.
+    pub msaa: bool,
+    /// An HDR main target (Bevy then tone maps it; pelage's own frame does not).
+    pub hdr: bool,
+    /// Leave `PelagePlugin` out (the same app without fur: Bevy's own frame time).
+    pub without_plugin: bool,
+}
+
+/// A Bevy app, headless, that renders `scene()` into an image each `update`: returns
+/// the app and the image.
+pub fn app(view: View) -> Result<(App, Handle<Image>)> {
+    let scene = scene();
+    let mut app = App::new();
+    app.add_plugins(
+        DefaultPlugins
+            .set(WindowPlugin {
+                primary_window: None,
+                exit_condition: ExitCondition::DontExit,
+                ..default()
+            })
+            .set(RenderPlugin {
+                // Every pipeline ready on the first frame (Bevy's blit too).
+                synchronous_pipeline_compilation: true,
+                ..default()
+            })
+            // The frame is rendered inside `update`, so it can be read right after.
+            .disable::<PipelinedRenderingPlugin>(),
+    )
+    .insert_resource(TimeUpdateStrategy::ManualDuration(FRAME_STEP));
+    if !view.without_plugin {
+        app.add_plugins(PelagePlugin);
+    }
+    let bg = scene.shade.background;
+    app.insert_resource(ClearColor(Color::linear_rgb(bg.x, bg.y, bg.z)));
+
+    let world = app.world_mut();
+    let mut target = Image::new_target_texture(WIDTH, HEIGHT, TextureFormat::Rgba8UnormSrgb, None);
+    // Read back by the test and the example.
+    target.texture_descriptor.usage |= TextureUsages::COPY_SRC;
+    let image = world.resource_mut::<Assets<Image>>().add(target);
+    let mesh = world
+        .resource_mut::<Assets<Mesh>>()
+        .add(bevy_pelage::bevy_mesh(&scene.mesh));
+
+    // pelage's camera, as a Bevy camera: the same eye, target, vertical field of view
+    // and near plane (Bevy's projection is reverse-Z with an infinite far plane).
+    let c = &scene.camera;
+    let v3 = |v: glam::Vec3| Vec3::from_array(v.to_array());
+    let mut camera = world.spawn((
+        Camera3d::default(),
+        RenderTarget::Image(image.clone().into()),
+        Transform::from_translation(v3(c.eye)).looking_at(v3(c.target), Vec3::Y),
+        Projection::Perspective(PerspectiveProjection {
+            fov: c.fov_y,
+            near: c.near,
+            ..default()
+        }),
+        if view.msaa { Msaa::Sample4 } else { Msaa::Off },
+        Tonemapping::None,
+        DebandDither::Disabled,
+    ));
+    if view.hdr {
+        camera.insert((Hdr, Tonemapping::Reinhard));
+    }
+
+    // pelage's key light as a Bevy directional light: its direction, colour, and an
+    // illuminance that the camera's exposure brings to pelage's intensity.
+    let pelage::scene::Light::Directional(key) = &scene.lights[0] else {
+        return Err("the scene's key light is not directional".into());
+    };
+    world.spawn((
+        DirectionalLight {
+            color: Color::linear_rgb(key.color.x, key.color.y, key.color.z),
+            illuminance: key.intensity / Exposure::default().exposure(),
+            ..default()
+        },
+        Transform::default().looking_to(v3(key.direction), Vec3::Y),
+    ));
+
+    world.spawn((
+        Mesh3d(mesh),
+        Fur {
+            hair: scene.hair.clone(),
+            shade: scene.shade.clone(),
+            voxel: match &scene.shadow {
+                pelage::scene::ShadowParams::Voxel(voxel) => voxel.clone(),
+                _ => Default::default(),
+            },
+            draw_mesh: true,
+        },
+        Transform::default(),
+    ));
+
+    while app.plugins_state() == PluginsState::Adding {
+        bevy::tasks::tick_global_task_pools_on_main_thread();
+    }
+    app.finish();
+    app.cleanup();
+    Ok((app, image))
+}
+
+/// The image the camera renders into, read back (blocking: test and example code, not
+/// the plugin's frame).
+pub fn read(app: &mut App, image: &Handle<Image>) -> Result<image::RgbaImage> {
+    let render = app.sub_app(bevy::render::RenderApp).world();
+    let gpu = pelage::gpu::Gpu::from_device(
+        render.resource::<RenderDevice>().wgpu_device().clone(),
+        (**render.resource::<RenderQueue>()).clone(),
+        None,
+    );
+    let texture = &render
+        .resource::<RenderAssets<GpuImage>>()
+        .get(image.id())
+        .ok_or("the target image is not on the GPU")?
+        .texture;
+    let data = pelage::gpu::read_texture(&gpu, texture)?;
+    Ok(image::RgbaImage::from_raw(WIDTH, HEIGHT, data.data)
+        .ok_or("the frame has the wrong size")?)
+}
+
+/// Bevy's clock after the last `update`: the time the fur was grown for.
+pub fn time(app: &App) -> f32 {
+    app.world().resource::<Time>().elapsed_secs()
+}
+
+fn main() {
+    if let Err(e) = run() {
+        eprintln!("fur: {e}");
+        std::process::exit(1);
+    }
+}
+
+fn run() -> Result<()> {
+    let mut frames = 8u32;
+    let mut out = PathBuf::from("out/bevy");
+    let mut view = View::default();
+    let mut args = std::env::args().skip(1);
+    while let Some(flag) = args.next() {
+        match flag.as_str() {
+            "--msaa" => view.msaa = true,
+            "--hdr" => view.hdr = true,
+            "--without-plugin" => view.without_plugin = true,
+            "--frames" => frames = args.next().ok_or("--frames needs a value")?.parse()?,
+            "--out" => out = PathBuf::from(args.next().ok_or("--out needs a value")?),
+            other => {
+                return Err(format!(
+                    "unknown argument {other} (--frames, --out, --msaa, --hdr, --without-plugin)"
+                )
+                .into());
+            }
+        }
+    }
+    let (mut app, image) = app(view)?;
+    std::fs::create_dir_all(&out)?;
+    let mut update_ms = Vec::new();
+    let mut plugin_ms = Vec::new();
+    for frame in 0..frames {
+        let start = std::time::Instant::now();
+        app.update();
+        update_ms.push(start.elapsed().as_secs_f64() * 1e3);
+        let render = app.sub_app(bevy::render::RenderApp).world();
+        if let Some(cpu) = render.get_resource::<bevy_pelage::PelageCpuTime>() {
+            plugin_ms.push((cpu.prepare + cpu.record).as_secs_f64() * 1e3);
+        }
+        let picture = read(&mut app, &image)?;
+        let path = out.join(format!("fur_{frame:04}.png"));
+        picture.save(&path)?;
+        println!("t = {:.3} s: wrote {}", time(&app), path.display());
+    }
+    // Bevy's whole frame (`App::update`: main world, extraction, render schedule,
+    // submit), the first two frames (pipelines, pelage's set-up) left out.
+    let median = |mut ms: Vec<f64>| {
+        let mut steady = ms.split_off(ms.len().min(2));
+        steady.sort_by(f64::total_cmp);
+        steady.get(steady.len() / 2).copied()
+    };
+    let which = if view.without_plugin {
+        "without"
+    } else {
+        "with"
+    };
+    if let Some(update) = median(update_ms) {
+        println!("App::update: median {update:.2} ms ({which} the plugin)");
+    }
+    // The plugin's own systems (PelageCpuTime: preparing and recording).
+    if let Some(plugin) = median(plugin_ms) {
+        println!("the plugin's systems: median {plugin:.3} ms of CPU per frame");
+    }
+    Ok(())
+}

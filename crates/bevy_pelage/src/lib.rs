@@ -1,0 +1,681 @@
+//! pelage's fur in Bevy: a [`Fur`] component on any entity with a [`Mesh3d`] grows
+//! strands from that mesh every frame (bent by pelage's wind at Bevy's [`Time`]),
+//! shadows them with pelage's voxel shadow in the direction of the scene's
+//! [`DirectionalLight`] and draws them in each 3D camera's render schedule
+//! ([`Core3d`], after Bevy's main transparent pass, before post-processing) into
+//! Bevy's own view targets: its main colour texture (HDR or not, multisampled as the
+//! camera's [`Msaa`] says) and its reverse-Z depth, with
+//! the camera's own view and projection.
+//!
+//! ```no_run
+//! use bevy::prelude::*;
+//! use bevy_pelage::{Fur, PelagePlugin};
+//!
+//! fn setup(mut commands: Commands, mut meshes: ResMut<Assets<Mesh>>) {
+//!     let body = meshes.add(Sphere::new(0.5).mesh().uv(48, 24));
+//!     commands.spawn((Mesh3d(body), Fur::default(), Transform::default()));
+//! }
+//! # App::new().add_plugins(PelagePlugin).add_systems(Startup, setup);
+//! ```
+//!
+//! What this first version does and does not do:
+//! - The mesh is read once from `Assets<Mesh>` (positions, normals, triangle-list
+//!   indices) and uploaded into pelage's own buffers; it is read again only when the
+//!   entity's [`Fur`] or [`Mesh3d`] changes, not when the asset is edited in place
+//!   (skinned or morphed meshes keep their first pose).
+//! - The entity's [`GlobalTransform`] is applied through the camera matrices: pelage
+//!   grows, winds and shadows in the mesh's own space and the view matrix carries the
+//!   model matrix, so [`HairParams::wind`] blows in mesh space and the light is turned
+//!   into mesh space each frame. A uniform scale is fine; non-uniform scale stretches
+//!   the strands with the mesh.
+//! - The first [`DirectionalLight`] found lights and shadows the fur: pelage's light
+//!   intensity is the light's illuminance times the camera's exposure (what Bevy's
+//!   PBR shaders do), its colour the light's colour in linear RGB. Without one the fur
+//!   gets only [`ShadeParams::ambient`].
+//! - With [`Fur::draw_mesh`] (the default) pelage draws the body itself, shaded as its
+//!   own renders shade it and shadowed by the fur; turn it off when the application
+//!   draws the mesh with a Bevy material.
+//! - Strands are grown and shadowed once per frame and drawn once per camera; pelage's
+//!   level of detail is not used (every strand is drawn).
+//! - Nothing waits for the GPU: every stage only writes uniforms in
+//!   [`RenderSystems::PrepareBindGroups`] and records into Bevy's command encoder.
+//!
+//! Errors (a mesh without normals, bad parameters, a transparency method that refuses
+//! the camera's targets) are logged once with Bevy's `error!` and the entity is
+//! skipped until its [`Fur`] or mesh changes; nothing panics.
+
+use std::collections::HashMap;
+use std::sync::Arc;
+
+use bevy::asset::AssetId;
+use bevy::camera::Camera3d;
+use bevy::core_pipeline::core_3d::main_transparent_pass_3d;
+use bevy::core_pipeline::schedule::{Core3d, Core3dSystems};
+use bevy::ecs::query::QueryItem;
+use bevy::light::DirectionalLight;
+use bevy::log::error;
+use bevy::mesh::{Indices, Mesh, Mesh3d, PrimitiveTopology, VertexAttributeValues};
+use bevy::prelude::*;
+use bevy::render::camera::ExtractedCamera;
+use bevy::render::render_resource::{LoadOp, StoreOp};
+use bevy::render::renderer::{
+    RenderAdapterInfo, RenderContext, RenderDevice, RenderQueue, ViewQuery,
+};
+use bevy::render::view::{ExtractedView, ViewDepthStencilTexture, ViewTarget};
+use bevy::render::{Extract, ExtractSchedule, Render, RenderApp, RenderSystems};
+
+use pelage::gpu::Gpu;
+use pelage::scene::{CameraMatrices, HairParams, Light, ShadeParams, VoxelParams};
+use pelage::shade::{HairInputs, HairPass, TargetFormat, TargetViews, Visibility};
+use pelage::shadow::{LightVisibility, ShadowMethod, VoxelShadow};
+use pelage::strands::{GrowStrands, MeshBuffers, StrandFrame, StrandStage};
+
+/// Why an entity's fur cannot be drawn.
+#[derive(Debug, thiserror::Error)]
+pub enum FurError {
+    /// The Bevy mesh cannot be read as a triangle list with positions and normals.
+    #[error("mesh: {0}")]
+    Mesh(String),
+    /// pelage refused the mesh, the parameters or the targets.
+    #[error(transparent)]
+    Pelage(#[from] pelage::Error),
+}
+
+impl FurError {
+    fn pelage(e: impl Into<pelage::Error>) -> Self {
+        Self::Pelage(e.into())
+    }
+}
+
+/// Fur on the [`Mesh3d`] of the same entity.
+#[derive(Component, Clone, Debug)]
+#[require(Transform)]
+pub struct Fur {
+    /// Roots, growth and wind (in the mesh's own space), as pelage takes them.
+    pub hair: HairParams,
+    /// Shading: the hair model, ambient term, mesh colour and transparency method.
+    /// `background` is unused (Bevy clears its targets); `sample_count` is taken from
+    /// the camera for opaque hair; the transparency methods need `Msaa::Off`.
+    pub shade: ShadeParams,
+    /// pelage's voxel shadow (the fur's own shadow from the directional light).
+    pub voxel: VoxelParams,
+    /// pelage draws the mesh too (in `shade.mesh_color`, shadowed by the fur); `false`
+    /// when the application draws the mesh itself.
+    pub draw_mesh: bool,
+}
+
+impl Default for Fur {
+    fn default() -> Self {
+        Self {
+            hair: HairParams::default(),
+            shade: ShadeParams::default(),
+            voxel: VoxelParams::default(),
+            draw_mesh: true,
+        }
+    }
+}
+
+/// Adds fur to every entity with [`Fur`] and [`Mesh3d`], drawn by every [`Camera3d`].
+pub struct PelagePlugin;
+
+impl Plugin for PelagePlugin {
+    fn build(&self, app: &mut App) {
+        app.add_systems(PostUpdate, read_fur_meshes);
+        let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
+            return;
+        };
+        render_app
+            .init_resource::<ExtractedFurs>()
+            .init_resource::<FurInstances>()
+            .init_resource::<PelageCpuTime>()
+            .add_systems(ExtractSchedule, extract_furs)
+            .add_systems(
+                Render,
+                prepare_furs.in_set(RenderSystems::PrepareBindGroups),
+            )
+            .add_systems(
+                Core3d,
+                draw_fur
+                    .after(main_transparent_pass_3d)
+                    .in_set(Core3dSystems::MainPass),
+            );
+    }
+}
+
+/// Reads a Bevy triangle-list mesh (positions, normals, indices) as pelage's mesh.
+pub fn pelage_mesh(mesh: &Mesh) -> Result<pelage::scene::Mesh, FurError> {
+    if mesh.primitive_topology() != PrimitiveTopology::TriangleList {
+        return Err(FurError::Mesh(format!(
+            "fur grows on triangle lists, not {:?}",
+            mesh.primitive_topology()
+        )));
+    }
+    let vectors = |id, name: &str| -> Result<Vec<::glam::Vec3>, FurError> {
+        match mesh.try_attribute(id) {
+            Ok(VertexAttributeValues::Float32x3(v)) => {
+                Ok(v.iter().map(|p| ::glam::Vec3::from_array(*p)).collect())
+            }
+            Ok(_) => Err(FurError::Mesh(format!("{name} are not Float32x3"))),
+            Err(e) => Err(FurError::Mesh(format!("no {name}: {e}"))),
+        }
+    };
+    let positions = vectors(Mesh::ATTRIBUTE_POSITION, "positions")?;
+    let normals = vectors(Mesh::ATTRIBUTE_NORMAL, "normals")?;
+    let indices = match mesh.try_indices() {
+        Ok(Indices::U16(i)) => i.iter().map(|&i| u32::from(i)).collect(),
+        Ok(Indices::U32(i)) => i.clone(),
+        Err(e) => return Err(FurError::Mesh(format!("no indices: {e}"))),
+    };
+    let mesh = pelage::scene::Mesh {
+        positions,
+        normals,
+        indices,
+    };
+    mesh.validate().map_err(|e| FurError::Mesh(e.to_string()))?;
+    Ok(mesh)
+}
+
+/// pelage's mesh as a Bevy mesh (triangle list, positions, normals, `u32` indices):
+/// pelage's built-in creature as a Bevy asset, say.
+pub fn bevy_mesh(mesh: &pelage::scene::Mesh) -> Mesh {
+    let vectors = |v: &[::glam::Vec3]| v.iter().map(|p| p.to_array()).collect::<Vec<_>>();
+    Mesh::new(
+        PrimitiveTopology::TriangleList,
+        bevy::asset::RenderAssetUsages::default(),
+    )
+    .with_inserted_attribute(Mesh::ATTRIBUTE_POSITION, vectors(&mesh.positions))
+    .with_inserted_attribute(Mesh::ATTRIBUTE_NORMAL, vectors(&mesh.normals))
+    .with_inserted_indices(Indices::U32(mesh.indices.clone()))
+}
+
+/// What the render world builds an entity's fur from, made when [`Fur`] or the mesh
+/// changes: the parameters and pelage's copy of the mesh, with a number that changes
+/// with them.
+#[derive(Component, Clone, Debug)]
+pub struct FurSource {
+    setup: Arc<(Fur, pelage::scene::Mesh)>,
+    generation: u64,
+}
+
+/// The mesh asset a [`FurSource`] (or its error) was made from.
+#[derive(Component)]
+struct FurSourceOf(AssetId<Mesh>);
+
+/// Reads the mesh of every entity whose [`Fur`] or [`Mesh3d`] is new or changed (or
+/// whose mesh had not loaded yet) into a [`FurSource`]; logs a mesh that cannot carry
+/// fur once.
+#[allow(clippy::type_complexity)]
+fn read_fur_meshes(
+    mut commands: Commands,
+    meshes: Res<Assets<Mesh>>,
+    furs: Query<
+        (Entity, Ref<Fur>, Ref<Mesh3d>, Option<&FurSourceOf>),
+        Or<(Changed<Fur>, Changed<Mesh3d>, Without<FurSourceOf>)>,
+    >,
+    mut generation: Local<u64>,
+) {
+    for (entity, fur, mesh3d, done) in &furs {
+        let id = mesh3d.id();
+        let changed = fur.is_changed() || mesh3d.is_changed();
+        if done.is_some_and(|d| d.0 == id) && !changed {
+            continue;
+        }
+        let Some(mesh) = meshes.get(id) else {
+            continue; // not loaded yet: tried again next frame
+        };
+        *generation += 1;
+        match pelage_mesh(mesh) {
+            Ok(pelage_mesh) => {
+                commands.entity(entity).insert((
+                    FurSource {
+                        setup: Arc::new(((*fur).clone(), pelage_mesh)),
+                        generation: *generation,
+                    },
+                    FurSourceOf(id),
+                ));
+            }
+            Err(e) => {
+                error!("pelage: no fur on {entity}: {e}");
+                commands
+                    .entity(entity)
+                    .insert(FurSourceOf(id))
+                    .remove::<FurSource>();
+            }
+        }
+    }
+}
+
+/// One furred entity as the render world sees it this frame.
+struct ExtractedFur {
+    entity: Entity,
+    source: FurSource,
+    world_from_model: Mat4,
+}
+
+/// This frame's furred entities, time and key light.
+#[derive(Resource, Default)]
+struct ExtractedFurs {
+    furs: Vec<ExtractedFur>,
+    time: f32,
+    /// Direction the light travels in (world space), linear colour, illuminance (lux).
+    light: Option<(Vec3, Vec3, f32)>,
+}
+
+fn extract_furs(
+    mut extracted: ResMut<ExtractedFurs>,
+    time: Extract<Res<Time>>,
+    furs: Extract<Query<(Entity, &FurSource, &GlobalTransform)>>,
+    lights: Extract<Query<(&DirectionalLight, &GlobalTransform)>>,
+) {
+    extracted.time = time.elapsed_secs();
+    extracted.furs.clear();
+    for (entity, source, transform) in &furs {
+        extracted.furs.push(ExtractedFur {
+            entity,
+            source: source.clone(),
+            world_from_model: transform.to_matrix(),
+        });
+    }
+    extracted.light = lights.iter().next().map(|(light, transform)| {
+        let color = light.color.to_linear();
+        (
+            transform.forward().as_vec3(),
+            Vec3::new(color.red, color.green, color.blue),
+            light.illuminance,
+        )
+    });
+}
+
+/// The CPU time the plugin spent in Bevy's last frame (a render-world resource):
+/// preparing (uniform writes, and building stages when a fur or camera is new) and
+/// recording into Bevy's encoder, summed over cameras. Neither includes a wait for the
+/// GPU: the plugin never waits.
+#[derive(Resource, Clone, Copy, Debug, Default)]
+pub struct PelageCpuTime {
+    /// `RenderSystems::PrepareBindGroups`: stages built or prepared.
+    pub prepare: std::time::Duration,
+    /// The `Core3d` schedules: passes recorded.
+    pub record: std::time::Duration,
+}
+
+/// pelage on Bevy's device.
+#[derive(Resource)]
+struct PelageGpu(Gpu);
+
+/// An entity's fur in the render world: pelage's stages, one hair pass per camera.
+struct FurInstance {
+    generation: u64,
+    setup: Arc<(Fur, pelage::scene::Mesh)>,
+    mesh: MeshBuffers,
+    strands: GrowStrands,
+    voxel: VoxelShadow,
+    hand_over: LightVisibility,
+    visibility: pelage::gpu::wgpu::Buffer,
+    stride: u32,
+    /// This frame's strands, and whether a camera has recorded them yet.
+    frame: Option<StrandFrame>,
+    recorded: bool,
+    /// Per view (render-world camera entity): its targets and pelage's hair pass.
+    views: HashMap<Entity, ViewHair>,
+}
+
+/// A camera's hair pass for one fur, with the targets it was built for.
+struct ViewHair {
+    format: TargetFormat,
+    size: (u32, u32),
+    hair: Box<dyn HairPass>,
+    /// Prepared for this frame.
+    ready: bool,
+}
+
+/// The 3D cameras of this frame, with their targets.
+type CameraViews<'w, 's> = Query<
+    'w,
+    's,
+    (
+        Entity,
+        &'static ExtractedView,
+        &'static ExtractedCamera,
+        &'static ViewTarget,
+        &'static ViewDepthStencilTexture,
+    ),
+    With<Camera3d>,
+>;
+
+/// (entity, camera) pairs whose hair pass failed, with the targets it failed for.
+type FailedViews = HashMap<(Entity, Entity), (TargetFormat, (u32, u32))>;
+
+/// Every furred entity's render-world state, and the errors already logged.
+#[derive(Resource, Default)]
+struct FurInstances {
+    instances: HashMap<Entity, FurInstance>,
+    /// Entities (and the generation) whose error was logged: skipped until they change.
+    failed: HashMap<Entity, u64>,
+    /// (entity, view) pairs whose hair pass failed for the given targets.
+    failed_views: FailedViews,
+}
+
+impl FurInstance {
+    fn new(gpu: &Gpu, source: &FurSource) -> Result<Self, FurError> {
+        let (fur, mesh) = &*source.setup;
+        let buffers = MeshBuffers::upload(gpu, mesh).map_err(FurError::pelage)?;
+        let strands = GrowStrands::new(gpu, mesh, &buffers, &fur.hair).map_err(FurError::pelage)?;
+        let b = strands.buffers();
+        let reach = pelage::shadow::reach(b, &buffers);
+        let voxel =
+            VoxelShadow::new(gpu, &fur.voxel, b, &buffers, reach).map_err(FurError::pelage)?;
+        let stride =
+            LightVisibility::stride_for(u64::from(b.strand_count) * u64::from(b.segments + 1))
+                .map_err(FurError::pelage)?;
+        let visibility = LightVisibility::buffer(gpu, 1, stride).map_err(FurError::pelage)?;
+        let hand_over = LightVisibility::new(gpu, &voxel.binding(), b, &visibility, 0, stride)
+            .map_err(FurError::pelage)?;
+        Ok(Self {
+            generation: source.generation,
+            setup: source.setup.clone(),
+            mesh: buffers,
+            strands,
+            voxel,
+            hand_over,
+            visibility,
+            stride,
+            frame: None,
+            recorded: false,
+            views: HashMap::new(),
+        })
+    }
+
+    /// The hair pass for a camera's targets.
+    fn hair_pass(
+        &self,
+        gpu: &Gpu,
+        format: TargetFormat,
+        size: (u32, u32),
+    ) -> Result<ViewHair, FurError> {
+        let fur = &self.setup.0;
+        let mut shade = fur.shade.clone();
+        if shade.transparency == pelage::scene::Transparency::Opaque {
+            shade.sample_count = format.samples;
+        }
+        let binding = self.voxel.binding();
+        let hair = pelage::shade::build(
+            gpu,
+            &HairInputs {
+                params: &shade,
+                mesh: &self.mesh,
+                strands: self.strands.buffers(),
+                shadow: Some(&binding),
+                visibility: Some(Visibility {
+                    buffer: &self.visibility,
+                    stride: self.stride,
+                }),
+                target: format,
+                draw_mesh: fur.draw_mesh,
+            },
+            size.0,
+            size.1,
+        )
+        .map_err(FurError::pelage)?;
+        Ok(ViewHair {
+            format,
+            size,
+            hair,
+            ready: false,
+        })
+    }
+}
+
+/// The targets of a camera as pelage is told about them.
+fn target_format(target: &ViewTarget, depth: &ViewDepthStencilTexture) -> TargetFormat {
+    TargetFormat {
+        color: target.main_texture_format(),
+        depth: depth.texture().format(),
+        samples: depth.texture().sample_count(),
+        // Bevy's perspective and orthographic projections are both reverse-Z.
+        reverse_z: true,
+    }
+}
+
+/// A camera's view of one fur: Bevy's view matrix times the entity's model matrix
+/// (pelage works in the mesh's space), Bevy's projection.
+fn camera_matrices(view: &ExtractedView, world_from_model: Mat4) -> CameraMatrices {
+    let glam = |m: Mat4| ::glam::Mat4::from_cols_array(&m.to_cols_array());
+    let view_from_world = view.world_from_view.to_matrix().inverse();
+    CameraMatrices {
+        view: glam(view_from_world * world_from_model),
+        projection: glam(view.clip_from_view),
+    }
+}
+
+/// Builds or rebuilds each entity's pelage stages and each camera's hair pass, and
+/// writes this frame's uniforms (strand time, light, camera). Only queue writes.
+#[allow(clippy::too_many_arguments)]
+fn prepare_furs(
+    mut commands: Commands,
+    gpu: Option<Res<PelageGpu>>,
+    device: Res<RenderDevice>,
+    queue: Res<RenderQueue>,
+    adapter: Res<RenderAdapterInfo>,
+    extracted: Res<ExtractedFurs>,
+    mut state: ResMut<FurInstances>,
+    views: CameraViews,
+    mut cpu: ResMut<PelageCpuTime>,
+) {
+    let start = std::time::Instant::now();
+    cpu.record = std::time::Duration::ZERO;
+    let Some(gpu) = gpu else {
+        let gpu = Gpu::from_device(
+            device.wgpu_device().clone(),
+            (**queue).clone(),
+            Some((**adapter).clone()),
+        );
+        commands.insert_resource(PelageGpu(gpu));
+        return; // the resource is there from the next frame on
+    };
+    let gpu = &gpu.0;
+    let FurInstances {
+        instances,
+        failed,
+        failed_views,
+    } = &mut *state;
+    instances.retain(|e, _| extracted.furs.iter().any(|f| f.entity == *e));
+    failed.retain(|e, _| extracted.furs.iter().any(|f| f.entity == *e));
+    failed_views
+        .retain(|(e, v), _| extracted.furs.iter().any(|f| f.entity == *e) && views.contains(*v));
+
+    for fur in &extracted.furs {
+        let entity = fur.entity;
+        let generation = fur.source.generation;
+        if failed.get(&entity) == Some(&generation) {
+            continue;
+        }
+        if instances
+            .get(&entity)
+            .is_none_or(|i| i.generation != generation)
+        {
+            instances.remove(&entity);
+            match FurInstance::new(gpu, &fur.source) {
+                Ok(instance) => {
+                    instances.insert(entity, instance);
+                }
+                Err(e) => {
+                    error!("pelage: no fur on {entity}: {e}");
+                    failed.insert(entity, generation);
+                    continue;
+                }
+            }
+        }
+        let Some(instance) = instances.get_mut(&entity) else {
+            continue;
+        };
+        if let Err(e) = prepare_instance(gpu, instance, fur, &extracted, &views, failed_views) {
+            error!("pelage: no fur on {entity}: {e}");
+            failed.insert(entity, generation);
+            instances.remove(&entity);
+        }
+    }
+    cpu.prepare = start.elapsed();
+}
+
+/// One fur's frame: stage 1 and the shadow once, then each camera's hair pass.
+fn prepare_instance(
+    gpu: &Gpu,
+    instance: &mut FurInstance,
+    fur: &ExtractedFur,
+    extracted: &ExtractedFurs,
+    views: &CameraViews,
+    failed_views: &mut FailedViews,
+) -> Result<(), FurError> {
+    let queue = &gpu.queue;
+    let frame = instance
+        .strands
+        .prepare(queue, extracted.time)
+        .map_err(FurError::pelage)?;
+    instance.frame = Some(frame);
+    instance.recorded = false;
+    // The light in the mesh's space (pelage works there).
+    let model_from_world = fur.world_from_model.inverse();
+    let (direction, color, illuminance) =
+        extracted
+            .light
+            .unwrap_or((Vec3::new(-0.85, -0.6, 0.1), Vec3::ONE, 0.0));
+    let direction = model_from_world
+        .transform_vector3(direction)
+        .normalize_or(Vec3::NEG_Y);
+    let v3 = |v: Vec3| ::glam::Vec3::from_array(v.to_array());
+    let shadow_light = pelage::scene::DirectionalLight {
+        direction: v3(direction),
+        color: v3(color),
+        intensity: 1.0,
+    };
+    instance
+        .voxel
+        .prepare(queue, &frame, &shadow_light)
+        .map_err(FurError::pelage)?;
+    instance.hand_over.prepare(&frame);
+
+    for hair in instance.views.values_mut() {
+        hair.ready = false;
+    }
+    for (view_entity, view, camera, target, depth) in views {
+        let format = target_format(target, depth);
+        let size = (view.viewport.z, view.viewport.w);
+        if size.0 == 0 || size.1 == 0 {
+            continue;
+        }
+        let key = (fur.entity, view_entity);
+        if failed_views.get(&key) == Some(&(format, size)) {
+            continue;
+        }
+        let fresh = instance
+            .views
+            .get(&view_entity)
+            .is_some_and(|h| h.format == format && h.size == size);
+        if !fresh {
+            instance.views.remove(&view_entity);
+            match instance.hair_pass(gpu, format, size) {
+                Ok(hair) => {
+                    instance.views.insert(view_entity, hair);
+                }
+                Err(e) => {
+                    error!(
+                        "pelage: the fur on {} cannot draw into camera {view_entity}'s targets: {e}",
+                        fur.entity
+                    );
+                    failed_views.insert(key, (format, size));
+                    continue;
+                }
+            }
+        }
+        let Some(hair) = instance.views.get_mut(&view_entity) else {
+            continue;
+        };
+        let light = Light::Directional(pelage::scene::DirectionalLight {
+            intensity: illuminance * camera.exposure,
+            ..shadow_light.clone()
+        });
+        hair.hair
+            .prepare(
+                queue,
+                &frame,
+                &camera_matrices(view, fur.world_from_model),
+                &[light],
+                size.0,
+                size.1,
+            )
+            .map_err(FurError::pelage)?;
+        hair.ready = true;
+    }
+    instance.views.retain(|v, _| views.contains(*v));
+    Ok(())
+}
+
+/// Records the fur into the current camera's targets: each fur's strands and shadow
+/// the first time a camera draws it this frame, then its hair pass.
+fn draw_fur(
+    view: ViewQuery<(&ViewTarget, &ViewDepthStencilTexture)>,
+    gpu: Option<Res<PelageGpu>>,
+    mut state: ResMut<FurInstances>,
+    mut cpu: ResMut<PelageCpuTime>,
+    mut ctx: RenderContext,
+) {
+    let start = std::time::Instant::now();
+    let Some(gpu) = gpu else {
+        return;
+    };
+    let gpu = &gpu.0;
+    let view_entity = view.entity();
+    let (target, depth): QueryItem<(&ViewTarget, &ViewDepthStencilTexture)> = view.into_inner();
+    let color = target.get_color_attachment();
+    let depth_attachment = depth.get_attachment(StoreOp::Store);
+    let size = depth.texture().size();
+    let views = TargetViews {
+        color: color.view,
+        resolve: color.resolve_target,
+        depth: depth_attachment.view,
+        depth_sampled: None,
+        width: size.width,
+        height: size.height,
+        // Bevy's main passes have drawn (and cleared) the target already.
+        load: matches!(color.ops.load, LoadOp::Load),
+    };
+    let mut failed = Vec::new();
+    for (entity, instance) in &mut state.instances {
+        let (Some(frame), Some(hair)) = (instance.frame, instance.views.get(&view_entity)) else {
+            continue;
+        };
+        if !hair.ready {
+            continue;
+        }
+        let encoder = ctx.command_encoder();
+        let result = (|| -> Result<(), FurError> {
+            if !instance.recorded {
+                instance
+                    .strands
+                    .encode(encoder, &frame, None)
+                    .map_err(FurError::pelage)?;
+                instance
+                    .voxel
+                    .encode(encoder, &frame, None)
+                    .map_err(FurError::pelage)?;
+                instance
+                    .hand_over
+                    .encode(encoder, &frame, None)
+                    .map_err(FurError::pelage)?;
+                instance.recorded = true;
+            }
+            hair.hair
+                .encode(gpu, encoder, &frame, &views, None)
+                .map_err(FurError::pelage)
+        })();
+        if let Err(e) = result {
+            error!("pelage: the fur on {entity} was not drawn: {e}");
+            failed.push((*entity, instance.generation));
+        }
+    }
+    for (entity, generation) in failed {
+        state.instances.remove(&entity);
+        state.failed.insert(entity, generation);
+    }
+    cpu.record += start.elapsed();
+}
