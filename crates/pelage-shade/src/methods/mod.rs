@@ -55,9 +55,11 @@ pub struct OitStats {
 
 /// One stage 3 method: draws the mesh and the hair into the caller's targets. Each
 /// frame: [`HairPass::prepare`] with stage 1's [`StrandFrame`], then
-/// [`HairPass::encode`] with the same frame. `Send + Sync`, so that an engine keeps a
-/// boxed method in shared state (a Bevy resource, say) and records it from any thread.
-pub trait HairPass: std::fmt::Debug + Send + Sync {
+/// [`HairPass::encode`] with the same frame. `Send + Sync` on native targets
+/// ([`wgpu::WasmNotSendSync`]), so that an engine keeps a boxed method in shared state
+/// (a Bevy resource, say) and records it from any thread; on the web wgpu's own types
+/// are neither, and neither is a method.
+pub trait HairPass: std::fmt::Debug + wgpu::WasmNotSendSync {
     /// Short name (`opaque`, `wboit`, `k_buffer`, `a_buffer`, `dbk`, `random_subsets`,
     /// `strand_raster`).
     fn name(&self) -> &'static str;
