@@ -968,27 +968,12 @@ fn shadow_ui(ui: &mut egui::Ui, c: &mut Controls) {
 }
 
 fn transparency_ui(ui: &mut egui::Ui, c: &mut Controls) {
-    let names = [
-        "opaque",
-        "wboit",
-        "k_buffer",
-        "a_buffer",
-        "dbk",
-        "random_subsets",
-        "strand_raster",
-    ];
+    let methods = Transparency::defaults();
+    let names = methods.each_ref().map(Transparency::name);
     let t = &mut c.shade.transparency;
     let current = names.iter().position(|n| *n == t.name()).unwrap_or(0);
-    if let Some(i) = pick(ui, "method", &names, current) {
-        *t = match i {
-            1 => Transparency::wboit(),
-            2 => Transparency::k_buffer(8),
-            3 => Transparency::a_buffer(),
-            4 => Transparency::dbk(0.05),
-            5 => Transparency::random_subsets(8),
-            6 => Transparency::strand_raster(),
-            _ => Transparency::Opaque,
-        };
+    if let Some(method) = pick(ui, "method", &names, current).and_then(|i| methods.get(i)) {
+        *t = method.clone();
     }
     let max_k = pelage::scene::MAX_OIT_K;
     match t {

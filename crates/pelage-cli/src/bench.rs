@@ -246,14 +246,11 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
     let (width, height) = if opts.quick { (160, 120) } else { (480, 360) };
     let mut rows: Vec<Row> = Vec::new();
     let light = DirectionalLight::default();
-    let methods = [
-        Transparency::Opaque,
-        Transparency::wboit(),
-        Transparency::k_buffer(8),
-        Transparency::a_buffer(),
-        Transparency::dbk(0.05),
-        Transparency::random_subsets(8),
-    ];
+    // Every hardware-rasterized method (the strand rasterizer has its own section).
+    let methods: Vec<Transparency> = Transparency::defaults()
+        .into_iter()
+        .filter(|t| !matches!(t, Transparency::StrandRaster { .. }))
+        .collect();
     // Steps: each strand count's compute stages and each of its transparency methods,
     // then the bare lit pass and the three combinations of section 4.
     let bar = progress::bar((counts.len() * (1 + methods.len()) + 7) as u64, "steps")?;

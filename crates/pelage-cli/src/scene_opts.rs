@@ -98,16 +98,12 @@ pub enum OitArg {
 }
 
 impl OitArg {
+    /// The method at its defaults ([`Transparency::by_name`]: clap's value names are
+    /// the methods' names, which `every_oit_arg_names_a_method` checks).
     fn params(self) -> Transparency {
-        match self {
-            Self::Opaque => Transparency::Opaque,
-            Self::Wboit => Transparency::wboit(),
-            Self::KBuffer => Transparency::k_buffer(8),
-            Self::ABuffer => Transparency::a_buffer(),
-            Self::Dbk => Transparency::dbk(0.05),
-            Self::RandomSubsets => Transparency::random_subsets(8),
-            Self::StrandRaster => Transparency::strand_raster(),
-        }
+        self.to_possible_value()
+            .and_then(|value| Transparency::by_name(value.get_name()))
+            .unwrap_or(Transparency::Opaque)
     }
 }
 
@@ -626,6 +622,21 @@ mod tests {
                 "{value}: {m}"
             );
             assert_eq!(e.exit_code(), 2, "{value}");
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_oit_arg_names_a_method() {
+        let args = OitArg::value_variants();
+        assert_eq!(args.len(), Transparency::defaults().len());
+        for arg in args {
+            let name = arg.to_possible_value().map(|v| v.get_name().to_owned());
+            assert_eq!(name.as_deref(), Some(arg.params().name()), "{arg:?}");
         }
     }
 }

@@ -164,6 +164,29 @@ impl Transparency {
         }
     }
 
+    /// Every method at the defaults the command line, the viewer, the browser demo and
+    /// the bench use (the k-buffer and random subsets with 8, the DBK-buffer with a depth
+    /// shift of 0.05, the others at their constructors' defaults), in the enum's order.
+    /// [`Transparency::by_name`] looks them up by name.
+    pub fn defaults() -> [Self; 7] {
+        [
+            Self::Opaque,
+            Self::wboit(),
+            Self::k_buffer(8),
+            Self::a_buffer(),
+            Self::dbk(0.05),
+            Self::random_subsets(8),
+            Self::strand_raster(),
+        ]
+    }
+
+    /// The method called `name` ([`Transparency::name`]: `opaque`, `wboit`, `k_buffer`,
+    /// `a_buffer`, `dbk`, `random_subsets`, `strand_raster`) at its defaults
+    /// ([`Transparency::defaults`]); `None` for any other name.
+    pub fn by_name(name: &str) -> Option<Self> {
+        Self::defaults().into_iter().find(|t| t.name() == name)
+    }
+
     /// Weighted blended OIT with the paper's eq. 7.
     pub fn wboit() -> Self {
         Self::Wboit {
@@ -314,5 +337,27 @@ impl Transparency {
                 k_range("transparency.resolve_k", resolve_k)
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_method_is_found_by_its_name_once_and_validates() {
+        let defaults = Transparency::defaults();
+        for method in &defaults {
+            assert_eq!(Transparency::by_name(method.name()).as_ref(), Some(method));
+            assert_eq!(
+                defaults.iter().filter(|m| m.name() == method.name()).count(),
+                1,
+                "{} listed twice",
+                method.name()
+            );
+            method.validate().unwrap();
+        }
+        assert_eq!(Transparency::by_name("k-buffer"), None);
+        assert_eq!(Transparency::by_name(""), None);
     }
 }

@@ -92,16 +92,7 @@ pub enum DemoError {
 /// The transparency method `name` ([`Transparency::name`]) with the defaults the
 /// command line uses.
 pub fn transparency(name: &str) -> Result<Transparency, DemoError> {
-    Ok(match name {
-        "opaque" => Transparency::Opaque,
-        "wboit" => Transparency::wboit(),
-        "k_buffer" => Transparency::k_buffer(8),
-        "a_buffer" => Transparency::a_buffer(),
-        "dbk" => Transparency::dbk(0.05),
-        "random_subsets" => Transparency::random_subsets(8),
-        "strand_raster" => Transparency::strand_raster(),
-        other => return Err(DemoError::UnknownMethod(other.into())),
-    })
+    Transparency::by_name(name).ok_or_else(|| DemoError::UnknownMethod(name.into()))
 }
 
 /// The scene the page draws: [`Scene::default`] (the creature, its fur, one light,
