@@ -624,11 +624,6 @@ mod tests {
             assert_eq!(e.exit_code(), 2, "{value}");
         }
     }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
 
     #[test]
     fn every_oit_arg_names_a_method() {

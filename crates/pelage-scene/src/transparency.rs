@@ -350,7 +350,10 @@ mod tests {
         for method in &defaults {
             assert_eq!(Transparency::by_name(method.name()).as_ref(), Some(method));
             assert_eq!(
-                defaults.iter().filter(|m| m.name() == method.name()).count(),
+                defaults
+                    .iter()
+                    .filter(|m| m.name() == method.name())
+                    .count(),
                 1,
                 "{} listed twice",
                 method.name()
