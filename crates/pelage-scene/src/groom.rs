@@ -80,10 +80,11 @@ pub enum GroomError {
     /// The `.tfx` file could not be read.
     #[error(transparent)]
     Tfx(#[from] TfxFileError),
-    /// The USD file could not be read (feature `usd`).
+    /// The USD file could not be read (feature `usd`; boxed: it names the file, prim
+    /// and attribute).
     #[cfg(feature = "usd")]
     #[error(transparent)]
-    Usd(#[from] crate::usd_file::UsdFileError),
+    Usd(Box<crate::usd_file::UsdFileError>),
     /// [`Groom::load`] does not know the file's extension.
     #[error(
         "cannot tell the hair format of {}: {}; the supported extensions are .hair (Cem Yuksel), .tfx (AMD TressFX 4){}",
@@ -196,6 +197,13 @@ pub enum GroomError {
         /// Whether it must be positive.
         positive: bool,
     },
+}
+
+#[cfg(feature = "usd")]
+impl From<crate::usd_file::UsdFileError> for GroomError {
+    fn from(e: crate::usd_file::UsdFileError) -> Self {
+        GroomError::Usd(Box::new(e))
+    }
 }
 
 impl Groom {

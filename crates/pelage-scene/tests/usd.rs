@@ -24,7 +24,7 @@ fn close(a: Vec3, b: Vec3) -> bool {
 
 fn usd_error(result: Result<Groom, GroomError>) -> UsdFileError {
     match result {
-        Err(GroomError::Usd(e)) => e,
+        Err(GroomError::Usd(e)) => *e,
         other => panic!("expected a USD error, got {other:?}"),
     }
 }

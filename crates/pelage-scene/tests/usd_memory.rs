@@ -2,7 +2,7 @@
 //! and reads 100 MB). Run it, with its report, by
 //!
 //! ```sh
-//! cargo test --release -p pelage-scene --features usd --test usd_memory -- --ignored --nocapture
+//! cargo test -p pelage-scene --features usd --test usd_memory -- --ignored --nocapture
 //! ```
 //!
 //! The heap is counted by a global allocator that forwards to the system's and keeps
