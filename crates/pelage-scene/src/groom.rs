@@ -1,6 +1,6 @@
 //! One groom type for every hair source: strands of any length from a Cem
 //! Yuksel `.hair` file ([`HairFile`]), an AMD TressFX `.tfx` file
-//! ([`TfxFile`]), a USD file's `BasisCurves` (feature `usd`, [`crate::usd_file`]) or
+//! ([`TfxFile`]), a USD file's `BasisCurves` (feature `usd`, `usd_file`) or
 //! plain point lists, with optional per-point widths and per-strand colours.
 //!
 //! A [`Groom`] stores its points flat, strand after strand, root first, with
@@ -25,7 +25,7 @@ use crate::params::MAX_SEGMENTS;
 use crate::tfx_file::{TfxFile, TfxFileError};
 
 /// File extensions [`Groom::load`] understands (lower case, without the dot); with the
-/// `usd` feature also [`crate::usd_file::USD_EXTENSIONS`].
+/// `usd` feature also `usd_file::USD_EXTENSIONS`.
 pub const SUPPORTED_EXTENSIONS: [&str; 2] = ["hair", "tfx"];
 
 /// Hair strands from any source, with optional per-point widths.
