@@ -4,7 +4,7 @@
 //!
 //! 1. [`strands`]: a compute pass grows strands from a mesh (PN triangles, hair
 //!    types, gravity and wind for a time `t`), or bends the strands of a groom file
-//!    (`.hair`, `.tfx`) by the wind;
+//!    (`.hair`, `.tfx`, USD) by the wind;
 //! 2. [`shadow`]: voxel shadows (density splatted into a light-space grid fitted
 //!    to the hair, summed along the light) and a shadow map for the mesh;
 //! 3. [`shade`]: strands drawn as camera-facing ribbons pulled from the strand
@@ -36,6 +36,9 @@
 //! - `png` (default): `Renderer::image` as an `image::RgbaImage` and `save_png`.
 //!   Without it the `image` crate is no dependency and [`Renderer::rgba8`] returns the
 //!   plain pixels.
+//! - `usd` (default): USD grooms (`BasisCurves` in `.usda`, `.usdc`, `.usd`, `.usdz`)
+//!   in `scene::Groom::load` and scene files, through the pure-Rust `openusd` crate,
+//!   which needs Rust 1.96 (without it pelage builds on 1.87).
 
 pub use pelage_gpu as gpu;
 pub use pelage_scene as scene;

@@ -17,7 +17,9 @@ use pelage_strands::{GroomStrands, GrowStrands, MeshBuffers, StrandFrame, Strand
 /// Everything a frame is made of.
 #[derive(Clone, Debug)]
 pub struct Scene {
-    /// The surface the hair grows from (drawn under a groom, as its head, say).
+    /// The surface the hair grows from (drawn under a groom, as its head, say). An empty
+    /// mesh (`Mesh::default()`, no triangles) with a groom is a groom-only scene: no mesh
+    /// is drawn or shadowed.
     pub mesh: Mesh,
     /// Roots, growth and wind.
     pub hair: HairParams,
@@ -88,8 +90,8 @@ impl Scene {
     }
 
     /// A world box holding the mesh and everything that can grow on it: the mesh's
-    /// bounds and [`GrowStrands::reach_of`]; with a groom, the mesh's bounds and the
-    /// groom's reach
+    /// bounds and [`GrowStrands::reach_of`]; with a groom, the mesh's bounds (none for
+    /// an empty mesh) and the groom's reach
     /// ([`GroomStrands::reach_of`]; the rest bounds alone when its parameters are bad,
     /// which the renderer then refuses).
     pub fn reach(&self) -> (glam::Vec3, glam::Vec3) {
@@ -97,6 +99,9 @@ impl Scene {
         if let Some(groom) = &self.groom {
             let (glo, ghi) =
                 GroomStrands::reach_of(groom, &self.hair).unwrap_or_else(|_| groom.bounds());
+            if self.mesh.indices.is_empty() {
+                return (glo, ghi);
+            }
             return (lo.min(glo), hi.max(ghi));
         }
         let (glo, ghi) = GrowStrands::reach_of(&self.mesh, &self.hair);
@@ -178,16 +183,26 @@ impl Renderer {
         height: u32,
         format: &TargetFormat,
     ) -> crate::Result<Self> {
-        let mesh_buffers = MeshBuffers::upload(gpu, &scene.mesh)?;
-        let strands: Box<dyn StrandStage> = match &scene.groom {
-            Some(groom) => Box::new(GroomStrands::new(gpu, groom, &scene.hair)?),
-            None => Box::new(GrowStrands::new(
-                gpu,
-                &scene.mesh,
-                &mesh_buffers,
-                &scene.hair,
-            )?),
-        };
+        // A groom with an empty mesh is a groom-only scene: nothing of the mesh is drawn
+        // or shadowed.
+        let draw_mesh = !(scene.groom.is_some() && scene.mesh.indices.is_empty());
+        let (mesh_buffers, strands): (MeshBuffers, Box<dyn StrandStage>) =
+            match (&scene.groom, draw_mesh) {
+                (Some(groom), false) => {
+                    let strands = GroomStrands::new(gpu, groom, &scene.hair)?;
+                    let mesh = no_mesh(gpu, strands.buffers().reach)?;
+                    (mesh, Box::new(strands))
+                }
+                (Some(groom), true) => (
+                    MeshBuffers::upload(gpu, &scene.mesh)?,
+                    Box::new(GroomStrands::new(gpu, groom, &scene.hair)?),
+                ),
+                (None, _) => {
+                    let mesh = MeshBuffers::upload(gpu, &scene.mesh)?;
+                    let strands = GrowStrands::new(gpu, &scene.mesh, &mesh, &scene.hair)?;
+                    (mesh, Box::new(strands))
+                }
+            };
         Light::validate_all(&scene.lights).map_err(pelage_shade::ShadeError::from)?;
         // Every later stage sizes itself from what stage 1 hands over: the strand
         // buffers carry their counts, widths and reach.
@@ -241,7 +256,7 @@ impl Renderer {
                     .as_ref()
                     .map(|buffer| Visibility { buffer, stride }),
                 target: targets.format,
-                draw_mesh: true,
+                draw_mesh,
             },
             width,
             height,
@@ -612,6 +627,33 @@ pub fn frame_plan(
     }
     plan.push(hair.passes(&key_lookup));
     plan
+}
+
+/// The mesh buffers of a groom-only scene: no triangles (so stage 2's mesh shadow map
+/// and stage 3's mesh draw draw nothing), one zero vertex so that every binding has a
+/// size, and the hair's reach as bounds (so that the shadow fits and
+/// [`pelage_shadow::reach`] are the hair's alone).
+fn no_mesh(gpu: &Gpu, reach: (glam::Vec3, glam::Vec3)) -> crate::Result<MeshBuffers> {
+    let usage =
+        wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC;
+    let make = |label: &str| {
+        pelage_gpu::create_buffer_init(
+            &gpu.device,
+            &wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents: &[0u8; 12],
+                usage,
+            },
+        )
+    };
+    Ok(MeshBuffers::from_buffers(
+        make("pelage no mesh: positions"),
+        make("pelage no mesh: normals"),
+        make("pelage no mesh: indices"),
+        1,
+        0,
+        reach,
+    )?)
 }
 
 /// Linear light in [0, 1] as an 8-bit sRGB value (the sRGB transfer function).

@@ -257,9 +257,37 @@ fn write_all(dir: &Path, seeds: impl IntoIterator<Item = (&'static str, Vec<u8>)
     }
 }
 
+/// USD grooms: pelage's own writers' text, crate and package, and hand-written text
+/// with every basis, wrap and interpolation, transforms and a few broken files.
+fn usd_seeds() -> Vec<(&'static str, Vec<u8>)> {
+    use pelage_scene::{Groom, usd_file};
+    let groom = Groom::from_strands(&[strand(Vec3::ZERO, 3), strand(Vec3::X, 2)]).unwrap();
+    let mut seeds = vec![
+        ("written-usda", usd_file::to_usda(&groom).unwrap().into_bytes()),
+        ("written-usdc", usd_file::to_usdc(&groom).unwrap()),
+        ("written-usdz", usd_file::to_usdz(&groom).unwrap()),
+    ];
+    let text = |body: &str| {
+        format!(
+            "#usda 1.0\ndef Xform \"World\"\n{{\n    double3 xformOp:translate = (1, 2, 3)\n    float xformOp:rotateY = 30\n    uniform token[] xformOpOrder = [\"xformOp:translate\", \"xformOp:rotateY\"]\n    def BasisCurves \"Hair\"\n    {{\n{body}\n    }}\n}}\n"
+        )
+        .into_bytes()
+    };
+    let points4 = "point3f[] points = [(0, 0, 0), (0, 1, 0), (1, 1, 0), (1, 0, 0)]";
+    seeds.push(("bezier", text(&format!("uniform token type = \"cubic\"\nuniform token basis = \"bezier\"\nint[] curveVertexCounts = [4]\n{points4}\nfloat[] widths = [0.1, 0.2] (interpolation = \"varying\")"))));
+    seeds.push(("bspline-pinned", text(&format!("uniform token type = \"cubic\"\nuniform token basis = \"bspline\"\nuniform token wrap = \"pinned\"\nint[] curveVertexCounts = [4]\n{points4}\ncolor3f[] primvars:displayColor = [(1, 0, 0)]"))));
+    seeds.push(("catmull-periodic", text(&format!("uniform token type = \"cubic\"\nuniform token basis = \"catmullRom\"\nuniform token wrap = \"periodic\"\nint[] curveVertexCounts = [4]\n{points4}\nfloat[] widths = [0.1, 0.2, 0.3, 0.4]\ncolor3f[] primvars:displayColor = [(1, 0, 0), (0, 1, 0), (0, 0, 1), (1, 1, 1)] (interpolation = \"vertex\")"))));
+    seeds.push(("linear-uniform", text("uniform token type = \"linear\"\nint[] curveVertexCounts = [2, 2]\npoint3f[] points = [(0, 0, 0), (0, 1, 0), (1, 0, 0), (1, 1, 0)]\nfloat[] widths = [0.1, 0.2] (interpolation = \"uniform\")\ncolor3f[] primvars:displayColor = [(1, 0, 0), (0, 1, 0)] (interpolation = \"uniform\")")));
+    seeds.push(("counts-mismatch", text(&format!("uniform token type = \"linear\"\nint[] curveVertexCounts = [3]\n{points4}"))));
+    seeds.push(("empty", Vec::new()));
+    seeds.push(("magic-only", b"PXR-USDC".to_vec()));
+    seeds
+}
+
 fn main() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("corpus");
     write_all(&root.join("hair_file"), hair_seeds());
+    write_all(&root.join("usd"), usd_seeds());
     write_all(
         &root.join("obj"),
         obj_seeds().into_iter().map(|(n, s)| (n, s.into_bytes())),

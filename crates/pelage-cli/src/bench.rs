@@ -162,6 +162,7 @@ fn grown_groom(gpu: &Gpu, grow: &mut GrowStrands) -> Result<Resampled, Error> {
         strands,
         skipped: 0,
         source_strands: (0..strands).collect(),
+        colors: None,
     })
 }
 

@@ -236,17 +236,25 @@ pub fn deform_groom_strand(rest: &[Vec3], root: &StrandRoot, u: &GrowUniforms) -
     let mut q = Vec4::new(0.0, 0.0, 0.0, 1.0);
     let mut p = rest_at(0);
     let mut d = Vec3::Y;
+    // No force has turned the strand yet: its vertices are the rest points.
+    let mut at_rest = true;
     let mut out = Vec::with_capacity((segments / step) as usize + 1);
     out.push(p.extend(0.0));
     for i in 0..segments {
         let offset = rest_at(i + 1) - rest_at(i);
         let conjugate = (-q.truncate()).extend(q.w);
         d = quat_rotate(q, safe_normalize(offset, quat_rotate(conjugate, d)));
-        p += d * offset.length();
+        if at_rest {
+            p = rest_at(i + 1);
+        } else {
+            p += d * offset.length();
+        }
         if (i + 1) % step == 0 {
             out.push(p.extend((i + 1) as f32 / segments as f32));
         }
-        let bent = safe_normalize(d + force(u, p, t) * u.force_weight, d);
+        let push = force(u, p, t) * u.force_weight;
+        at_rest = at_rest && push == Vec3::ZERO;
+        let bent = safe_normalize(d + push, d);
         q = quat_mul(quat_between(d, bent), q);
         q /= q.length();
         d = bent;

@@ -1,6 +1,7 @@
 //! One groom type for every hair source: strands of any length from a Cem
 //! Yuksel `.hair` file ([`HairFile`]), an AMD TressFX `.tfx` file
-//! ([`TfxFile`]) or plain point lists, with optional per-point widths.
+//! ([`TfxFile`]), a USD file's `BasisCurves` (feature `usd`, `usd_file`) or
+//! plain point lists, with optional per-point widths and per-strand colours.
 //!
 //! A [`Groom`] stores its points flat, strand after strand, root first, with
 //! an offsets array (`strand_count + 1` entries, strand `i` is
@@ -23,7 +24,8 @@ use crate::hair_file::{HairFile, HairFileError};
 use crate::params::MAX_SEGMENTS;
 use crate::tfx_file::{TfxFile, TfxFileError};
 
-/// File extensions [`Groom::load`] understands (lower case, without the dot).
+/// File extensions [`Groom::load`] understands (lower case, without the dot); with the
+/// `usd` feature also `usd_file::USD_EXTENSIONS`.
 pub const SUPPORTED_EXTENSIONS: [&str; 2] = ["hair", "tfx"];
 
 /// Hair strands from any source, with optional per-point widths.
@@ -35,6 +37,8 @@ pub struct Groom {
     offsets: Vec<u32>,
     /// One width per point, if the source had widths.
     widths: Option<Vec<f32>>,
+    /// One colour per strand (linear RGB), if the source had colours.
+    colors: Option<Vec<Vec3>>,
 }
 
 /// A groom resampled to the same number of segments per strand (see
@@ -53,6 +57,8 @@ pub struct Resampled {
     pub skipped: u32,
     /// Index in the groom of every kept strand, in order.
     pub source_strands: Vec<u32>,
+    /// One colour per kept strand (linear RGB), if the groom has colours.
+    pub colors: Option<Vec<Vec3>>,
 }
 
 impl Resampled {
@@ -74,11 +80,17 @@ pub enum GroomError {
     /// The `.tfx` file could not be read.
     #[error(transparent)]
     Tfx(#[from] TfxFileError),
+    /// The USD file could not be read (feature `usd`; boxed: it names the file, prim
+    /// and attribute).
+    #[cfg(feature = "usd")]
+    #[error(transparent)]
+    Usd(Box<crate::usd_file::UsdFileError>),
     /// [`Groom::load`] does not know the file's extension.
     #[error(
-        "cannot tell the hair format of {}: {}; the supported extensions are .hair (Cem Yuksel) and .tfx (AMD TressFX 4)",
+        "cannot tell the hair format of {}: {}; the supported extensions are .hair (Cem Yuksel), .tfx (AMD TressFX 4){}",
         path.display(),
-        match extension { Some(e) => format!("the extension .{e} is not supported"), None => "it has no extension".to_owned() }
+        match extension { Some(e) => format!("the extension .{e} is not supported"), None => "it has no extension".to_owned() },
+        if cfg!(feature = "usd") { " and .usda, .usdc, .usd, .usdz (USD BasisCurves)" } else { "; USD files need pelage-scene's feature usd" }
     )]
     UnknownExtension {
         /// The file.
@@ -89,6 +101,24 @@ pub enum GroomError {
     /// There are no strands.
     #[error("the groom has no strands; there is no hair to draw")]
     NoStrands,
+    /// The per-strand colours are not one per strand.
+    #[error("the groom has {len} colours for {strands} strands; give one colour per strand")]
+    BadColors {
+        /// The number of colours.
+        len: usize,
+        /// The number of strands.
+        strands: usize,
+    },
+    /// A strand's colour is NaN, infinite or negative.
+    #[error(
+        "the colour of strand {strand} is {value}; every component must be finite and not negative"
+    )]
+    BadColor {
+        /// Strand index.
+        strand: usize,
+        /// The value found.
+        value: Vec3,
+    },
     /// A strand has no points.
     #[error("strand {strand} has no points; every strand needs at least one")]
     EmptyStrand {
@@ -169,6 +199,13 @@ pub enum GroomError {
     },
 }
 
+#[cfg(feature = "usd")]
+impl From<crate::usd_file::UsdFileError> for GroomError {
+    fn from(e: crate::usd_file::UsdFileError) -> Self {
+        GroomError::Usd(Box::new(e))
+    }
+}
+
 impl Groom {
     /// A groom from strands given as point lists (root first), without widths.
     ///
@@ -183,7 +220,7 @@ impl Groom {
             offsets.push(u32::try_from(total).map_err(|_| too_many(total))?);
         }
         let points = strands.iter().flatten().copied().collect();
-        Groom::from_parts(points, offsets, None)
+        Groom::from_parts(points, offsets, None, None)
     }
 
     /// A groom from a `.hair` file: its strands as they are, and its
@@ -219,7 +256,7 @@ impl Groom {
             offsets.push(u32::try_from(total).map_err(|_| too_many(total))?);
         }
         let widths = hair.has_thickness.then(|| hair.thickness.clone());
-        Groom::from_parts(hair.points.clone(), offsets, widths)
+        Groom::from_parts(hair.points.clone(), offsets, widths, None)
     }
 
     /// A groom from a `.tfx` file: its strands' `xyz` (the inverse mass `w`
@@ -242,16 +279,37 @@ impl Groom {
                 .flat_map(|&w| std::iter::repeat_n(w, vps))
                 .collect()
         });
-        Groom::from_parts(points, offsets, widths)
+        Groom::from_parts(points, offsets, widths, None)
     }
 
-    /// Loads a `.hair` or `.tfx` file, chosen by the extension (in any
-    /// letter case).
+    /// A groom from its parts as the USD reader gathers them (one colour per strand).
+    #[cfg(feature = "usd")]
+    pub(crate) fn from_usd_parts(
+        points: Vec<Vec3>,
+        offsets: Vec<u32>,
+        widths: Option<Vec<f32>>,
+        colors: Option<Vec<Vec3>>,
+    ) -> Result<Groom, GroomError> {
+        Groom::from_parts(points, offsets, widths, colors)
+    }
+
+    /// This groom with one colour per strand (linear RGB), or none.
+    ///
+    /// Errors: a colour count other than the strand count
+    /// ([`GroomError::BadColors`]), a NaN, infinite or negative colour.
+    pub fn with_colors(mut self, colors: Option<Vec<Vec3>>) -> Result<Groom, GroomError> {
+        self.colors = colors;
+        self.check_colors()?;
+        Ok(self)
+    }
+
+    /// Loads a `.hair`, `.tfx` or (feature `usd`) `.usda`, `.usdc`, `.usd` or `.usdz`
+    /// file, chosen by the extension (in any letter case).
     ///
     /// Errors: an unknown or missing extension
     /// ([`GroomError::UnknownExtension`], naming the supported ones), and
     /// whatever reading the file or [`Groom::from_hair`] /
-    /// [`Groom::from_tfx`] report.
+    /// [`Groom::from_tfx`] / `usd_file::load` report.
     pub fn load(path: impl AsRef<Path>) -> Result<Groom, GroomError> {
         let path = path.as_ref();
         let extension = path
@@ -261,6 +319,8 @@ impl Groom {
         match extension.as_deref() {
             Some("hair") => Groom::from_hair(&HairFile::read_path(path)?),
             Some("tfx") => Groom::from_tfx(&TfxFile::load(path)?),
+            #[cfg(feature = "usd")]
+            Some("usda" | "usdc" | "usd" | "usdz") => crate::usd_file::load(path),
             _ => Err(GroomError::UnknownExtension {
                 path: path.to_path_buf(),
                 extension: path.extension().map(|e| e.to_string_lossy().into_owned()),
@@ -273,6 +333,7 @@ impl Groom {
         points: Vec<Vec3>,
         offsets: Vec<u32>,
         widths: Option<Vec<f32>>,
+        colors: Option<Vec<Vec3>>,
     ) -> Result<Groom, GroomError> {
         if offsets.len() < 2 {
             return Err(GroomError::NoStrands);
@@ -283,7 +344,9 @@ impl Groom {
             points,
             offsets,
             widths,
+            colors,
         };
+        groom.check_colors()?;
         for (strand, range) in groom.ranges().enumerate() {
             if range.is_empty() {
                 return Err(GroomError::EmptyStrand { strand });
@@ -312,6 +375,27 @@ impl Groom {
             }
         }
         Ok(groom)
+    }
+
+    /// Refuses colours that are not one finite colour per strand.
+    fn check_colors(&self) -> Result<(), GroomError> {
+        let Some(colors) = &self.colors else {
+            return Ok(());
+        };
+        if colors.len() != self.strand_count() {
+            return Err(GroomError::BadColors {
+                len: colors.len(),
+                strands: self.strand_count(),
+            });
+        }
+        if let Some((strand, &value)) = colors
+            .iter()
+            .enumerate()
+            .find(|(_, c)| !(c.is_finite() && c.min_element() >= 0.0))
+        {
+            return Err(GroomError::BadColor { strand, value });
+        }
+        Ok(())
     }
 
     /// Point index range of every strand.
@@ -345,6 +429,12 @@ impl Groom {
     /// One width per point, if the source had widths.
     pub fn widths(&self) -> Option<&[f32]> {
         self.widths.as_deref()
+    }
+
+    /// One colour per strand (linear RGB), if the source had colours (a USD file's
+    /// `primvars:displayColor`).
+    pub fn colors(&self) -> Option<&[Vec3]> {
+        self.colors.as_deref()
     }
 
     /// The points of strand `index`, root first (`None` past the last strand).
@@ -421,6 +511,12 @@ impl Groom {
             );
             source_strands.push(index as u32);
         }
+        let colors = self.colors.as_ref().map(|c| {
+            source_strands
+                .iter()
+                .map(|&s| c.get(s as usize).copied().unwrap_or(Vec3::ONE))
+                .collect()
+        });
         Ok(Resampled {
             points,
             widths,
@@ -428,6 +524,7 @@ impl Groom {
             strands: kept as u32,
             skipped: (self.strand_count() - kept) as u32,
             source_strands,
+            colors,
         })
     }
 
@@ -463,7 +560,7 @@ impl Groom {
             .widths
             .as_ref()
             .map(|w| w.iter().map(|&w| (f64::from(w) * s) as f32).collect());
-        Groom::from_parts(points, self.offsets.clone(), widths)
+        Groom::from_parts(points, self.offsets.clone(), widths, self.colors.clone())
     }
 
     /// The groom centred on the origin (the centre of its bounding box goes
@@ -498,7 +595,7 @@ impl Groom {
             .widths
             .as_ref()
             .map(|w| w.iter().map(|&w| (f64::from(w) * scale) as f32).collect());
-        Groom::from_parts(points, self.offsets.clone(), widths)
+        Groom::from_parts(points, self.offsets.clone(), widths, self.colors.clone())
     }
 }
 
@@ -584,7 +681,7 @@ impl GroomSource {
     }
 }
 
-fn too_many(count: u64) -> GroomError {
+pub(crate) fn too_many(count: u64) -> GroomError {
     GroomError::TooManyPoints {
         count,
         max: u64::from(u32::MAX),

@@ -1,5 +1,6 @@
-//! CPU scene data for pelage: meshes (procedural and OBJ), Cem Yuksel `.hair`
-//! and AMD TressFX `.tfx` files, camera, lights and the parameters of every stage.
+//! CPU scene data for pelage: meshes (procedural and OBJ), Cem Yuksel `.hair`,
+//! AMD TressFX `.tfx` and (feature `usd`) USD `BasisCurves` files, camera, lights and
+//! the parameters of every stage.
 //!
 //! Everything here is plain CPU data with serde support; nothing here knows
 //! about the GPU. The stage crates turn these types into GPU buffers.
@@ -19,6 +20,8 @@ mod scene_keys;
 pub mod shading;
 pub mod tfx_file;
 pub mod transparency;
+#[cfg(feature = "usd")]
+pub mod usd_file;
 
 pub use camera::{Camera, CameraMatrices};
 pub use groom::{Groom, GroomError, GroomSource, Resampled};
@@ -41,3 +44,5 @@ pub use shading::{
 };
 pub use tfx_file::{TfxFile, TfxFileError};
 pub use transparency::{MAX_OIT_K, Transparency, WboitWeight};
+#[cfg(feature = "usd")]
+pub use usd_file::UsdFileError;

@@ -9,7 +9,7 @@ use std::path::Path;
 pub const MAX_SCENE_FILE_BYTES: u64 = 16 << 20;
 /// OBJ meshes: 2 GiB.
 pub const MAX_OBJ_FILE_BYTES: u64 = 2 << 30;
-/// Groom files (`.hair`, `.tfx`): 2 GiB.
+/// Groom files (`.hair`, `.tfx`, USD): 2 GiB.
 pub const MAX_GROOM_FILE_BYTES: u64 = 2 << 30;
 
 /// The largest coordinate, length or width a scene may hold, in scene units. The

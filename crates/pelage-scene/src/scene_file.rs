@@ -19,7 +19,7 @@
 //!
 //! ```toml
 //! [mesh]
-//! kind = "obj"            # or "creature", "icosphere", "torus", "plane"
+//! kind = "obj"            # or "creature", "icosphere", "torus", "plane", "none"
 //! path = "head.obj"       # relative to the scene file
 //!
 //! [hair.roots]
@@ -34,8 +34,9 @@
 //! direction = [-0.85, -0.6, 0.1]
 //! ```
 //!
-//! A `[groom]` table draws the strands of a `.hair` or `.tfx` file instead of growing
-//! fur from the mesh (see [`GroomSource`]; the mesh is still drawn, as the head, say):
+//! A `[groom]` table draws the strands of a `.hair`, `.tfx` or (feature `usd`) USD file
+//! (`.usda`, `.usdc`, `.usd`, `.usdz`) instead of growing fur from the mesh (see
+//! [`GroomSource`]; the mesh is still drawn, as the head, say):
 //!
 //! ```toml
 //! [groom]
@@ -43,6 +44,12 @@
 //! segments = 16           # resampled by arc length
 //! fit = 1.8               # centred, longest side 1.8 units (leave out: the file's units)
 //! ```
+//!
+//! A groom keeps its file shape at t = 0 unless the scene asks for wind: in a scene
+//! with a `[groom]` and no `[hair.wind]` table the wind is [`WindParams::calm`] (without
+//! a groom the default breeze stays). A **groom-only scene** draws no mesh at all, and
+//! shadows none: `[mesh] kind = "none"` (which needs a `[groom]`; leaving `[mesh]` out
+//! still means the creature).
 
 use std::path::{Path, PathBuf};
 
@@ -50,7 +57,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::{
     Camera, GroomError, GroomSource, HairParams, Light, Mesh, MeshError, ObjError, Resampled,
-    ShadeParams, ShadowParams, scene_keys,
+    ShadeParams, ShadowParams, WindParams, scene_keys,
 };
 
 /// The surface the hair grows from.
@@ -94,6 +101,9 @@ pub enum MeshSource {
         /// The file.
         path: PathBuf,
     },
+    /// No mesh: a groom-only scene (needs a `[groom]`). [`SceneFile::mesh`] gives an
+    /// empty [`Mesh`], which the renderer neither draws nor shadows.
+    None,
 }
 
 /// A scene as a TOML file describes it.
@@ -200,8 +210,9 @@ impl SceneFile {
             message,
         };
         let mut doc = toml::de::DeTable::parse(text).map_err(|e| toml_error(e.to_string()))?;
+        let has_wind = has_table(doc.get_ref(), &["hair", "wind"]);
         let normalized = scene_keys::normalize(&mut doc).map_err(|e| toml_error(e.render(text)))?;
-        let file = SceneFile::deserialize(toml::de::Deserializer::from(doc.clone())).map_err(
+        let mut file = SceneFile::deserialize(toml::de::Deserializer::from(doc.clone())).map_err(
             |mut e| {
                 e.set_input(Some(text));
                 toml_error(scene_keys::repoint(&e, &doc, &normalized, text))
@@ -209,6 +220,10 @@ impl SceneFile {
         )?;
         scene_keys::check_every_key_used(&doc, &file, &normalized)
             .map_err(|e| toml_error(e.render(text)))?;
+        // A groom keeps its file shape unless the scene asks for wind.
+        if file.groom.is_some() && !has_wind {
+            file.hair.wind = WindParams::calm();
+        }
         file.validate().map_err(|source| SceneFileError::Param {
             path: path.to_path_buf(),
             source,
@@ -259,6 +274,12 @@ impl SceneFile {
         self.camera.validate()?;
         if let Some(groom) = &self.groom {
             groom.validate()?;
+        } else if self.mesh == MeshSource::None {
+            return Err(crate::ParamError::new(
+                "mesh.kind",
+                "none",
+                "needs a [groom] table: without a mesh there is nothing to grow fur from",
+            ));
         }
         Light::validate_all(&self.lights)
     }
@@ -279,13 +300,15 @@ impl SceneFile {
             })
     }
 
-    /// Builds or loads the mesh (`path` names the scene file in errors).
+    /// Builds or loads the mesh (`path` names the scene file in errors); an empty mesh
+    /// for `kind = "none"`.
     pub fn mesh(&self, path: &Path) -> Result<Mesh, SceneFileError> {
         let mesh_error = |source| SceneFileError::Mesh {
             path: path.to_path_buf(),
             source,
         };
         match &self.mesh {
+            MeshSource::None => Ok(Mesh::default()),
             MeshSource::Creature => Ok(Mesh::creature()),
             MeshSource::Icosphere {
                 radius,
@@ -327,4 +350,18 @@ impl SceneFile {
             message: e.to_string(),
         })
     }
+}
+
+/// Whether `table` has a table at `keys` (`["hair", "wind"]`: `[hair.wind]`).
+fn has_table(table: &toml::de::DeTable<'_>, keys: &[&str]) -> bool {
+    let Some((first, rest)) = keys.split_first() else {
+        return true;
+    };
+    table.iter().any(|(key, value)| {
+        key.get_ref() == first
+            && match value.get_ref() {
+                toml::de::DeValue::Table(inner) => has_table(inner, rest),
+                _ => false,
+            }
+    })
 }

@@ -411,6 +411,11 @@ fn every_variant() -> Vec<SceneFile> {
             ..GroomSource::new("hair/long.tfx")
         })
     });
+    // A groom-only scene.
+    push(&|f| {
+        f.mesh = MeshSource::None;
+        f.groom = Some(GroomSource::new("hair/long.usda"));
+    });
     files
 }
 

@@ -145,6 +145,28 @@ fn a_groom_table_round_trips_and_its_path_is_relative_to_the_scene() {
 }
 
 #[test]
+fn a_groom_scene_without_a_wind_table_has_no_wind_and_mesh_none_needs_a_groom() {
+    use pelage_scene::WindParams;
+    let calm = SceneFile::parse("[groom]\npath = \"hair.usda\"\n").unwrap();
+    assert_eq!(calm.hair.wind, WindParams::calm());
+    let windy =
+        SceneFile::parse("[groom]\npath = \"hair.usda\"\n[hair.wind]\nstrength = 0.5\n").unwrap();
+    assert_eq!(windy.hair.wind.strength, 0.5);
+    assert_eq!(windy.hair.wind.turbulence, WindParams::default().turbulence);
+    // Without a groom the default breeze stays.
+    assert_eq!(
+        SceneFile::parse("").unwrap().hair.wind,
+        WindParams::default()
+    );
+    let only =
+        SceneFile::parse("[mesh]\nkind = \"none\"\n[groom]\npath = \"hair.usda\"\n").unwrap();
+    assert_eq!(only.mesh, MeshSource::None);
+    assert!(only.mesh(Path::new("x.toml")).unwrap().indices.is_empty());
+    let e = SceneFile::parse("[mesh]\nkind = \"none\"\n").unwrap_err();
+    assert!(e.to_string().contains("mesh.kind"), "{e}");
+}
+
+#[test]
 fn bad_chiang_values_in_a_scene_file_are_named() {
     let chiang = |body: &str| format!("[shade.model]\nmodel = \"chiang\"\n{body}\n");
     for (body, key) in [

@@ -37,14 +37,15 @@ pub struct MeshShadowMap {
     uniforms: UniformBuffer<MeshShadowUniforms>,
     view: wgpu::TextureView,
     sampler: wgpu::Sampler,
-    /// `None` when `size` is 0 (no mesh shadows).
+    /// `None` when `size` is 0 (no mesh shadows) or the mesh has no triangles.
     draw: Option<(wgpu::RenderPipeline, wgpu::BindGroup, u32)>,
     bounds: (Vec3, Vec3),
 }
 
 impl MeshShadowMap {
     /// A `size` x `size` map (0 = disabled) with a PCF kernel of radius `pcf_radius`,
-    /// covering the world box `bounds` (the mesh and everything that grows on it).
+    /// covering the world box `bounds` (the mesh and everything that grows on it). A mesh
+    /// without triangles disables it too: everything is lit by the mesh.
     pub fn new(
         gpu: &Gpu,
         mesh: &MeshBuffers,
@@ -88,7 +89,8 @@ impl MeshShadowMap {
                 compare: Some(wgpu::CompareFunction::LessEqual),
                 ..Default::default()
             });
-            let draw = (size > 0).then(|| {
+            // A mesh without triangles (a groom-only scene) casts nothing: no pass.
+            let draw = (size > 0 && mesh.triangle_count > 0).then(|| {
                 // mesh_depth.wgsl (vertex stage only): the light, positions, indices.
                 let layout = BindLayout::new("pelage mesh shadow map", wgpu::ShaderStages::VERTEX)
                     .uniform(0)

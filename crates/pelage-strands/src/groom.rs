@@ -13,12 +13,14 @@ use crate::{LodLevel, StrandRoot, hash_to_unit, pcg_hash};
 /// `Groom::resample`): the roots stay where the file puts them, every segment keeps its
 /// rest length and direction relative to the one before it, and the wind of
 /// `HairParams::wind` turns each segment by `growth.force_weight · F` the way it bends
-/// grown fur, so the groom's own curls ride along. With no wind the file's strands come
-/// out unchanged.
+/// grown fur, so the groom's own curls ride along. With no wind (no force at all) the
+/// file's strands come out exactly: every vertex is the resampled rest point.
 ///
 /// Of [`HairParams`] it uses the wind, the level of detail, `roots.seed` (the strand
 /// order and per-strand jitter), and of `growth` the width (for strands the file gives
-/// no width), `tip_width`, colour, `color_jitter`, opacity and `force_weight`. Gravity is
+/// no width), `tip_width`, colour (for a groom without per-strand colours,
+/// [`Resampled::colors`]; a USD file's `displayColor`), `color_jitter`, opacity and
+/// `force_weight`. Gravity is
 /// not applied: a groom's rest shape already hangs under it. [`StrandStage::params`]
 /// returns the parameters the groom amounts to (strand count, segments, longest strand,
 /// mean width), which the later stages size themselves by.
@@ -54,6 +56,8 @@ pub struct GroomStrands {
     pass: StrandPass,
     /// The rest roots the pass reads (rewritten by [`StrandStage::set_color`]).
     rest_roots: wgpu::Buffer,
+    /// The groom's colour of every strand in buffer order, if it has colours.
+    file_colors: Option<Vec<Vec3>>,
 }
 
 impl GroomStrands {
@@ -84,6 +88,7 @@ impl GroomStrands {
             };
             let phase = next();
             let brightness = 1.0 + g.color_jitter * (2.0 * next() - 1.0);
+            let color = file_color(groom, source).unwrap_or(g.color);
             roots.push(StrandRoot {
                 triangle: 0,
                 seed: h0,
@@ -93,9 +98,15 @@ impl GroomStrands {
                 phase,
                 tilt: 0.0,
                 azimuth: 0.0,
-                color: g.color * brightness,
+                color: color * brightness,
             });
         }
+        let file_colors = groom.colors.as_ref().map(|_| {
+            order
+                .iter()
+                .map(|&i| file_color(groom, i).unwrap_or(g.color))
+                .collect()
+        });
         let source_strands = order
             .iter()
             .map(|&i| groom.source_strands.get(i as usize).copied().unwrap_or(i))
@@ -127,6 +138,7 @@ impl GroomStrands {
             longest_segment,
             pass,
             rest_roots,
+            file_colors,
         })
     }
 
@@ -241,7 +253,28 @@ impl StrandStage for GroomStrands {
             GROOM_BRIGHTNESS_DRAW,
             queue,
             (color, color_jitter),
-        )
+        )?;
+        // A groom's own colours stay; only their jitter changes.
+        let Some(colors) = &self.file_colors else {
+            return Ok(());
+        };
+        for (root, &base) in self.roots.iter_mut().zip(colors) {
+            root.color =
+                base * crate::strand_brightness(root.seed, GROOM_BRIGHTNESS_DRAW, color_jitter);
+        }
+        pelage_gpu::write_storage(
+            queue,
+            "pelage strand rest roots",
+            &self.rest_roots,
+            &*self.roots,
+        )?;
+        pelage_gpu::write_storage(
+            queue,
+            "pelage strand roots",
+            &StrandStage::buffers(self).roots,
+            &*self.roots,
+        )?;
+        Ok(())
     }
 
     /// Segment reduction measured on the rest shape: the farthest rest point from the
@@ -312,6 +345,25 @@ fn check_groom(groom: &Resampled) -> Result<(), ParamError> {
             ));
         }
     }
+    if let Some(colors) = &groom.colors {
+        if colors.len() != groom.strands as usize {
+            return Err(ParamError::new(
+                "groom.colors",
+                colors.len(),
+                &format!("must hold one colour per strand ({})", groom.strands),
+            ));
+        }
+        if let Some(c) = colors
+            .iter()
+            .find(|c| !(c.is_finite() && c.min_element() >= 0.0))
+        {
+            return Err(ParamError::new(
+                "groom.colors",
+                c,
+                "every colour must be finite and >= 0",
+            ));
+        }
+    }
     if let Some(p) = groom
         .points
         .iter()
@@ -327,6 +379,15 @@ fn check_groom(groom: &Resampled) -> Result<(), ParamError> {
         ));
     }
     Ok(())
+}
+
+/// The groom's colour of its strand `strand`, when it has colours.
+fn file_color(groom: &Resampled, strand: u32) -> Option<Vec3> {
+    groom
+        .colors
+        .as_ref()
+        .and_then(|c| c.get(strand as usize))
+        .copied()
 }
 
 /// The file's width at point `first` (a strand's root), when it has a positive one.

@@ -17,8 +17,10 @@
 // direction turned by the rotation `q` accumulated so far, keeps its rest length, and the
 // force at its end turns the direction the way grow.wgsl bends a growing strand
 // (d' = normalize(d + force_weight * F)); that turn is composed into `q` for the rest of
-// the strand. With no force `q` stays the identity and the groom comes out as it went in;
-// with any force no segment is stretched and the curls of the groom ride along.
+// the strand. Until the first segment whose force is not zero the vertices are the rest
+// points themselves, so with no force the groom comes out exactly as it went in (at t = 0
+// in a scene without wind, say); with any force no segment is stretched and the curls of
+// the groom ride along.
 // The CPU mirror of this file is `deform_groom` in pelage-reference/src/strands.rs:
 // change both together.
 
@@ -77,16 +79,24 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     var q = vec4<f32>(0.0, 0.0, 0.0, 1.0);
     var p = rest[first].xyz;
     var d = vec3<f32>(0.0, 1.0, 0.0);
+    // No force has turned the strand yet: its vertices are the rest points.
+    var at_rest = true;
     vertices[base] = vec4<f32>(p, 0.0);
     for (var i = 0u; i < segments; i++) {
         let offset = rest[first + i + 1u].xyz - rest[first + i].xyz;
         // A zero-length rest segment (points repeated in the file) keeps the last direction.
         d = quat_rotate(q, safe_normalize(offset, quat_rotate(vec4<f32>(-q.xyz, q.w), d)));
-        p = p + d * length(offset);
+        if at_rest {
+            p = rest[first + i + 1u].xyz;
+        } else {
+            p = p + d * length(offset);
+        }
         if (i + 1u) % step == 0u {
             vertices[base + (i + 1u) / step] = vec4<f32>(p, f32(i + 1u) / f32(segments));
         }
-        let bent = safe_normalize(d + force(p, t, base_force) * u.force_weight, d);
+        let push = force(p, t, base_force) * u.force_weight;
+        at_rest = at_rest && all(push == vec3<f32>(0.0));
+        let bent = safe_normalize(d + push, d);
         q = quat_mul(quat_between(d, bent), q);
         q = q / length(q);
         d = bent;
