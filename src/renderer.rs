@@ -5,14 +5,19 @@ mod update;
 pub use update::{Change, Update};
 
 use pelage_gpu::{FramePlan, Gpu, GpuTimer, wgpu};
-use pelage_scene::{Camera, HairParams, Light, Mesh, Resampled, ShadeParams, ShadowParams};
+use pelage_scene::{
+    Camera, DynamicsParams, HairParams, Light, Mesh, MeshMotion, Resampled, ShadeParams,
+    ShadowParams,
+};
 #[cfg(not(target_arch = "wasm32"))]
 use pelage_shade::TargetViews;
 use pelage_shade::{
     HairInputs, HairPass, OitStats, TargetFormat, TargetViewSet, Targets, Visibility,
 };
 use pelage_shadow::{LightVisibility, ShadowMethod};
-use pelage_strands::{GroomStrands, GrowStrands, MeshBuffers, StrandFrame, StrandStage};
+use pelage_strands::{
+    GroomStrands, GrowStrands, MeshBuffers, SimulateStrands, StrandFrame, StrandStage,
+};
 
 /// Everything a frame is made of.
 #[derive(Clone, Debug)]
@@ -24,6 +29,12 @@ pub struct Scene {
     /// A groom to draw instead of growing fur from `mesh` (see [`GroomStrands`] for the
     /// parts of `hair` it uses); `None` grows fur.
     pub groom: Option<Resampled>,
+    /// Strand dynamics: `Some` simulates the hair (grown or the groom) with
+    /// [`SimulateStrands`]; `None` (the default) bends it by the stateless wind.
+    pub dynamics: Option<DynamicsParams>,
+    /// A rigid motion of the mesh over time (written into the mesh buffers every
+    /// frame: the hair on it, its colliders and its drawing follow); `None` keeps it still.
+    pub motion: Option<MeshMotion>,
     /// Shadow method.
     pub shadow: ShadowParams,
     /// Raster and shading.
@@ -42,6 +53,8 @@ impl Default for Scene {
             mesh: Mesh::creature(),
             hair: HairParams::default(),
             groom: None,
+            dynamics: None,
+            motion: None,
             shadow: ShadowParams::default(),
             shade: ShadeParams::default(),
             camera: Camera::default(),
@@ -66,6 +79,8 @@ impl Scene {
             mesh: file.mesh(path)?,
             hair: file.hair.clone(),
             groom: file.groom(path)?,
+            dynamics: file.dynamics.clone(),
+            motion: file.motion.clone(),
             shadow: file.shadow.clone(),
             shade: file.shade.clone(),
             camera: file.camera.clone(),
@@ -92,15 +107,25 @@ impl Scene {
     /// groom's reach
     /// ([`GroomStrands::reach_of`]; the rest bounds alone when its parameters are bad,
     /// which the renderer then refuses).
+    ///
+    /// A simulated groom reaches its longest strand (and width) around its rest bounds;
+    /// with a [`MeshMotion`] the box is the sphere around the pivot holding it.
     pub fn reach(&self) -> (glam::Vec3, glam::Vec3) {
         let (lo, hi) = self.mesh.bounds();
-        if let Some(groom) = &self.groom {
-            let (glo, ghi) =
-                GroomStrands::reach_of(groom, &self.hair).unwrap_or_else(|_| groom.bounds());
-            return (lo.min(glo), hi.max(ghi));
-        }
-        let (glo, ghi) = GrowStrands::reach_of(&self.mesh, &self.hair);
-        (lo.min(glo), hi.max(ghi))
+        let (glo, ghi) = match (&self.groom, &self.dynamics) {
+            (Some(groom), None) => {
+                GroomStrands::reach_of(groom, &self.hair).unwrap_or_else(|_| groom.bounds())
+            }
+            (Some(groom), Some(_)) => {
+                let pad = GroomStrands::params_for(groom, &self.hair)
+                    .map_or(0.0, |p| p.growth.length + p.growth.width);
+                let (a, b) = groom.bounds();
+                (a - glam::Vec3::splat(pad), b + glam::Vec3::splat(pad))
+            }
+            (None, _) => GrowStrands::reach_of(&self.mesh, &self.hair),
+        };
+        let reach = (lo.min(glo), hi.max(ghi));
+        self.motion.as_ref().map_or(reach, |m| m.reach(reach))
     }
 }
 
@@ -149,6 +174,8 @@ pub struct Renderer {
     in_flight: std::collections::VecDeque<wgpu::SubmissionIndex>,
     /// What the renderer draws, for [`Renderer::update`] to compare a scene with.
     built: update::Built,
+    /// The mesh's motion and its rest pose, written into the mesh buffers every frame.
+    motion: Option<(MeshMotion, Mesh)>,
 }
 
 /// Frames [`Renderer::render`] lets the GPU fall behind by before it waits.
@@ -178,14 +205,33 @@ impl Renderer {
         height: u32,
         format: &TargetFormat,
     ) -> crate::Result<Self> {
-        let mesh_buffers = MeshBuffers::upload(gpu, &scene.mesh)?;
-        let strands: Box<dyn StrandStage> = match &scene.groom {
-            Some(groom) => Box::new(GroomStrands::new(gpu, groom, &scene.hair)?),
-            None => Box::new(GrowStrands::new(
+        let mut mesh_buffers = MeshBuffers::upload(gpu, &scene.mesh)?;
+        if let Some(motion) = &scene.motion {
+            motion.validate()?;
+            mesh_buffers.bounds = motion.reach(mesh_buffers.bounds);
+        }
+        let strands: Box<dyn StrandStage> = match (&scene.groom, &scene.dynamics) {
+            (Some(groom), None) => Box::new(GroomStrands::new(gpu, groom, &scene.hair)?),
+            (None, None) => Box::new(GrowStrands::new(
                 gpu,
                 &scene.mesh,
                 &mesh_buffers,
                 &scene.hair,
+            )?),
+            (Some(groom), Some(dynamics)) => Box::new(SimulateStrands::groom(
+                gpu,
+                groom,
+                &scene.mesh,
+                &mesh_buffers,
+                &scene.hair,
+                dynamics,
+            )?),
+            (None, Some(dynamics)) => Box::new(SimulateStrands::grown(
+                gpu,
+                &scene.mesh,
+                &mesh_buffers,
+                &scene.hair,
+                dynamics,
             )?),
         };
         Light::validate_all(&scene.lights).map_err(pelage_shade::ShadeError::from)?;
@@ -251,6 +297,7 @@ impl Renderer {
         let timer = GpuTimer::new(gpu, 64)?;
         let views = targets.view_set();
         Ok(Self {
+            motion: scene.motion.clone().map(|m| (m, scene.mesh.clone())),
             mesh_buffers,
             strands,
             shadows,
@@ -276,6 +323,15 @@ impl Renderer {
     /// [`StrandFrame`] every later stage is prepared and recorded with.
     fn prepare(&mut self, gpu: &Gpu, t: f32, camera: &Camera) -> crate::Result<StrandFrame> {
         camera.validate()?;
+        if let Some((motion, rest)) = &self.motion {
+            self.mesh_buffers.update(&gpu.queue, &motion.apply(rest, t))?;
+            if let Some(sim) = self.strands.as_simulation_mut() {
+                let moved: Vec<_> = (sim.dynamics().colliders.iter())
+                    .map(|c| c.moved(|p| motion.point(p, t)))
+                    .collect();
+                sim.set_colliders(&moved)?;
+            }
+        }
         let (width, height) = (self.targets.width, self.targets.height);
         let level = self
             .strands
