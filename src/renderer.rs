@@ -324,7 +324,8 @@ impl Renderer {
     fn prepare(&mut self, gpu: &Gpu, t: f32, camera: &Camera) -> crate::Result<StrandFrame> {
         camera.validate()?;
         if let Some((motion, rest)) = &self.motion {
-            self.mesh_buffers.update(&gpu.queue, &motion.apply(rest, t))?;
+            self.mesh_buffers
+                .update(&gpu.queue, &motion.apply(rest, t))?;
             if let Some(sim) = self.strands.as_simulation_mut() {
                 let moved: Vec<_> = (sim.dynamics().colliders.iter())
                     .map(|c| c.moved(|p| motion.point(p, t)))

@@ -382,8 +382,8 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
             Ok(())
         })?;
         let substeps = u64::from(sim.sim_uniforms().substeps.max(1));
-        let vertex_count = u64::from(sim.buffers().strand_count)
-            * u64::from(sim.buffers().vertices_per_strand());
+        let vertex_count =
+            u64::from(sim.buffers().strand_count) * u64::from(sim.buffers().vertices_per_strand());
         let sim_ms = get(&sim_times, "strands: simulate");
         let sim_note = format!(
             "{substeps} substeps a frame; {:.2} ns per vertex per substep; {:.2}x the groom pass's time",

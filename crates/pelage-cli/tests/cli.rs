@@ -779,7 +779,15 @@ fn a_frame_range_of_a_simulation_renders_the_same_frames_as_the_full_run() {
 fn range_matches_full_run(name: &str, extra: &[&str]) {
     let full = Scratch::new(&format!("{name}_full"));
     let part = Scratch::new(&format!("{name}_part"));
-    let mut args = vec!["animate", "--size", "32x24", "--strands", "200", "--frames", "6"];
+    let mut args = vec![
+        "animate",
+        "--size",
+        "32x24",
+        "--strands",
+        "200",
+        "--frames",
+        "6",
+    ];
     args.extend_from_slice(extra);
     args.push("--out");
     let run = |dir: &Scratch, range: &[&str]| {

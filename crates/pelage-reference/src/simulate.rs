@@ -50,7 +50,13 @@ fn to_world(pose: &Pose, local: Vec3) -> Vec3 {
 }
 
 /// `collide` in WGSL: `(p, prev)` pushed out of every collider of `sim`.
-fn collide(sim: &SimUniforms, p_in: Vec3, prev_in: Vec3, margin: f32, fallback: Vec3) -> (Vec3, Vec3) {
+fn collide(
+    sim: &SimUniforms,
+    p_in: Vec3,
+    prev_in: Vec3,
+    margin: f32,
+    fallback: Vec3,
+) -> (Vec3, Vec3) {
     let (mut p, mut prev) = (p_in, prev_in);
     for col in sim.colliders.iter().take(sim.collider_count as usize) {
         let axis = col.b - col.a;

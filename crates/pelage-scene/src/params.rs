@@ -610,7 +610,10 @@ impl MeshMotion {
     /// A box holding `bounds` in every pose: the sphere around the pivot through the
     /// box's farthest corner.
     pub fn reach(&self, (lo, hi): (Vec3, Vec3)) -> (Vec3, Vec3) {
-        let r = (lo - self.pivot).abs().max((hi - self.pivot).abs()).length();
+        let r = (lo - self.pivot)
+            .abs()
+            .max((hi - self.pivot).abs())
+            .length();
         (self.pivot - Vec3::splat(r), self.pivot + Vec3::splat(r))
     }
 }
@@ -655,7 +658,11 @@ impl DynamicsParams {
             }
             Ok(())
         };
-        bounded("dynamics.wind_response", self.wind_response, MAX_ACCELERATION)?;
+        bounded(
+            "dynamics.wind_response",
+            self.wind_response,
+            MAX_ACCELERATION,
+        )?;
         bounded("dynamics.damping", self.damping, 1000.0)?;
         bounded("dynamics.local_stiffness", self.local_stiffness, 1.0)?;
         bounded("dynamics.global_stiffness", self.global_stiffness, 1.0)?;

@@ -216,7 +216,10 @@ fn dynamics_and_motion_tables_parse_and_name_their_bad_keys() {
     let dynamics = file.dynamics.unwrap();
     assert_eq!(dynamics.damping, 3.0);
     assert_eq!(dynamics.colliders.len(), 2);
-    assert_eq!(dynamics.colliders[1].end, Some(glam::Vec3::new(0.0, -1.0, 0.0)));
+    assert_eq!(
+        dynamics.colliders[1].end,
+        Some(glam::Vec3::new(0.0, -1.0, 0.0))
+    );
     assert_eq!(file.motion.unwrap().turn, 0.5);
     assert!(SceneFile::default().dynamics.is_none());
     for (text, key) in [

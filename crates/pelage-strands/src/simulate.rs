@@ -414,7 +414,10 @@ impl StrandStage for SimulateStrands {
         if !time.is_finite() {
             return Err(ParamError::new("time", time, "must be finite").into());
         }
-        let dt = self.last_time.filter(|&last| time >= last).map(|last| time - last);
+        let dt = self
+            .last_time
+            .filter(|&last| time >= last)
+            .map(|last| time - last);
         let uniforms = SimUniforms::new(&self.dynamics, &self.colliders, time, dt);
         self.sim.write(queue, &uniforms)?;
         self.last_uniforms = uniforms;
@@ -658,8 +661,14 @@ mod tests {
     #[test]
     fn closest_point_barycentrics_cover_the_regions() {
         let (a, b, c) = (Vec3::ZERO, Vec3::X, Vec3::Y);
-        assert_eq!(closest_on_triangle(Vec3::new(-1.0, -1.0, 0.0), a, b, c), (1.0, 0.0, 0.0));
-        assert_eq!(closest_on_triangle(Vec3::new(2.0, -0.5, 0.0), a, b, c), (0.0, 1.0, 0.0));
+        assert_eq!(
+            closest_on_triangle(Vec3::new(-1.0, -1.0, 0.0), a, b, c),
+            (1.0, 0.0, 0.0)
+        );
+        assert_eq!(
+            closest_on_triangle(Vec3::new(2.0, -0.5, 0.0), a, b, c),
+            (0.0, 1.0, 0.0)
+        );
         let (u, v, w) = closest_on_triangle(Vec3::new(0.25, 0.25, 3.0), a, b, c);
         assert!((u - 0.5).abs() < 1e-6 && (v - 0.25).abs() < 1e-6 && (w - 0.25).abs() < 1e-6);
         let (u, v, w) = closest_on_triangle(Vec3::new(0.5, -2.0, 0.0), a, b, c);
@@ -689,6 +698,9 @@ mod tests {
         };
         let rest = grown_rest(&root, &straight, 8);
         assert_eq!(rest.len(), 9);
-        assert!((rest[8] - Vec3::new(0.0, 2.0, 0.0)).length() < 1e-5, "{rest:?}");
+        assert!(
+            (rest[8] - Vec3::new(0.0, 2.0, 0.0)).length() < 1e-5,
+            "{rest:?}"
+        );
     }
 }

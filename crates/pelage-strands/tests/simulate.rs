@@ -55,7 +55,13 @@ fn body() -> Collider {
 }
 
 /// A simulation of `count` strands on the head, with the body collider.
-fn simulation(gpu: &Gpu, mesh: &Mesh, buffers: &MeshBuffers, count: u32, wind: WindParams) -> SimulateStrands {
+fn simulation(
+    gpu: &Gpu,
+    mesh: &Mesh,
+    buffers: &MeshBuffers,
+    count: u32,
+    wind: WindParams,
+) -> SimulateStrands {
     let mut sim = SimulateStrands::grown(
         gpu,
         mesh,
@@ -71,7 +77,11 @@ fn simulation(gpu: &Gpu, mesh: &Mesh, buffers: &MeshBuffers, count: u32, wind: W
 /// `mesh` turned by `rotation` about the origin and moved by `offset`.
 fn posed(mesh: &Mesh, rotation: Quat, offset: Vec3) -> Mesh {
     Mesh {
-        positions: mesh.positions.iter().map(|&p| rotation * p + offset).collect(),
+        positions: mesh
+            .positions
+            .iter()
+            .map(|&p| rotation * p + offset)
+            .collect(),
         normals: mesh.normals.iter().map(|&n| rotation * n).collect(),
         indices: mesh.indices.clone(),
     }
@@ -176,7 +186,10 @@ fn gpu_matches_the_cpu_mirror_after_one_substep_and_stays_close_for_100_frames()
         );
         drift = drift.max(max_diff(&g, &c));
     }
-    println!("100 frames: max |GPU - CPU| = {drift:.2e} ({:.2e} of the scene size)", drift / size);
+    println!(
+        "100 frames: max |GPU - CPU| = {drift:.2e} ({:.2e} of the scene size)",
+        drift / size
+    );
     assert!(drift <= 1e-2 * size, "{drift}");
 }
 
@@ -206,7 +219,10 @@ fn segments_keep_their_length_and_vertices_stay_out_of_the_body_while_the_head_t
         "120 frames: worst stretch {stretch:.2e}; at most {inside_most} of {total} vertices inside the body, deepest {deepest:.2e} (strand width {width})"
     );
     assert!(stretch <= 1e-3, "{stretch}");
-    assert!(inside_most as f64 <= 0.001 * total as f64, "{inside_most} of {total}");
+    assert!(
+        inside_most as f64 <= 0.001 * total as f64,
+        "{inside_most} of {total}"
+    );
     assert!(deepest <= width, "{deepest}");
 }
 
@@ -222,7 +238,11 @@ fn survive(frames: u32) {
     let mut t = 0.0f32;
     for frame in 1..=frames {
         t += if frame % 2 == 0 { 0.1 } else { 0.001 };
-        let offset = if (frame / 250) % 2 == 1 { Vec3::X * 10.0 } else { Vec3::ZERO };
+        let offset = if (frame / 250) % 2 == 1 {
+            Vec3::X * 10.0
+        } else {
+            Vec3::ZERO
+        };
         let mut mesh = posed(&rest_mesh, head_pose(t), offset);
         if frame % 300 == 0 {
             mesh.positions[5] = Vec3::NAN;
@@ -234,7 +254,10 @@ fn survive(frames: u32) {
         gpu.queue.submit([encoder.finish()]);
         if frame % 1000 == 0 || frame == frames {
             let v = common::read_vertices(&gpu, &sim.buffers().vertices);
-            assert!(v.iter().all(|v| v.is_finite()), "frame {frame}: a vertex is not finite");
+            assert!(
+                v.iter().all(|v| v.is_finite()),
+                "frame {frame}: a vertex is not finite"
+            );
             let stretch = worst_stretch(&v, &sim);
             assert!(stretch <= 1e-3, "frame {frame}: stretch {stretch}");
         }
@@ -272,7 +295,9 @@ fn a_teleported_root_puts_its_strand_at_rest_in_the_new_pose() {
     let after = grow_on_gpu(&gpu, &mut sim, t + 1.0 / 30.0);
     let shifted: Vec<Vec4> = rest.iter().map(|v| *v + offset.extend(0.0)).collect();
     let worst = max_diff(&after, &shifted);
-    println!("teleport by 10: strands {swing:.3} from rest before, {worst:.2e} from the moved rest after");
+    println!(
+        "teleport by 10: strands {swing:.3} from rest before, {worst:.2e} from the moved rest after"
+    );
     assert!(worst <= 1e-5 * 12.0, "{worst}");
 }
 
@@ -390,25 +415,45 @@ fn a_groom_is_bound_to_the_nearest_triangles_and_starts_at_its_rest_shape() {
     .unwrap();
     let rest = grow_on_gpu(&gpu, &mut sim, 0.0);
     let stateless = pelage_strands::GroomStrands::new(&gpu, &groom, &params).unwrap();
-    let points: Vec<Vec4> = stateless.rest_points().iter().map(|p| p.extend(0.0)).collect();
+    let points: Vec<Vec4> = stateless
+        .rest_points()
+        .iter()
+        .map(|p| p.extend(0.0))
+        .collect();
     let worst = max_diff(&rest, &points);
     println!("groom at rest: max |GPU - file| = {worst:.2e}");
     assert!(worst <= 1e-5 * 4.0, "{worst}");
     for root in sim.roots() {
-        assert!(root.bary.x >= 0.0 && root.bary.y >= 0.0 && root.bary.x + root.bary.y <= 1.0 + 1e-6);
+        assert!(
+            root.bary.x >= 0.0 && root.bary.y >= 0.0 && root.bary.x + root.bary.y <= 1.0 + 1e-6
+        );
     }
     // A turned head carries the groom along: the first frame after a turn of the mesh
     // by 90 degrees puts every root on the turned surface.
     let turn = Quat::from_rotation_y(std::f32::consts::FRAC_PI_2);
-    buffers.update(&gpu.queue, &posed(&mesh, turn, Vec3::ZERO)).unwrap();
+    buffers
+        .update(&gpu.queue, &posed(&mesh, turn, Vec3::ZERO))
+        .unwrap();
     sim.reset();
     let turned = grow_on_gpu(&gpu, &mut sim, 0.1);
-    let expected: Vec<Vec4> = points.iter().map(|p| (turn * p.truncate()).extend(0.0)).collect();
+    let expected: Vec<Vec4> = points
+        .iter()
+        .map(|p| (turn * p.truncate()).extend(0.0))
+        .collect();
     let worst = max_diff(&turned, &expected);
     assert!(worst <= 1e-5 * 4.0, "{worst}");
-    assert!(SimulateStrands::groom(&gpu, &groom, &mesh, &buffers, &params, &DynamicsParams {
-        damping: -1.0,
-        ..DynamicsParams::default()
-    })
-    .is_err_and(|e| e.to_string().contains("dynamics.damping")));
+    assert!(
+        SimulateStrands::groom(
+            &gpu,
+            &groom,
+            &mesh,
+            &buffers,
+            &params,
+            &DynamicsParams {
+                damping: -1.0,
+                ..DynamicsParams::default()
+            }
+        )
+        .is_err_and(|e| e.to_string().contains("dynamics.damping"))
+    );
 }
