@@ -522,7 +522,7 @@ impl RootFrame {
     }
 
     /// `p` in this frame's coordinates (x tangent, y normal, z tangent × normal).
-    fn to_local(&self, p: Vec3) -> Vec3 {
+    fn to_local(self, p: Vec3) -> Vec3 {
         let d = p - self.position;
         Vec3::new(
             d.dot(self.tangent),
