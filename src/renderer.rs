@@ -5,14 +5,19 @@ mod update;
 pub use update::{Change, Update};
 
 use pelage_gpu::{FramePlan, Gpu, GpuTimer, wgpu};
-use pelage_scene::{Camera, HairParams, Light, Mesh, Resampled, ShadeParams, ShadowParams};
+use pelage_scene::{
+    Camera, DynamicsParams, HairParams, Light, Mesh, MeshMotion, Resampled, ShadeParams,
+    ShadowParams,
+};
 #[cfg(not(target_arch = "wasm32"))]
 use pelage_shade::TargetViews;
 use pelage_shade::{
     HairInputs, HairPass, OitStats, TargetFormat, TargetViewSet, Targets, Visibility,
 };
 use pelage_shadow::{LightVisibility, ShadowMethod};
-use pelage_strands::{GroomStrands, GrowStrands, MeshBuffers, StrandFrame, StrandStage};
+use pelage_strands::{
+    GroomStrands, GrowStrands, MeshBuffers, SimulateStrands, StrandFrame, StrandStage,
+};
 
 /// Everything a frame is made of.
 #[derive(Clone, Debug)]
@@ -26,6 +31,12 @@ pub struct Scene {
     /// A groom to draw instead of growing fur from `mesh` (see [`GroomStrands`] for the
     /// parts of `hair` it uses); `None` grows fur.
     pub groom: Option<Resampled>,
+    /// Strand dynamics: `Some` simulates the hair (grown or the groom) with
+    /// [`SimulateStrands`]; `None` (the default) bends it by the stateless wind.
+    pub dynamics: Option<DynamicsParams>,
+    /// A rigid motion of the mesh over time (written into the mesh buffers every
+    /// frame: the hair on it, its colliders and its drawing follow); `None` keeps it still.
+    pub motion: Option<MeshMotion>,
     /// Shadow method.
     pub shadow: ShadowParams,
     /// Raster and shading.
@@ -44,6 +55,8 @@ impl Default for Scene {
             mesh: Mesh::creature(),
             hair: HairParams::default(),
             groom: None,
+            dynamics: None,
+            motion: None,
             shadow: ShadowParams::default(),
             shade: ShadeParams::default(),
             camera: Camera::default(),
@@ -68,6 +81,8 @@ impl Scene {
             mesh: file.mesh(path)?,
             hair: file.hair.clone(),
             groom: file.groom(path)?,
+            dynamics: file.dynamics.clone(),
+            motion: file.motion.clone(),
             shadow: file.shadow.clone(),
             shade: file.shade.clone(),
             camera: file.camera.clone(),
@@ -94,18 +109,29 @@ impl Scene {
     /// an empty mesh) and the groom's reach
     /// ([`GroomStrands::reach_of`]; the rest bounds alone when its parameters are bad,
     /// which the renderer then refuses).
+    ///
+    /// A simulated groom reaches its longest strand (and width) around its rest bounds;
+    /// with a [`MeshMotion`] the box is the sphere around the pivot holding it.
     pub fn reach(&self) -> (glam::Vec3, glam::Vec3) {
         let (lo, hi) = self.mesh.bounds();
-        if let Some(groom) = &self.groom {
-            let (glo, ghi) =
-                GroomStrands::reach_of(groom, &self.hair).unwrap_or_else(|_| groom.bounds());
-            if self.mesh.indices.is_empty() {
-                return (glo, ghi);
+        let (glo, ghi) = match (&self.groom, &self.dynamics) {
+            (Some(groom), None) => {
+                GroomStrands::reach_of(groom, &self.hair).unwrap_or_else(|_| groom.bounds())
             }
-            return (lo.min(glo), hi.max(ghi));
+            (Some(groom), Some(_)) => {
+                let pad = GroomStrands::params_for(groom, &self.hair)
+                    .map_or(0.0, |p| p.growth.length + p.growth.width);
+                let (a, b) = groom.bounds();
+                (a - glam::Vec3::splat(pad), b + glam::Vec3::splat(pad))
+            }
+            (None, _) => GrowStrands::reach_of(&self.mesh, &self.hair),
+        };
+        // A groom-only scene: the hair's reach alone.
+        if self.groom.is_some() && self.mesh.indices.is_empty() {
+            return (glo, ghi);
         }
-        let (glo, ghi) = GrowStrands::reach_of(&self.mesh, &self.hair);
-        (lo.min(glo), hi.max(ghi))
+        let reach = (lo.min(glo), hi.max(ghi));
+        self.motion.as_ref().map_or(reach, |m| m.reach(reach))
     }
 }
 
@@ -154,6 +180,8 @@ pub struct Renderer {
     in_flight: std::collections::VecDeque<wgpu::SubmissionIndex>,
     /// What the renderer draws, for [`Renderer::update`] to compare a scene with.
     built: update::Built,
+    /// The mesh's motion and its rest pose, written into the mesh buffers every frame.
+    motion: Option<(MeshMotion, Mesh)>,
 }
 
 /// Frames [`Renderer::render`] lets the GPU fall behind by before it waits.
@@ -184,25 +212,70 @@ impl Renderer {
         format: &TargetFormat,
     ) -> crate::Result<Self> {
         // A groom with an empty mesh is a groom-only scene: nothing of the mesh is drawn
-        // or shadowed.
+        // or shadowed, and nothing moves it or binds roots to it.
         let draw_mesh = !(scene.groom.is_some() && scene.mesh.indices.is_empty());
-        let (mesh_buffers, strands): (MeshBuffers, Box<dyn StrandStage>) =
-            match (&scene.groom, draw_mesh) {
-                (Some(groom), false) => {
+        if !draw_mesh {
+            let refuse = |name: &str, what: &str| {
+                pelage_scene::ParamError::new(
+                    name,
+                    "set",
+                    &format!(
+                        "a groom-only scene (an empty mesh, [mesh] kind = \"none\") has no mesh {what}; give the scene a mesh or leave it out"
+                    ),
+                )
+            };
+            if scene.dynamics.is_some() {
+                return Err(refuse("dynamics", "to bind the simulated roots to").into());
+            }
+            if scene.motion.is_some() {
+                return Err(refuse("motion", "to move").into());
+            }
+        }
+        let (mut mesh_buffers, strands): (MeshBuffers, Box<dyn StrandStage>) =
+            match (&scene.groom, &scene.dynamics, draw_mesh) {
+                (Some(groom), None, false) => {
                     let strands = GroomStrands::new(gpu, groom, &scene.hair)?;
                     let mesh = no_mesh(gpu, strands.buffers().reach)?;
                     (mesh, Box::new(strands))
                 }
-                (Some(groom), true) => (
+                (Some(groom), None, true) => (
                     MeshBuffers::upload(gpu, &scene.mesh)?,
                     Box::new(GroomStrands::new(gpu, groom, &scene.hair)?),
                 ),
-                (None, _) => {
+                (None, None, _) => {
                     let mesh = MeshBuffers::upload(gpu, &scene.mesh)?;
                     let strands = GrowStrands::new(gpu, &scene.mesh, &mesh, &scene.hair)?;
                     (mesh, Box::new(strands))
                 }
+                (groom, Some(dynamics), _) => {
+                    let mut mesh = MeshBuffers::upload(gpu, &scene.mesh)?;
+                    // The simulated hair reaches wherever the motion takes the mesh.
+                    if let Some(motion) = &scene.motion {
+                        motion.validate()?;
+                        mesh.bounds = motion.reach(mesh.bounds);
+                    }
+                    let strands = match groom {
+                        Some(groom) => SimulateStrands::groom(
+                            gpu,
+                            groom,
+                            &scene.mesh,
+                            &mesh,
+                            &scene.hair,
+                            dynamics,
+                        )?,
+                        None => {
+                            SimulateStrands::grown(gpu, &scene.mesh, &mesh, &scene.hair, dynamics)?
+                        }
+                    };
+                    (mesh, Box::new(strands))
+                }
             };
+        // The stateless methods: the mesh's box is wherever the motion takes it (the
+        // simulation's above already is).
+        if let (Some(motion), None) = (&scene.motion, &scene.dynamics) {
+            motion.validate()?;
+            mesh_buffers.bounds = motion.reach(mesh_buffers.bounds);
+        }
         Light::validate_all(&scene.lights).map_err(pelage_shade::ShadeError::from)?;
         // Every later stage sizes itself from what stage 1 hands over: the strand
         // buffers carry their counts, widths and reach.
@@ -266,6 +339,7 @@ impl Renderer {
         let timer = GpuTimer::new(gpu, 64)?;
         let views = targets.view_set();
         Ok(Self {
+            motion: scene.motion.clone().map(|m| (m, scene.mesh.clone())),
             mesh_buffers,
             strands,
             shadows,
@@ -291,6 +365,16 @@ impl Renderer {
     /// [`StrandFrame`] every later stage is prepared and recorded with.
     fn prepare(&mut self, gpu: &Gpu, t: f32, camera: &Camera) -> crate::Result<StrandFrame> {
         camera.validate()?;
+        if let Some((motion, rest)) = &self.motion {
+            self.mesh_buffers
+                .update(&gpu.queue, &motion.apply(rest, t))?;
+            if let Some(sim) = self.strands.as_simulation_mut() {
+                let moved: Vec<_> = (sim.dynamics().colliders.iter())
+                    .map(|c| c.moved(|p| motion.point(p, t)))
+                    .collect();
+                sim.set_colliders(&moved)?;
+            }
+        }
         let (width, height) = (self.targets.width, self.targets.height);
         let level = self
             .strands

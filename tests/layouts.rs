@@ -177,6 +177,41 @@ fn the_strand_rasterizer_needs_no_feature_and_no_more_than_webgpu_limits() {
 }
 
 #[test]
+fn the_simulation_renders_on_a_device_with_default_limits_and_repeats_bit_for_bit() {
+    // Issue 20: the simulation binds 8 storage buffers (WebGPU's default), on a head
+    // that turns (the mesh rewritten every frame): two renderers given the same frames
+    // draw the same pictures, and the picture changes as the head turns.
+    let gpu = gpu_with(|_| wgpu::Features::empty());
+    let mut s = scene(
+        ShadowParams::default(),
+        Transparency::Opaque,
+        ShadingModel::default(),
+    );
+    s.mesh = pelage::scene::Mesh::icosphere(0.5, 2).unwrap();
+    s.hair.growth.length = 0.6;
+    s.camera.eye = glam::Vec3::new(0.0, 0.3, 2.5);
+    s.camera.target = glam::Vec3::ZERO;
+    s.dynamics = Some(pelage::scene::DynamicsParams {
+        colliders: vec![pelage::scene::Collider::sphere(glam::Vec3::ZERO, 0.45)],
+        ..Default::default()
+    });
+    s.motion = Some(pelage::scene::MeshMotion::default());
+    let frames = |renderer: &mut Renderer| {
+        (0..6)
+            .map(|f| {
+                renderer.render(&gpu, f as f32 * 0.25, &s.camera).unwrap();
+                renderer.finish(&gpu).unwrap();
+                renderer.rgba8(&gpu).unwrap().2
+            })
+            .collect::<Vec<_>>()
+    };
+    let a = frames(&mut Renderer::new(&gpu, &s, 64, 48).unwrap());
+    let b = frames(&mut Renderer::new(&gpu, &s, 64, 48).unwrap());
+    assert!(a == b, "two renderers of the same frames differ");
+    assert!(a[0] != a[5], "the head did not move");
+}
+
+#[test]
 fn no_library_pipeline_has_an_automatic_layout() {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
     let dirs = [

@@ -153,6 +153,29 @@ fn a_groom_only_scene_draws_the_hair_and_no_mesh() {
     // Stage 2 shadowed the hair alone: its reach is the groom's.
     let renderer = Renderer::new(&gpu, &only, SIZE.0, SIZE.1).unwrap();
     assert_eq!(renderer.mesh_buffers().triangle_count, 0);
+    // Dynamics and motion need a mesh: refused, naming the key, not drawn wrong.
+    for (key, scene) in [
+        (
+            "dynamics",
+            Scene {
+                dynamics: Some(pelage::scene::DynamicsParams::default()),
+                ..only.clone()
+            },
+        ),
+        (
+            "motion",
+            Scene {
+                motion: Some(pelage::scene::MeshMotion::default()),
+                ..only.clone()
+            },
+        ),
+    ] {
+        let e = Renderer::new(&gpu, &scene, SIZE.0, SIZE.1).unwrap_err();
+        assert!(
+            matches!(&e, pelage::Error::Param(p) if p.name == key),
+            "{key}: {e}"
+        );
+    }
     // No mesh and no groom is refused, naming the key.
     let e = SceneFile::parse("[mesh]\nkind = \"none\"\n").unwrap_err();
     assert!(e.to_string().contains("mesh.kind"), "{e}");

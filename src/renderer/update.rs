@@ -3,7 +3,9 @@
 //! slider does not pay for a new renderer (uploads, root sampling, pipelines).
 
 use glam::Vec3;
-use pelage_scene::{HairParams, Light, ShadeParams, ShadowParams, WindParams};
+use pelage_scene::{
+    DynamicsParams, HairParams, Light, MeshMotion, ShadeParams, ShadowParams, WindParams,
+};
 
 use super::{Renderer, Scene};
 
@@ -39,6 +41,8 @@ pub(crate) struct Built {
     shadow: ShadowParams,
     shade: ShadeParams,
     lights: Vec<Light>,
+    dynamics: Option<DynamicsParams>,
+    motion: Option<MeshMotion>,
     /// [`geometry_fingerprint`] of the mesh and the groom.
     geometry: u64,
 }
@@ -51,6 +55,8 @@ impl Built {
             shadow: scene.shadow.clone(),
             shade: scene.shade.clone(),
             lights: scene.lights.clone(),
+            dynamics: scene.dynamics.clone(),
+            motion: scene.motion.clone(),
             geometry: geometry_fingerprint(scene),
         }
     }
@@ -124,7 +130,7 @@ impl Renderer {
     /// Anything else (the mesh or groom, strand count, growth other than colour, level of
     /// detail parameters, the shadow method or its parameters, the light count with
     /// shadows on, the transparency method, sample count, minimum ribbon width, the kind
-    /// of shading model, a groom's reach under a new wind) answers [`Update::Rebuild`]
+    /// of shading model, a groom's reach under a new wind, the dynamics, the motion) answers [`Update::Rebuild`]
     /// naming it, and nothing is applied. Bad values are an error, as from
     /// [`Renderer::new`], and nothing is applied either. The camera is the caller's at
     /// every `render` and is not compared.
@@ -151,6 +157,12 @@ impl Renderer {
         }
         if scene.shadow != built.shadow {
             return Ok(Update::Rebuild("shadow".into()));
+        }
+        if scene.dynamics != built.dynamics {
+            return Ok(Update::Rebuild("dynamics".into()));
+        }
+        if scene.motion != built.motion {
+            return Ok(Update::Rebuild("motion".into()));
         }
         if let Err(why) = self.lights_in_place(&scene.lights) {
             return Ok(Update::Rebuild(why));

@@ -38,7 +38,9 @@ pub struct AnimateOpts {
     pub fps: u32,
     /// Render only frames A to B-1 of the animation (half-open, 0 <= A < B <= N). They
     /// keep their index in the file names (frame_0040.png, ...) and are identical to
-    /// the same frames of the full run; the GIF holds only them. Default: all frames.
+    /// the same frames of the full run; the GIF holds only them. A scene with
+    /// `[dynamics]` is still simulated from frame 0 (frames before A are rendered and
+    /// not written). Default: all frames.
     #[arg(long, value_name = "A..B")]
     pub range: Option<String>,
     /// Output folder for frame_0000.png, frame_0001.png, ... and wind.gif; created if missing.
@@ -149,6 +151,14 @@ pub fn run(opts: &AnimateOpts) -> Result<(), CliError> {
         encoder
             .set_repeat(image::codecs::gif::Repeat::Infinite)
             .map_err(encode_error)?;
+        // A simulation's frame depends on every frame before it: simulate from frame 0,
+        // writing nothing before the range.
+        if scene.dynamics.is_some() {
+            for f in 0..plan.range.start {
+                let t = plan.time(f);
+                renderer.render(&gpu, t, &scene.camera.orbited(-0.5 * t / plan.duration()))?;
+            }
+        }
         for (f, t) in plan.frames() {
             // A slow orbit over the animation (a quarter of a radian in all), so the wind
             // is seen from several sides.

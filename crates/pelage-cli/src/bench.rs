@@ -26,11 +26,11 @@ use std::time::Instant;
 use pelage::gpu::{Gpu, GpuTimer, ShaderSources, compute_pipeline, dispatch_size, wgpu};
 use pelage::scene::Resampled;
 use pelage::scene::{
-    ChiangParams, DirectionalLight, ShadingModel, ShadowParams, Transparency, VoxelParams,
-    WindParams,
+    ChiangParams, DirectionalLight, DynamicsParams, ShadingModel, ShadowParams, Transparency,
+    VoxelParams, WindParams,
 };
 use pelage::shadow::{ShadowMethod, VoxelShadow};
-use pelage::strands::{GroomStrands, GrowStrands, MeshBuffers, StrandStage};
+use pelage::strands::{GroomStrands, GrowStrands, MeshBuffers, SimulateStrands, StrandStage};
 use pelage::{Renderer, Scene};
 use pelage_lab::{ScatterChart, ScatterPoint, Table};
 
@@ -364,6 +364,37 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
             2 * vertices + roots,
             "the grown strands as a groom: reads rest points and roots, writes vertices",
         ));
+        // The grown strands simulated (the default dynamics, frames of 1/60 s): bytes are
+        // what each substep moves per vertex (rest, position and previous position read,
+        // position and previous written: 5 vec4) plus, once a frame, the mesh, roots and
+        // vertices; the row's time is per frame.
+        let mut sim =
+            SimulateStrands::grown(&gpu, &s.mesh, &mesh, &s.hair, &DynamicsParams::default())?;
+        let rest_frame = sim.prepare(&gpu.queue, 0.0)?;
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        sim.encode(&mut encoder, &rest_frame, None)?;
+        gpu.submit_and_wait([encoder.finish()])?;
+        let sim_times = time_frames(&gpu, frames, |encoder, timer, frame| {
+            let frame = sim.prepare(&gpu.queue, (frame + 1) as f32 / 60.0)?;
+            sim.encode(encoder, &frame, timer)?;
+            Ok(())
+        })?;
+        let substeps = u64::from(sim.sim_uniforms().substeps.max(1));
+        let vertex_count =
+            u64::from(sim.buffers().strand_count) * u64::from(sim.buffers().vertices_per_strand());
+        let sim_ms = get(&sim_times, "strands: simulate");
+        let sim_note = format!(
+            "{substeps} substeps a frame; {:.2} ns per vertex per substep; {:.2}x the groom pass's time",
+            sim_ms * 1e6 / (substeps * vertex_count) as f64,
+            sim_ms / get(&groom_times, "strands: groom")
+        );
+        rows.push(compute_row(
+            "strands: simulate",
+            sim_ms,
+            substeps * vertex_count * 5 * 16 + roots + mesh_bytes + vertices,
+            &sim_note,
+        ));
+        bar.println(format!("           simulate: {sim_note}"));
         bar.inc(1);
         scan_ms.push(get(&times, "shadow: scan"));
         grow_points.push((f64::from(strands), get(&times, "strands: grow")));

@@ -755,9 +755,31 @@ fn frames_beyond_the_maximum_exit_2() {
 
 #[test]
 fn a_frame_range_renders_the_same_frames_as_the_full_run() {
-    let full = Scratch::new("range_full");
-    let part = Scratch::new("range_part");
-    let args = [
+    range_matches_full_run("range", &[]);
+}
+
+#[test]
+fn a_frame_range_of_a_simulation_renders_the_same_frames_as_the_full_run() {
+    // The simulation's frame 2 depends on frames 0 and 1: animate simulates them first.
+    let dir = Scratch::new("range_dynamics_scene");
+    let scene = dir.0.join("sim.toml");
+    std::fs::write(
+        &scene,
+        "[mesh]\nkind = \"icosphere\"\nradius = 0.5\nsubdivisions = 2\n\
+         [hair.growth]\nlength = 0.6\n\
+         [dynamics]\ncolliders = [{ center = [0.0, 0.0, 0.0], radius = 0.45 }]\n\
+         [motion]\nturn = 1.0\nturn_frequency = 2.0\n",
+    )
+    .unwrap();
+    let scene = scene.to_string_lossy().into_owned();
+    range_matches_full_run("range_dynamics", &["--scene", &scene]);
+}
+
+/// `animate --range 2..4` writes frames 2 and 3 byte for byte as the full run does.
+fn range_matches_full_run(name: &str, extra: &[&str]) {
+    let full = Scratch::new(&format!("{name}_full"));
+    let part = Scratch::new(&format!("{name}_part"));
+    let mut args = vec![
         "animate",
         "--size",
         "32x24",
@@ -765,10 +787,11 @@ fn a_frame_range_renders_the_same_frames_as_the_full_run() {
         "200",
         "--frames",
         "6",
-        "--out",
     ];
+    args.extend_from_slice(extra);
+    args.push("--out");
     let run = |dir: &Scratch, range: &[&str]| {
-        let mut a: Vec<&str> = args.to_vec();
+        let mut a: Vec<&str> = args.clone();
         let out = dir.0.to_string_lossy().into_owned();
         a.push(&out);
         a.extend_from_slice(range);

@@ -25,6 +25,7 @@ pub mod oit;
 pub mod oit_raster;
 pub mod path_tracer;
 pub mod shading;
+pub mod simulate;
 pub mod strand_raster;
 pub mod strands;
 pub mod transmittance;

@@ -203,19 +203,19 @@ pub fn drawn_width(root: &StrandRoot, index: u32, u: &GrowUniforms) -> f32 {
 
 /// `quat_rotate` in `wgsl/strands/groom.wgsl`: `v` turned by the unit quaternion `q`
 /// (xyz = vector part, w = scalar part).
-fn quat_rotate(q: Vec4, v: Vec3) -> Vec3 {
+pub(crate) fn quat_rotate(q: Vec4, v: Vec3) -> Vec3 {
     let axis = q.truncate();
     v + 2.0 * axis.cross(axis.cross(v) + q.w * v)
 }
 
 /// `quat_mul` in WGSL: the rotation `a` after `b`.
-fn quat_mul(a: Vec4, b: Vec4) -> Vec4 {
+pub(crate) fn quat_mul(a: Vec4, b: Vec4) -> Vec4 {
     let (av, bv) = (a.truncate(), b.truncate());
     (a.w * bv + b.w * av + av.cross(bv)).extend(a.w * b.w - av.dot(bv))
 }
 
 /// `quat_between` in WGSL: the shortest rotation taking unit `a` to unit `b`.
-fn quat_between(a: Vec3, b: Vec3) -> Vec4 {
+pub(crate) fn quat_between(a: Vec3, b: Vec3) -> Vec4 {
     let w = 1.0 + a.dot(b);
     if w < 1e-6 {
         let hint = if a.x.abs() > 0.9 { Vec3::Y } else { Vec3::X };

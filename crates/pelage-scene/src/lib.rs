@@ -32,9 +32,10 @@ pub use lod::{LodParams, Transition};
 pub use mesh::{Mesh, MeshError, MeshReport};
 pub use obj::{ObjError, load_obj, parse_obj};
 pub use params::{
-    AdsmParams, DeepOpacityParams, GrowthParams, HairParams, HairType, LayerSpacing, MAX_FORCE,
-    MAX_SEGMENTS, MapParams, OpacityFormat, ParamError, RootParams, ShadeParams, ShadowMapParams,
-    ShadowParams, Splat, SurfaceInterpolation, VoxelParams, WindParams,
+    AdsmParams, Collider, DeepOpacityParams, DynamicsParams, GrowthParams, HairParams, HairType,
+    LayerSpacing, MAX_ACCELERATION, MAX_COLLIDERS, MAX_FORCE, MAX_SEGMENTS, MapParams, MeshMotion,
+    OpacityFormat, ParamError, RootParams, ShadeParams, ShadowMapParams, ShadowParams, Splat,
+    SurfaceInterpolation, VoxelParams, WindParams,
 };
 pub use scene_file::{MeshSource, SceneFile, SceneFileError};
 pub use shading::{

@@ -404,6 +404,311 @@ impl WindParams {
     }
 }
 
+/// Strand dynamics (`pelage_strands::SimulateStrands`): position-based dynamics of every
+/// strand vertex, integrated by Verlet in fixed substeps, then projected root to tip onto
+/// the global shape, local shape, collision and length constraints.
+///
+/// The stiffnesses are fractions of the way to the target taken per substep (as in
+/// TressFX), so with the default substep they behave the same at any frame rate.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct DynamicsParams {
+    /// Gravity, scene units per second squared.
+    pub gravity: Vec3,
+    /// Acceleration per unit of the wind's force (`WindParams`; the wind's own field,
+    /// turbulence and gusts included), scene units per second squared.
+    pub wind_response: f32,
+    /// Velocity damping rate, per second: velocities decay by `exp(-damping·h)` per
+    /// substep of `h` seconds.
+    pub damping: f32,
+    /// Local shape stiffness in [0, 1]: how far each segment is turned back toward its
+    /// rest direction in its parent segment's frame, per substep.
+    pub local_stiffness: f32,
+    /// Global shape stiffness in [0, 1] at the root: how far each vertex is pulled
+    /// toward its rest position carried by the root's frame, per substep.
+    pub global_stiffness: f32,
+    /// Fraction of the strand, from the root, over which the global stiffness falls
+    /// linearly to zero, in (0, 1].
+    pub global_range: f32,
+    /// Müller et al. 2012's velocity correction of follow-the-leader in [0, 1]: the
+    /// fraction of the next vertex's length correction taken off a vertex's velocity.
+    pub length_damping: f32,
+    /// Friction of the colliders in [0, 1]: the fraction of the tangential velocity a
+    /// vertex loses on contact.
+    pub friction: f32,
+    /// The longest substep, seconds, in (0, 0.05]: a frame of `dt` takes
+    /// `ceil(dt / max_substep)` equal substeps.
+    pub max_substep: f32,
+    /// The longest frame simulated, seconds, in (0, 1]: a longer frame (a hitch, a
+    /// breakpoint) is simulated as this long.
+    pub max_frame: f32,
+    /// A root that moves farther than this in one frame, scene units (> 0), has been
+    /// teleported: its strand is reset to rest at the new pose.
+    pub teleport_distance: f32,
+    /// Spheres and capsules the strands cannot enter, in the mesh's space (they move
+    /// with a [`MeshMotion`]); at most [`MAX_COLLIDERS`].
+    pub colliders: Vec<Collider>,
+}
+
+/// The most colliders a simulation takes.
+pub const MAX_COLLIDERS: usize = 16;
+
+/// A body strands cannot enter: the points within `radius` of `center`, or of the
+/// segment from `center` to `end` (a capsule) when `end` is given.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Collider {
+    /// The sphere's centre, or one end of the capsule's axis.
+    pub center: Vec3,
+    /// The radius (> 0).
+    pub radius: f32,
+    /// The other end of the capsule's axis (none: a sphere).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub end: Option<Vec3>,
+}
+
+impl Collider {
+    /// A sphere.
+    pub fn sphere(center: Vec3, radius: f32) -> Self {
+        Self {
+            center,
+            radius,
+            end: None,
+        }
+    }
+
+    /// A capsule from `a` to `b`.
+    pub fn capsule(a: Vec3, b: Vec3, radius: f32) -> Self {
+        Self {
+            center: a,
+            radius,
+            end: Some(b),
+        }
+    }
+
+    /// The ends of the axis (equal for a sphere).
+    pub fn axis(&self) -> (Vec3, Vec3) {
+        (self.center, self.end.unwrap_or(self.center))
+    }
+
+    /// How far `p` is inside the collider (negative outside).
+    pub fn depth(&self, p: Vec3) -> f32 {
+        let (a, b) = self.axis();
+        let axis = b - a;
+        let len2 = axis.length_squared();
+        let s = if len2 > 0.0 {
+            ((p - a).dot(axis) / len2).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        self.radius - p.distance(a + axis * s)
+    }
+
+    /// The collider moved by `f` (a rigid motion).
+    pub fn moved(&self, f: impl Fn(Vec3) -> Vec3) -> Self {
+        Self {
+            center: f(self.center),
+            radius: self.radius,
+            end: self.end.map(f),
+        }
+    }
+
+    /// Checks the collider; the error names it as `name`.
+    pub fn validate(&self, name: &str) -> Result<(), ParamError> {
+        let (a, b) = self.axis();
+        if !(a.is_finite() && b.is_finite())
+            || a.abs().max_element() > crate::MAX_EXTENT
+            || b.abs().max_element() > crate::MAX_EXTENT
+        {
+            return Err(ParamError::new(
+                name,
+                self,
+                &format!(
+                    "its centre and end must be finite and at most {:e} in magnitude",
+                    crate::MAX_EXTENT
+                ),
+            ));
+        }
+        extent(&format!("{name}.radius"), self.radius)
+    }
+}
+
+/// A rigid motion of the mesh over time (and of the colliders with it): a turn about
+/// the vertical axis through `pivot` and a nod about the horizontal x axis, each a
+/// sine of its amplitude and frequency.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct MeshMotion {
+    /// The point the mesh turns about.
+    pub pivot: Vec3,
+    /// Amplitude of the turn about the vertical axis, radians.
+    pub turn: f32,
+    /// Turns per second.
+    pub turn_frequency: f32,
+    /// Amplitude of the nod about the x axis, radians.
+    pub nod: f32,
+    /// Nods per second.
+    pub nod_frequency: f32,
+}
+
+impl Default for MeshMotion {
+    fn default() -> Self {
+        Self {
+            pivot: Vec3::ZERO,
+            turn: 1.0,
+            turn_frequency: 0.35,
+            nod: 0.35,
+            nod_frequency: 0.6,
+        }
+    }
+}
+
+impl MeshMotion {
+    /// Checks every field; the error names the first bad one.
+    pub fn validate(&self) -> Result<(), ParamError> {
+        finite_vec("motion.pivot", self.pivot)?;
+        for (name, v) in [
+            ("motion.turn", self.turn),
+            ("motion.turn_frequency", self.turn_frequency),
+            ("motion.nod", self.nod),
+            ("motion.nod_frequency", self.nod_frequency),
+        ] {
+            non_negative(name, v)?;
+            if v > 1000.0 {
+                return Err(ParamError::new(name, v, "must be in [0, 1000]"));
+            }
+        }
+        Ok(())
+    }
+
+    /// The rotation at time `t` (seconds): the turn after the nod.
+    pub fn rotation(&self, t: f32) -> glam::Quat {
+        let tau = std::f32::consts::TAU;
+        glam::Quat::from_rotation_y(self.turn * (tau * self.turn_frequency * t).sin())
+            * glam::Quat::from_rotation_x(self.nod * (tau * self.nod_frequency * t).sin())
+    }
+
+    /// Where the point `p` of the mesh at rest is at time `t`.
+    pub fn point(&self, p: Vec3, t: f32) -> Vec3 {
+        self.pivot + self.rotation(t) * (p - self.pivot)
+    }
+
+    /// `mesh` at time `t`: positions turned about the pivot, normals turned.
+    pub fn apply(&self, mesh: &crate::Mesh, t: f32) -> crate::Mesh {
+        let q = self.rotation(t);
+        crate::Mesh {
+            positions: mesh
+                .positions
+                .iter()
+                .map(|&p| self.pivot + q * (p - self.pivot))
+                .collect(),
+            normals: mesh.normals.iter().map(|&n| q * n).collect(),
+            indices: mesh.indices.clone(),
+        }
+    }
+
+    /// A box holding `bounds` in every pose: the sphere around the pivot through the
+    /// box's farthest corner.
+    pub fn reach(&self, (lo, hi): (Vec3, Vec3)) -> (Vec3, Vec3) {
+        let r = (lo - self.pivot)
+            .abs()
+            .max((hi - self.pivot).abs())
+            .length();
+        (self.pivot - Vec3::splat(r), self.pivot + Vec3::splat(r))
+    }
+}
+
+impl Default for DynamicsParams {
+    fn default() -> Self {
+        Self {
+            gravity: Vec3::new(0.0, -9.8, 0.0),
+            wind_response: 4.0,
+            damping: 2.0,
+            local_stiffness: 0.3,
+            global_stiffness: 0.2,
+            global_range: 0.3,
+            length_damping: 0.9,
+            friction: 0.3,
+            max_substep: 1.0 / 120.0,
+            max_frame: 0.1,
+            teleport_distance: 1.0,
+            colliders: Vec::new(),
+        }
+    }
+}
+
+/// The largest gravity or wind response accepted, scene units per second squared.
+pub const MAX_ACCELERATION: f32 = 1.0e4;
+
+impl DynamicsParams {
+    /// Checks every field; the error names the first bad one (e.g. `dynamics.damping`).
+    pub fn validate(&self) -> Result<(), ParamError> {
+        finite_vec("dynamics.gravity", self.gravity)?;
+        if self.gravity.length() > MAX_ACCELERATION {
+            return Err(ParamError::new(
+                "dynamics.gravity",
+                self.gravity,
+                &format!("must be at most {MAX_ACCELERATION} long"),
+            ));
+        }
+        let bounded = |name: &str, v: f32, max: f32| {
+            non_negative(name, v)?;
+            if v > max {
+                return Err(ParamError::new(name, v, &format!("must be in [0, {max}]")));
+            }
+            Ok(())
+        };
+        bounded(
+            "dynamics.wind_response",
+            self.wind_response,
+            MAX_ACCELERATION,
+        )?;
+        bounded("dynamics.damping", self.damping, 1000.0)?;
+        bounded("dynamics.local_stiffness", self.local_stiffness, 1.0)?;
+        bounded("dynamics.global_stiffness", self.global_stiffness, 1.0)?;
+        bounded("dynamics.length_damping", self.length_damping, 1.0)?;
+        bounded("dynamics.friction", self.friction, 1.0)?;
+        let in_range = |name: &str, v: f32, max: f32| {
+            positive(name, v)?;
+            if v > max {
+                return Err(ParamError::new(name, v, &format!("must be in (0, {max}]")));
+            }
+            Ok(())
+        };
+        in_range("dynamics.global_range", self.global_range, 1.0)?;
+        in_range("dynamics.max_substep", self.max_substep, 0.05)?;
+        in_range("dynamics.max_frame", self.max_frame, 1.0)?;
+        extent("dynamics.teleport_distance", self.teleport_distance)?;
+        if self.colliders.len() > MAX_COLLIDERS {
+            return Err(ParamError::new(
+                "dynamics.colliders",
+                self.colliders.len(),
+                &format!("at most {MAX_COLLIDERS} colliders"),
+            ));
+        }
+        for (i, c) in self.colliders.iter().enumerate() {
+            c.validate(&format!("dynamics.colliders[{i}]"))?;
+        }
+        Ok(())
+    }
+
+    /// The substeps a frame of `dt` seconds takes, and their length: `dt` clamped to
+    /// [0, `max_frame`], cut into `ceil(dt / max_substep)` equal substeps (none for 0).
+    pub fn substeps(&self, dt: f32) -> (u32, f32) {
+        let dt = if dt.is_finite() {
+            dt.clamp(0.0, self.max_frame)
+        } else {
+            0.0
+        };
+        let count = (dt / self.max_substep).ceil().max(0.0) as u32;
+        if count == 0 {
+            (0, 0.0)
+        } else {
+            (count, dt / count as f32)
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -412,7 +717,24 @@ mod tests {
     fn defaults_are_valid() {
         GrowthParams::default().validate().unwrap();
         WindParams::default().validate().unwrap();
+        DynamicsParams::default().validate().unwrap();
         RootParams::default().validate(3).unwrap();
+    }
+
+    #[test]
+    fn frames_are_cut_into_substeps_no_longer_than_the_cap() {
+        let d = DynamicsParams::default();
+        assert_eq!(d.substeps(0.0), (0, 0.0));
+        assert_eq!(d.substeps(-1.0), (0, 0.0));
+        assert_eq!(d.substeps(f32::NAN), (0, 0.0));
+        let (n, h) = d.substeps(0.001);
+        assert_eq!(n, 1);
+        assert!((h - 0.001).abs() < 1e-9);
+        // 100 ms at 1/120 s: 12 substeps; 5 s is clamped to max_frame.
+        let (n, h) = d.substeps(0.1);
+        assert_eq!(n, 12);
+        assert!(h <= d.max_substep + 1e-9);
+        assert_eq!(d.substeps(5.0), d.substeps(d.max_frame));
     }
 
     #[test]
@@ -432,6 +754,16 @@ mod tests {
             ..Default::default()
         };
         assert_eq!(w.validate().unwrap_err().name, "wind.strength");
+        let d = DynamicsParams {
+            damping: f32::NAN,
+            ..Default::default()
+        };
+        assert_eq!(d.validate().unwrap_err().name, "dynamics.damping");
+        let d = DynamicsParams {
+            max_substep: 0.0,
+            ..Default::default()
+        };
+        assert_eq!(d.validate().unwrap_err().name, "dynamics.max_substep");
         let g = GrowthParams {
             opacity: 1.5,
             ..Default::default()

@@ -34,6 +34,20 @@
 //! direction = [-0.85, -0.6, 0.1]
 //! ```
 //!
+//! A `[dynamics]` table simulates the hair (grown or from a groom) instead of bending it
+//! by the stateless wind, and a `[motion]` table turns and nods the mesh over time (see
+//! `scenes/head_turn.toml`):
+//!
+//! ```toml
+//! [dynamics]
+//! damping = 2.0
+//! colliders = [{ center = [0.0, 0.0, 0.0], radius = 0.95 }]
+//!
+//! [motion]
+//! turn = 1.0              # radians about the vertical axis through `pivot`
+//! turn_frequency = 0.35   # per second
+//! ```
+//!
 //! A `[groom]` table draws the strands of a `.hair`, `.tfx` or (feature `usd`) USD file
 //! (`.usda`, `.usdc`, `.usd`, `.usdz`) instead of growing fur from the mesh (see
 //! [`GroomSource`]; the mesh is still drawn, as the head, say):
@@ -56,8 +70,8 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 use crate::{
-    Camera, GroomError, GroomSource, HairParams, Light, Mesh, MeshError, ObjError, Resampled,
-    ShadeParams, ShadowParams, WindParams, scene_keys,
+    Camera, DynamicsParams, GroomError, GroomSource, HairParams, Light, Mesh, MeshError,
+    MeshMotion, ObjError, Resampled, ShadeParams, ShadowParams, WindParams, scene_keys,
 };
 
 /// The surface the hair grows from.
@@ -119,6 +133,14 @@ pub struct SceneFile {
     /// bends them (see `pelage_strands::GroomStrands`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub groom: Option<GroomSource>,
+    /// Strand dynamics (none by default: the stateless wind): the hair, grown or from
+    /// `groom`, simulated (see `pelage_strands::SimulateStrands`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dynamics: Option<DynamicsParams>,
+    /// A rigid motion of the mesh over time (none by default): the mesh, its colliders
+    /// and the hair on it turn and nod.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub motion: Option<MeshMotion>,
     /// Stage 2's method.
     pub shadow: ShadowParams,
     /// Stage 3: shading model, transparency, look.
@@ -135,6 +157,8 @@ impl Default for SceneFile {
             mesh: MeshSource::default(),
             hair: HairParams::default(),
             groom: None,
+            dynamics: None,
+            motion: None,
             shadow: ShadowParams::default(),
             shade: ShadeParams::default(),
             camera: Camera::default(),
@@ -280,6 +304,12 @@ impl SceneFile {
                 "none",
                 "needs a [groom] table: without a mesh there is nothing to grow fur from",
             ));
+        }
+        if let Some(dynamics) = &self.dynamics {
+            dynamics.validate()?;
+        }
+        if let Some(motion) = &self.motion {
+            motion.validate()?;
         }
         Light::validate_all(&self.lights)
     }

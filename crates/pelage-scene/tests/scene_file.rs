@@ -226,3 +226,34 @@ fn every_scene_in_the_repository_parses_and_blond_chiang_is_blond() {
         pelage_scene::Absorption::Fixed(pelage_scene::sigma_a_from_melanin(0.3, 0.0))
     );
 }
+
+#[test]
+fn dynamics_and_motion_tables_parse_and_name_their_bad_keys() {
+    let file = SceneFile::parse(
+        "[dynamics]\ndamping = 3.0\ncolliders = [{ center = [0.0, 1.0, 0.0], radius = 0.5 }, \
+         { center = [0.0, 0.0, 0.0], end = [0.0, -1.0, 0.0], radius = 0.2 }]\n\
+         [motion]\nturn = 0.5\n",
+    )
+    .unwrap();
+    let dynamics = file.dynamics.unwrap();
+    assert_eq!(dynamics.damping, 3.0);
+    assert_eq!(dynamics.colliders.len(), 2);
+    assert_eq!(
+        dynamics.colliders[1].end,
+        Some(glam::Vec3::new(0.0, -1.0, 0.0))
+    );
+    assert_eq!(file.motion.unwrap().turn, 0.5);
+    assert!(SceneFile::default().dynamics.is_none());
+    for (text, key) in [
+        ("[dynamics]\ndamping = -1.0\n", "dynamics.damping"),
+        ("[dynamics]\nstiffness = 1.0\n", "stiffness"),
+        (
+            "[dynamics]\ncolliders = [{ center = [0.0, 0.0, 0.0], radius = 0.0 }]\n",
+            "dynamics.colliders[0].radius",
+        ),
+        ("[motion]\nnod = -1.0\n", "motion.nod"),
+    ] {
+        let message = SceneFile::parse(text).unwrap_err().to_string();
+        assert!(message.contains(key), "{text}: {message}");
+    }
+}

@@ -216,7 +216,7 @@ fn reach_around((lo, hi): (Vec3, Vec3), params: &HairParams) -> (Vec3, Vec3) {
 
 /// The hash draw a groom strand's brightness comes from (after its phase; see
 /// [`GroomStrands::new`]).
-const GROOM_BRIGHTNESS_DRAW: u32 = 2;
+pub(crate) const GROOM_BRIGHTNESS_DRAW: u32 = 2;
 
 impl StrandStage for GroomStrands {
     fn pass(&self) -> &StrandPass {

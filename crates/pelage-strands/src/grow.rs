@@ -438,7 +438,8 @@ impl StrandPass {
 
     /// Allocates the strand buffers for `params` (`roots` are the rest roots, copied to
     /// the drawn roots; every vertex stays in `reach`) and builds `shader`'s pipeline
-    /// with the uniforms, `inputs`, the vertices and the drawn roots bound in that order.
+    /// with the uniforms, `inputs` (read-only storage), the vertices and the drawn roots
+    /// bound in that order.
     pub(crate) fn new(
         gpu: &Gpu,
         label: &'static str,
@@ -447,6 +448,20 @@ impl StrandPass {
         reach: (Vec3, Vec3),
         roots: &[StrandRoot],
         inputs: &[&wgpu::Buffer],
+    ) -> crate::Result<Self> {
+        let inputs: Vec<Input> = inputs.iter().copied().map(Input::Read).collect();
+        Self::with_inputs(gpu, label, shader, params, reach, roots, &inputs)
+    }
+
+    /// [`StrandPass::new`] with inputs of any [`Input`] kind.
+    pub(crate) fn with_inputs(
+        gpu: &Gpu,
+        label: &'static str,
+        shader: &str,
+        params: &HairParams,
+        reach: (Vec3, Vec3),
+        roots: &[StrandRoot],
+        inputs: &[Input<'_>],
     ) -> crate::Result<Self> {
         let vertex_bytes = Self::vertex_bytes(gpu, params)?;
         let uniforms = UniformBuffer::new(
@@ -464,9 +479,14 @@ impl StrandPass {
             // then the vertices and drawn roots written.
             let inputs_end = inputs.len() as u32 + 1;
             let layout = (1..inputs_end)
+                .zip(inputs)
                 .fold(
                     BindLayout::new(label, wgpu::ShaderStages::COMPUTE).uniform(0),
-                    BindLayout::storage,
+                    |layout, (binding, input)| match input {
+                        Input::Read(_) => layout.storage(binding),
+                        Input::ReadWrite(_) => layout.storage_rw(binding),
+                        Input::Uniform(_) => layout.uniform(binding),
+                    },
                 )
                 .storage_rw(inputs_end)
                 .storage_rw(inputs_end + 1)
@@ -474,7 +494,9 @@ impl StrandPass {
             let pipeline =
                 compute_pipeline_with_layouts(device, label, &module, "main", &[Some(&layout)]);
             let mut entries = vec![&uniforms.buffer];
-            entries.extend_from_slice(inputs);
+            entries.extend(inputs.iter().map(|input| match input {
+                Input::Read(b) | Input::ReadWrite(b) | Input::Uniform(b) => *b,
+            }));
             entries.push(&vertices);
             entries.push(&roots_buffer);
             let bind_group = bind_buffers(device, label, &layout, &entries);
@@ -507,6 +529,55 @@ impl StrandPass {
             limits: gpu.limits().clone(),
         })
     }
+}
+
+impl StrandPass {
+    /// What [`StrandStage::prepare`] does once the method knows its uniforms: writes
+    /// them and starts the frame at the level of detail last set.
+    pub(crate) fn begin_frame(
+        &mut self,
+        queue: &wgpu::Queue,
+        uniforms: &GrowUniforms,
+    ) -> crate::Result<StrandFrame> {
+        self.uniforms.write(queue, uniforms)?;
+        let frame = StrandFrame::next(self.level.layout());
+        self.frame = Some(frame);
+        Ok(frame)
+    }
+
+    /// What [`StrandStage::encode`] does: records the pass for `frame` (which must be
+    /// the one [`StrandPass::begin_frame`] returned last) over `strands` invocations.
+    pub(crate) fn record(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        frame: &StrandFrame,
+        timer: Option<&mut GpuTimer>,
+        strands: u32,
+    ) -> crate::Result<()> {
+        frame.check_prepared(self.label, self.frame.map_or(0, |f| f.id))?;
+        let timestamp_writes = timer.and_then(|t| t.compute_pass(self.label));
+        let mut compute = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some(self.label),
+            timestamp_writes,
+        });
+        compute.set_pipeline(&self.pipeline);
+        compute.set_bind_group(0, &self.bind_group, &[]);
+        let groups = dispatch_size(&self.limits, u64::from(strands), WORKGROUP);
+        compute.dispatch_workgroups(groups.0, groups.1, 1);
+        Ok(())
+    }
+}
+
+/// How a method's shader binds one of its own inputs (between the uniforms at binding
+/// 0 and the vertices and drawn roots at the last two bindings).
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Input<'a> {
+    /// `var<storage, read>`.
+    Read(&'a wgpu::Buffer),
+    /// `var<storage, read_write>` (state the method keeps from frame to frame).
+    ReadWrite(&'a wgpu::Buffer),
+    /// `var<uniform>`.
+    Uniform(&'a wgpu::Buffer),
 }
 
 /// The shape every stage 1 method has: [`GrowStrands`] (fur grown from a mesh) and
@@ -550,11 +621,7 @@ pub trait StrandStage: std::fmt::Debug {
             .into());
         }
         let uniforms = self.uniforms_at(time);
-        let pass = self.pass_mut();
-        pass.uniforms.write(queue, &uniforms)?;
-        let frame = StrandFrame::next(pass.level.layout());
-        pass.frame = Some(frame);
-        Ok(frame)
+        self.pass_mut().begin_frame(queue, &uniforms)
     }
 
     /// The frame the last [`StrandStage::prepare`] returned (`None` before the first).
@@ -638,18 +705,8 @@ pub trait StrandStage: std::fmt::Debug {
         frame: &StrandFrame,
         timer: Option<&mut GpuTimer>,
     ) -> crate::Result<()> {
-        let pass = self.pass();
-        frame.check_prepared(pass.label, pass.frame.map_or(0, |f| f.id))?;
-        let timestamp_writes = timer.and_then(|t| t.compute_pass(pass.label));
-        let mut compute = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some(pass.label),
-            timestamp_writes,
-        });
-        compute.set_pipeline(&pass.pipeline);
-        compute.set_bind_group(0, &pass.bind_group, &[]);
-        let groups = dispatch_size(&pass.limits, u64::from(frame.layout.strands), WORKGROUP);
-        compute.dispatch_workgroups(groups.0, groups.1, 1);
-        Ok(())
+        self.pass()
+            .record(encoder, frame, timer, frame.layout.strands)
     }
 
     /// The passes [`StrandStage::encode`] records, with the named resources each reads
@@ -662,6 +719,12 @@ pub trait StrandStage: std::fmt::Debug {
                 .reads(pass.inputs.iter().copied())
                 .writes([STRAND_VERTICES, STRAND_ROOTS]),
         ]
+    }
+
+    /// The method as a [`SimulateStrands`](crate::SimulateStrands) (`None` for the
+    /// stateless methods): what a caller moving colliders with the body needs.
+    fn as_simulation_mut(&mut self) -> Option<&mut crate::SimulateStrands> {
+        None
     }
 
     /// The buffers this stage writes.

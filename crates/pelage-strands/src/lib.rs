@@ -1,13 +1,15 @@
 //! Stage 1 of pelage: strands on the GPU, grown from a triangle mesh or read from a
 //! groom file.
 //!
-//! Two methods with one shape ([`StrandStage`]), each writing [`StrandBuffers`], which
+//! Three methods with one shape ([`StrandStage`]), each writing [`StrandBuffers`], which
 //! later stages bind directly:
 //! - [`GrowStrands`] samples roots over the mesh once (on the CPU, deterministic from a
 //!   seed), then every frame a compute pass evaluates the surface under each root (PN
 //!   triangles or flat) and grows the strand under gravity and wind for a time `t`;
 //! - [`GroomStrands`] takes the strands of a `.hair` or `.tfx` file (resampled to a
-//!   fixed segment count) and every frame bends their rest shape by the wind for `t`.
+//!   fixed segment count) and every frame bends their rest shape by the wind for `t`;
+//! - [`SimulateStrands`] simulates either (position-based dynamics with their roots
+//!   bound to the mesh, colliders, the wind as a force), stepping from frame to frame.
 //!
 //! The mesh lives in [`MeshBuffers`]: tightly packed `f32 x3` positions and
 //! normals and a `u32` triangle list in storage buffers, which an engine may own
@@ -26,6 +28,7 @@ mod grow;
 mod lod;
 mod mesh_buffers;
 mod roots;
+mod simulate;
 
 pub use groom::GroomStrands;
 pub use grow::{
@@ -38,6 +41,7 @@ pub use lod::{
 };
 pub use mesh_buffers::MeshBuffers;
 pub use roots::{StrandRoot, hash_to_unit, pcg_hash, sample_roots, strand_brightness};
+pub use simulate::{ColliderUniform, STATE_HEADER, SimUniforms, SimulateStrands};
 
 use pelage_gpu::{GpuError, ShaderSources};
 use pelage_scene::{MeshError, ParamError};
@@ -49,6 +53,7 @@ pub static SHADERS: ShaderSources = pelage_gpu::wgsl_sources!(
     "strands/groom.wgsl",
     "strands/grow.wgsl",
     "strands/lod.wgsl",
+    "strands/simulate.wgsl",
 );
 
 /// What can go wrong in stage 1.

@@ -1,0 +1,706 @@
+//! Stage 1 with dynamics: strands simulated by position-based dynamics on the GPU
+//! (`wgsl/strands/simulate.wgsl`), their roots bound to the triangles of a mesh that may
+//! move every frame.
+
+use encase::ShaderType;
+use glam::{Vec2, Vec3, Vec4};
+use pelage_gpu::{Gpu, GpuTimer, UniformBuffer, read_buffer, storage_buffer, wgpu, zeroed_storage};
+use pelage_scene::{
+    Camera, Collider, DynamicsParams, HairParams, HairType, MAX_COLLIDERS, Mesh, ParamError,
+    Resampled,
+};
+
+use crate::grow::{Input, MESH, StrandPass, StrandStage};
+use crate::{GroomStrands, LodLevel, MeshBuffers, StrandFrame, StrandRoot, StrandsError};
+
+/// `vec4`s of simulation state per strand before its vertices (`STATE_HEADER` in WGSL):
+/// the root's position (w = 1 once posed), normal and tangent in the last frame.
+pub const STATE_HEADER: u32 = 3;
+
+/// `collider` as the shader reads it.
+fn collider_uniform(collider: &Collider) -> ColliderUniform {
+    let (a, b) = collider.axis();
+    ColliderUniform {
+        a,
+        radius: collider.radius,
+        b,
+        pad: 0.0,
+    }
+}
+
+/// A capsule from `a` to `b` (a sphere when equal), as `simulate.wgsl` reads it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, ShaderType)]
+pub struct ColliderUniform {
+    /// One end of the axis.
+    pub a: Vec3,
+    /// Radius.
+    pub radius: f32,
+    /// The other end.
+    pub b: Vec3,
+    /// Padding to 16 bytes.
+    pub pad: f32,
+}
+
+/// The per-frame uniforms of `simulate.wgsl` (`SimUniforms` there), beside the
+/// [`GrowUniforms`](crate::GrowUniforms) that carry the wind and the level of detail.
+#[derive(Clone, Copy, Debug, PartialEq, ShaderType)]
+pub struct SimUniforms {
+    /// Gravity, scene units per second squared.
+    pub gravity: Vec3,
+    /// Acceleration per unit of wind force.
+    pub wind_response: f32,
+    /// Substeps this frame.
+    pub substeps: u32,
+    /// Length of each, seconds.
+    pub h: f32,
+    /// Time at the start of the frame, seconds (the last substep ends at the frame's time).
+    pub time0: f32,
+    /// 1 puts every strand at rest in this frame's pose.
+    pub reset: u32,
+    /// Velocity kept per substep, `exp(-damping · h)`.
+    pub keep: f32,
+    /// [`DynamicsParams::local_stiffness`].
+    pub local_stiffness: f32,
+    /// [`DynamicsParams::global_stiffness`].
+    pub global_stiffness: f32,
+    /// [`DynamicsParams::global_range`].
+    pub global_range: f32,
+    /// [`DynamicsParams::length_damping`].
+    pub length_damping: f32,
+    /// [`DynamicsParams::friction`].
+    pub friction: f32,
+    /// [`DynamicsParams::teleport_distance`].
+    pub teleport_distance: f32,
+    /// Colliders in use (the first of `colliders`).
+    pub collider_count: u32,
+    /// The colliders.
+    pub colliders: [ColliderUniform; MAX_COLLIDERS],
+}
+
+impl SimUniforms {
+    /// The uniforms of a frame ending at `time`, `dt` after the last (`None`: reset
+    /// every strand to rest), with `dynamics` and `colliders`.
+    pub fn new(
+        dynamics: &DynamicsParams,
+        colliders: &[Collider],
+        time: f32,
+        dt: Option<f32>,
+    ) -> Self {
+        let (substeps, h) = dt.map_or((0, 0.0), |dt| dynamics.substeps(dt));
+        let mut uniforms = [ColliderUniform::default(); MAX_COLLIDERS];
+        for (slot, c) in uniforms.iter_mut().zip(colliders) {
+            *slot = collider_uniform(c);
+        }
+        Self {
+            gravity: dynamics.gravity,
+            wind_response: dynamics.wind_response,
+            substeps,
+            h,
+            time0: time - h * substeps as f32,
+            reset: u32::from(dt.is_none()),
+            keep: (-dynamics.damping * h).exp(),
+            local_stiffness: dynamics.local_stiffness,
+            global_stiffness: dynamics.global_stiffness,
+            global_range: dynamics.global_range,
+            length_damping: dynamics.length_damping,
+            friction: dynamics.friction,
+            teleport_distance: dynamics.teleport_distance,
+            collider_count: colliders.len().min(MAX_COLLIDERS) as u32,
+            colliders: uniforms,
+        }
+    }
+}
+
+/// Stage 1 with dynamics: the strands of grown fur ([`SimulateStrands::grown`]) or of a
+/// groom file ([`SimulateStrands::groom`]) simulated under gravity and the wind, their
+/// roots following a mesh the caller may rewrite every frame (skinned or moved), kept
+/// out of spheres and capsules ([`Collider`]: `DynamicsParams::colliders`, moved by the
+/// caller with [`SimulateStrands::set_colliders`]).
+///
+/// **Scheme.** Position-based dynamics (Müller et al. 2007) with one compute invocation
+/// per strand walking it root to tip, every substep: Verlet integration (gravity,
+/// damping, the stateless methods' wind field as a force), then, vertex after vertex,
+/// global shape (toward the rest position carried by the root's frame, stiffness falling
+/// linearly to 0 over `global_range` of the strand), local shape (toward the rest
+/// direction in the parent segment's frame, TressFX's local shape constraint),
+/// collisions with friction, and inextensibility by follow-the-leader with Müller et al.
+/// 2012's velocity correction ("DFTL"). Gauss-Seidel along the strand converges in one
+/// pass where Jacobi iterations need many, FTL makes every segment exactly its rest
+/// length after every substep whatever the forces, and one thread per strand needs no
+/// atomics, so runs are bit for bit repeatable and the CPU mirror
+/// (`pelage_reference::simulate`) follows it loop for loop.
+///
+/// **Time.** [`StrandStage::prepare`] takes the frame's time: the method steps by
+/// `dt = time - last time`, clamped to `max_frame` (0.1 s by default: a longer hitch is
+/// simulated as 0.1 s) and cut into `ceil(dt / max_substep)` equal substeps (1/120 s by
+/// default, so 1 ms takes one substep and 100 ms twelve); the root is interpolated
+/// across the substeps. The first frame, time going backwards and
+/// [`SimulateStrands::reset`] put every strand at rest in the current pose. Every
+/// `prepare` must be followed by its `encode` and a submit: a prepared frame that is
+/// never run is lost time.
+///
+/// **Roots.** Each root sits on a triangle (index and barycentrics); every frame its
+/// position, normal and tangent (from the triangle's first edge, flat interpolation)
+/// come from the current [`MeshBuffers`], and the rest shape, stored in that frame,
+/// turns with it. A root that moved more than `teleport_distance` in one frame puts its
+/// strand at rest in the new pose. A root whose triangle holds a non-finite position or
+/// normal holds its strand at its last pose and is counted
+/// ([`SimulateStrands::held_strands`]).
+///
+/// **State.** One storage buffer ([`SimulateStrands::state`]): per strand
+/// [`STATE_HEADER`] `vec4`s of root pose, then its rest shape, positions and previous
+/// positions, `segments + 1` `vec4` each. The pass binds 8 storage buffers (WebGPU's
+/// default limit): the mesh's three, the roots, the state, the held counter, the
+/// vertices and the drawn roots.
+///
+/// Every strand is simulated each frame, the level of detail only choosing which are
+/// drawn (segment reduction is not offered: the simulated shape has no bend bound).
+#[derive(Debug)]
+pub struct SimulateStrands {
+    roots: Vec<StrandRoot>,
+    /// Rest shape of every strand in its root's frame, `segments + 1` per strand.
+    rest_local: Vec<Vec3>,
+    pass: StrandPass,
+    rest_roots: wgpu::Buffer,
+    state: wgpu::Buffer,
+    held: wgpu::Buffer,
+    sim: UniformBuffer<SimUniforms>,
+    dynamics: DynamicsParams,
+    colliders: Vec<Collider>,
+    /// The time of the last frame prepared (`None`: the next one resets).
+    last_time: Option<f32>,
+    last_uniforms: SimUniforms,
+    /// The hash draw the strands' brightness comes from (see [`crate::strand_brightness`]).
+    brightness_draw: u32,
+}
+
+impl SimulateStrands {
+    /// Fur grown on `mesh` with `hair` (roots sampled as [`GrowStrands`](crate::GrowStrands)
+    /// samples them; the rest shape is the grown one without gravity or wind: straight,
+    /// wavy or curly along the root's tilted normal), simulated with `dynamics`.
+    /// `mesh_buffers` must hold `mesh` (in any later pose).
+    pub fn grown(
+        gpu: &Gpu,
+        mesh: &Mesh,
+        mesh_buffers: &MeshBuffers,
+        hair: &HairParams,
+        dynamics: &DynamicsParams,
+    ) -> crate::Result<Self> {
+        check_mesh(mesh, mesh_buffers)?;
+        StrandPass::vertex_bytes(gpu, hair)?;
+        let roots = crate::sample_roots(mesh, &hair.roots, &hair.growth)?;
+        let segments = hair.growth.segments;
+        let rest_local: Vec<Vec3> = roots
+            .iter()
+            .flat_map(|root| grown_rest(root, hair, segments))
+            .collect();
+        let mut params = hair.clone();
+        params.growth.gravity = Vec3::ZERO;
+        Self::build(
+            gpu,
+            mesh_buffers,
+            params,
+            dynamics,
+            roots,
+            rest_local,
+            crate::roots::GROWN_BRIGHTNESS_DRAW,
+        )
+    }
+
+    /// The strands of a groom file (shuffled, coloured and sized as
+    /// [`GroomStrands`] does), each root bound to the triangle of `mesh` nearest to it,
+    /// simulated with `dynamics`. `mesh_buffers` must hold `mesh` (in any later pose).
+    pub fn groom(
+        gpu: &Gpu,
+        groom: &Resampled,
+        mesh: &Mesh,
+        mesh_buffers: &MeshBuffers,
+        hair: &HairParams,
+        dynamics: &DynamicsParams,
+    ) -> crate::Result<Self> {
+        check_mesh(mesh, mesh_buffers)?;
+        // The groom method shuffles, colours and sizes the strands; its pass is dropped.
+        let stateless = GroomStrands::new(gpu, groom, hair)?;
+        let params = stateless.params().clone();
+        let per_strand = groom.segments as usize + 1;
+        let triangles = usable_triangles(mesh);
+        if triangles.is_empty() {
+            return Err(StrandsError::NoSurface(
+                "every triangle has zero area: roots cannot be bound".into(),
+            ));
+        }
+        let mut roots = stateless.roots().to_vec();
+        let mut rest_local = Vec::with_capacity(stateless.rest_points().len());
+        for (root, points) in roots
+            .iter_mut()
+            .zip(stateless.rest_points().chunks(per_strand))
+        {
+            let (triangle, bary) = nearest_triangle(mesh, &triangles, points[0]);
+            root.triangle = triangle;
+            root.bary = bary;
+            let frame = RootFrame::on(mesh, triangle, bary);
+            rest_local.extend(points.iter().map(|&p| frame.to_local(p)));
+        }
+        Self::build(
+            gpu,
+            mesh_buffers,
+            params,
+            dynamics,
+            roots,
+            rest_local,
+            crate::groom::GROOM_BRIGHTNESS_DRAW,
+        )
+    }
+
+    fn build(
+        gpu: &Gpu,
+        mesh_buffers: &MeshBuffers,
+        params: HairParams,
+        dynamics: &DynamicsParams,
+        roots: Vec<StrandRoot>,
+        rest_local: Vec<Vec3>,
+        brightness_draw: u32,
+    ) -> crate::Result<Self> {
+        dynamics.validate()?;
+        let per_strand = params.growth.segments as usize + 1;
+        let header = STATE_HEADER as usize;
+        // State: root pose (zero: not posed yet), rest shape, positions, previous.
+        let mut state = vec![Vec4::ZERO; roots.len() * (header + 3 * per_strand)];
+        for (chunk, rest) in state
+            .chunks_mut(header + 3 * per_strand)
+            .zip(rest_local.chunks(per_strand))
+        {
+            for (slot, p) in chunk[header..].iter_mut().zip(rest) {
+                *slot = p.extend(0.0);
+            }
+        }
+        let storage = wgpu::BufferUsages::STORAGE;
+        let state = storage_buffer(gpu, "pelage simulation state", &state, storage)?;
+        let held = zeroed_storage(gpu, "pelage simulation held strands", 4, storage)?;
+        let rest_roots = storage_buffer(gpu, "pelage simulation rest roots", &roots, storage)?;
+        let last_uniforms = SimUniforms::new(dynamics, &[], 0.0, None);
+        let sim = UniformBuffer::new(gpu, "pelage simulation uniforms", &last_uniforms)?;
+        // A strand reaches at most its length from its root point (which sits its rest
+        // offset from the surface), anywhere the mesh goes.
+        let max_width = roots.iter().map(|r| r.width).fold(0.0f32, f32::max);
+        let pad = rest_local
+            .chunks(per_strand)
+            .zip(&roots)
+            .map(|(rest, root)| rest[0].length() + root.length)
+            .fold(0.0f32, f32::max)
+            + max_width;
+        let (lo, hi) = mesh_buffers.bounds;
+        let reach = (lo - Vec3::splat(pad), hi + Vec3::splat(pad));
+        let mut pass = StrandPass::with_inputs(
+            gpu,
+            "strands: simulate",
+            "strands/simulate.wgsl",
+            &params,
+            reach,
+            &roots,
+            &[
+                Input::Read(&mesh_buffers.positions),
+                Input::Read(&mesh_buffers.normals),
+                Input::Read(&mesh_buffers.indices),
+                Input::Read(&rest_roots),
+                Input::Uniform(&sim.buffer),
+                Input::ReadWrite(&state),
+                Input::ReadWrite(&held),
+            ],
+        )?;
+        pass.inputs = &[MESH];
+        Ok(Self {
+            roots,
+            rest_local,
+            pass,
+            rest_roots,
+            state,
+            held,
+            sim,
+            dynamics: dynamics.clone(),
+            colliders: dynamics.colliders.clone(),
+            last_time: None,
+            last_uniforms,
+            brightness_draw,
+        })
+    }
+
+    /// Replaces the colliders in use (world space, at most [`MAX_COLLIDERS`]; they start
+    /// as `DynamicsParams::colliders`), taking effect at the next `prepare`: the caller
+    /// moves them with the body. Refuses more, or a bad one, naming it, and then changes
+    /// nothing.
+    pub fn set_colliders(&mut self, colliders: &[Collider]) -> crate::Result<()> {
+        if colliders.len() > MAX_COLLIDERS {
+            return Err(ParamError::new(
+                "dynamics.colliders",
+                colliders.len(),
+                &format!("at most {MAX_COLLIDERS} colliders"),
+            )
+            .into());
+        }
+        for (i, c) in colliders.iter().enumerate() {
+            c.validate(&format!("colliders[{i}]"))?;
+        }
+        self.colliders = colliders.to_vec();
+        Ok(())
+    }
+
+    /// The colliders in use.
+    pub fn colliders(&self) -> &[Collider] {
+        &self.colliders
+    }
+
+    /// Replaces the dynamics parameters (validated) and the colliders in use with its
+    /// colliders, from the next `prepare` on.
+    pub fn set_dynamics(&mut self, dynamics: &DynamicsParams) -> crate::Result<()> {
+        dynamics.validate()?;
+        self.dynamics = dynamics.clone();
+        self.colliders = dynamics.colliders.clone();
+        Ok(())
+    }
+
+    /// The dynamics parameters in use.
+    pub fn dynamics(&self) -> &DynamicsParams {
+        &self.dynamics
+    }
+
+    /// Puts every strand back at rest (in the pose of the mesh) at the next `prepare`.
+    pub fn reset(&mut self) {
+        self.last_time = None;
+    }
+
+    /// The simulation state (see the type's docs; input of the CPU mirror).
+    pub fn state(&self) -> &wgpu::Buffer {
+        &self.state
+    }
+
+    /// The rest shape of every strand in its root's frame (x along the tangent, y along
+    /// the normal, z along tangent × normal), `segments + 1` points per strand.
+    pub fn rest_local(&self) -> &[Vec3] {
+        &self.rest_local
+    }
+
+    /// The simulation uniforms the last `prepare` wrote.
+    pub fn sim_uniforms(&self) -> &SimUniforms {
+        &self.last_uniforms
+    }
+
+    /// The strands held at their last pose in the last frame run because the mesh under
+    /// their root was not finite. Reads back from the GPU (waits for it): call it outside
+    /// the frame loop.
+    pub fn held_strands(&self, gpu: &Gpu) -> crate::Result<u32> {
+        let bytes = read_buffer(gpu, &self.held)?;
+        Ok(bytes
+            .get(..4)
+            .map_or(0, |b| u32::from_le_bytes([b[0], b[1], b[2], b[3]])))
+    }
+}
+
+impl StrandStage for SimulateStrands {
+    fn pass(&self) -> &StrandPass {
+        &self.pass
+    }
+
+    fn pass_mut(&mut self) -> &mut StrandPass {
+        &mut self.pass
+    }
+
+    fn roots(&self) -> &[StrandRoot] {
+        &self.roots
+    }
+
+    /// Steps the simulation from the last frame's time to `time` (see the type's docs).
+    fn prepare(&mut self, queue: &wgpu::Queue, time: f32) -> crate::Result<StrandFrame> {
+        if !time.is_finite() {
+            return Err(ParamError::new("time", time, "must be finite").into());
+        }
+        let dt = self
+            .last_time
+            .filter(|&last| time >= last)
+            .map(|last| time - last);
+        let uniforms = SimUniforms::new(&self.dynamics, &self.colliders, time, dt);
+        self.sim.write(queue, &uniforms)?;
+        self.last_uniforms = uniforms;
+        self.last_time = Some(time);
+        let grow = self.uniforms_at(time);
+        self.pass.begin_frame(queue, &grow)
+    }
+
+    /// Clears the held counter and simulates every strand (drawn or not).
+    fn encode(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        frame: &StrandFrame,
+        timer: Option<&mut GpuTimer>,
+    ) -> crate::Result<()> {
+        encoder.clear_buffer(&self.held, 0, None);
+        self.pass
+            .record(encoder, frame, timer, self.buffers().strand_count)
+    }
+
+    fn set_color(
+        &mut self,
+        queue: &wgpu::Queue,
+        color: Vec3,
+        color_jitter: f32,
+    ) -> crate::Result<()> {
+        crate::grow::recolor(
+            &mut self.pass,
+            &mut self.roots,
+            &self.rest_roots,
+            self.brightness_draw,
+            queue,
+            (color, color_jitter),
+        )
+    }
+
+    fn as_simulation_mut(&mut self) -> Option<&mut SimulateStrands> {
+        Some(self)
+    }
+
+    /// Strand reduction as the stateless methods; always every segment.
+    fn level_for_view(
+        &self,
+        bounds: (Vec3, Vec3),
+        camera: &Camera,
+        width: u32,
+        height: u32,
+    ) -> LodLevel {
+        let full = self.params().growth.segments;
+        LodLevel::for_view_with(self.params(), bounds, camera, width, height, |_| {
+            (full, 0.0)
+        })
+    }
+}
+
+/// Refuses mesh buffers that do not hold `mesh`.
+fn check_mesh(mesh: &Mesh, buffers: &MeshBuffers) -> crate::Result<()> {
+    mesh.validate()?;
+    if buffers.vertex_count as usize != mesh.positions.len()
+        || buffers.triangle_count as usize != mesh.indices.len() / 3
+    {
+        return Err(StrandsError::MeshMismatch {
+            buffers: format!(
+                "{} vertices, {} triangles",
+                buffers.vertex_count, buffers.triangle_count
+            ),
+            mesh: format!(
+                "{} vertices, {} triangles",
+                mesh.positions.len(),
+                mesh.indices.len() / 3
+            ),
+        });
+    }
+    Ok(())
+}
+
+/// A root's frame on the mesh at rest, as `root_pose` in WGSL computes it.
+#[derive(Clone, Copy, Debug)]
+struct RootFrame {
+    position: Vec3,
+    normal: Vec3,
+    tangent: Vec3,
+}
+
+impl RootFrame {
+    /// The flat surface of `triangle` at barycentrics `bary`.
+    fn on(mesh: &Mesh, triangle: u32, bary: Vec2) -> Self {
+        let idx = |k: usize| mesh.indices[triangle as usize * 3 + k] as usize;
+        let (i1, i2, i3) = (idx(0), idx(1), idx(2));
+        let w = 1.0 - bary.x - bary.y;
+        let position =
+            mesh.positions[i1] * bary.x + mesh.positions[i2] * bary.y + mesh.positions[i3] * w;
+        let normal = (mesh.normals[i1] * bary.x + mesh.normals[i2] * bary.y + mesh.normals[i3] * w)
+            .try_normalize()
+            .unwrap_or(Vec3::Y);
+        let tangent = perpendicular(normal, mesh.positions[i2] - mesh.positions[i1]);
+        Self {
+            position,
+            normal,
+            tangent,
+        }
+    }
+
+    /// `p` in this frame's coordinates (x tangent, y normal, z tangent × normal).
+    fn to_local(self, p: Vec3) -> Vec3 {
+        let d = p - self.position;
+        Vec3::new(
+            d.dot(self.tangent),
+            d.dot(self.normal),
+            d.dot(self.tangent.cross(self.normal)),
+        )
+    }
+}
+
+/// A unit vector perpendicular to unit `n`, as close to `hint` as possible.
+fn perpendicular(n: Vec3, hint: Vec3) -> Vec3 {
+    let fallback = if n.x.abs() > 0.9 { Vec3::Y } else { Vec3::X };
+    let f = (fallback - fallback.dot(n) * n)
+        .try_normalize()
+        .unwrap_or(Vec3::Z);
+    (hint - hint.dot(n) * n).try_normalize().unwrap_or(f)
+}
+
+/// The rest shape of a grown strand in its root's frame: `grow.wgsl`'s strand without
+/// force (the root direction tilted from the normal, the growth's wave or curl).
+fn grown_rest(root: &StrandRoot, hair: &HairParams, segments: u32) -> Vec<Vec3> {
+    // Root frame: tangent = x, normal = y, tangent × normal = z, so normal × tangent = -z.
+    let (st, ct) = root.tilt.sin_cos();
+    let (sa, ca) = root.azimuth.sin_cos();
+    let d = Vec3::new(st * ca, ct, -st * sa);
+    let e1 = perpendicular(d, Vec3::X);
+    let e2 = d.cross(e1);
+    let seg_len = root.length / segments as f32;
+    let mut p = Vec3::ZERO;
+    let mut out = Vec::with_capacity(segments as usize + 1);
+    out.push(p);
+    for i in 0..segments {
+        let s = (i as f32 + 0.5) * seg_len;
+        let tangent = match hair.growth.hair_type {
+            HairType::Straight => d,
+            HairType::Wavy {
+                amplitude,
+                frequency,
+            } => {
+                let k = std::f32::consts::TAU * frequency;
+                let theta = (k * amplitude * (k * s).cos()).atan();
+                d * theta.cos() + e1 * theta.sin()
+            }
+            HairType::Curly { radius, pitch } => {
+                let circumference = std::f32::consts::TAU * radius;
+                let turn_length = (circumference * circumference + pitch * pitch).sqrt();
+                let theta = circumference.atan2(pitch);
+                let phi = std::f32::consts::TAU * s / turn_length;
+                d * theta.cos() + (e1 * phi.cos() + e2 * phi.sin()) * theta.sin()
+            }
+        };
+        p += tangent * seg_len;
+        out.push(p);
+    }
+    out
+}
+
+/// The triangles of `mesh` with a non-zero area.
+fn usable_triangles(mesh: &Mesh) -> Vec<u32> {
+    mesh.triangle_areas()
+        .iter()
+        .enumerate()
+        .filter(|(_, a)| **a > 0.0 && a.is_finite())
+        .map(|(t, _)| t as u32)
+        .collect()
+}
+
+/// The triangle of `triangles` nearest to `p` and the barycentrics (of its first and
+/// second corner) of the nearest point on it.
+fn nearest_triangle(mesh: &Mesh, triangles: &[u32], p: Vec3) -> (u32, Vec2) {
+    let mut best = (triangles[0], Vec2::new(1.0 / 3.0, 1.0 / 3.0), f32::INFINITY);
+    for &t in triangles {
+        let idx = |k: usize| mesh.indices[t as usize * 3 + k] as usize;
+        let (a, b, c) = (
+            mesh.positions[idx(0)],
+            mesh.positions[idx(1)],
+            mesh.positions[idx(2)],
+        );
+        let (u, v, w) = closest_on_triangle(p, a, b, c);
+        let d = p.distance_squared(a * u + b * v + c * w);
+        if d < best.2 {
+            best = (t, Vec2::new(u, v), d);
+        }
+    }
+    (best.0, best.1)
+}
+
+/// Barycentrics `(u, v, w)` of the point of triangle `abc` nearest to `p` (Ericson,
+/// Real-Time Collision Detection, 5.1.5).
+fn closest_on_triangle(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> (f32, f32, f32) {
+    let ab = b - a;
+    let ac = c - a;
+    let ap = p - a;
+    let d1 = ab.dot(ap);
+    let d2 = ac.dot(ap);
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return (1.0, 0.0, 0.0);
+    }
+    let bp = p - b;
+    let d3 = ab.dot(bp);
+    let d4 = ac.dot(bp);
+    if d3 >= 0.0 && d4 <= d3 {
+        return (0.0, 1.0, 0.0);
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        let v = d1 / (d1 - d3);
+        return (1.0 - v, v, 0.0);
+    }
+    let cp = p - c;
+    let d5 = ab.dot(cp);
+    let d6 = ac.dot(cp);
+    if d6 >= 0.0 && d5 <= d6 {
+        return (0.0, 0.0, 1.0);
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        let w = d2 / (d2 - d6);
+        return (1.0 - w, 0.0, w);
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        return (0.0, 1.0 - w, w);
+    }
+    let denom = 1.0 / (va + vb + vc);
+    let v = vb * denom;
+    let w = vc * denom;
+    (1.0 - v - w, v, w)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn closest_point_barycentrics_cover_the_regions() {
+        let (a, b, c) = (Vec3::ZERO, Vec3::X, Vec3::Y);
+        assert_eq!(
+            closest_on_triangle(Vec3::new(-1.0, -1.0, 0.0), a, b, c),
+            (1.0, 0.0, 0.0)
+        );
+        assert_eq!(
+            closest_on_triangle(Vec3::new(2.0, -0.5, 0.0), a, b, c),
+            (0.0, 1.0, 0.0)
+        );
+        let (u, v, w) = closest_on_triangle(Vec3::new(0.25, 0.25, 3.0), a, b, c);
+        assert!((u - 0.5).abs() < 1e-6 && (v - 0.25).abs() < 1e-6 && (w - 0.25).abs() < 1e-6);
+        let (u, v, w) = closest_on_triangle(Vec3::new(0.5, -2.0, 0.0), a, b, c);
+        assert!((u - 0.5).abs() < 1e-6 && (v - 0.5).abs() < 1e-6 && w == 0.0);
+    }
+
+    #[test]
+    fn grown_rest_shape_has_the_strand_length_along_the_normal() {
+        let hair = HairParams::default();
+        let root = StrandRoot {
+            triangle: 0,
+            seed: 0,
+            bary: Vec2::ZERO,
+            length: 2.0,
+            width: 0.01,
+            phase: 0.0,
+            tilt: 0.0,
+            azimuth: 0.0,
+            color: Vec3::ONE,
+        };
+        let straight = HairParams {
+            growth: pelage_scene::GrowthParams {
+                hair_type: HairType::Straight,
+                ..hair.growth.clone()
+            },
+            ..hair
+        };
+        let rest = grown_rest(&root, &straight, 8);
+        assert_eq!(rest.len(), 9);
+        assert!(
+            (rest[8] - Vec3::new(0.0, 2.0, 0.0)).length() < 1e-5,
+            "{rest:?}"
+        );
+    }
+}

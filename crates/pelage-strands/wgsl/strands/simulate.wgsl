@@ -1,0 +1,320 @@
+// Stage 1 with dynamics: every strand simulated by position-based dynamics, its root
+// bound to a triangle of the (possibly moving) mesh.
+//
+// Reads:  the mesh (positions and normals as tightly packed f32 x3, a u32 triangle list),
+//         one StrandRoot per strand (triangle, barycentrics, width, gust phase), the
+//         frame's GrowUniforms (wind, time, level of detail; gravity, shape and surface
+//         fields unused) and SimUniforms (substeps, stiffnesses, colliders).
+// Reads and writes: `state`, per strand STATE_HEADER + 3 (segments + 1) vec4 (see
+//         `state_base`): the root's pose last frame, the rest shape in the root's frame,
+//         and every vertex's position and previous position (Verlet).
+// Writes: `held[0]` (atomicAdd): the strands held this frame because the mesh under
+//         their root is not finite; `vertices`, (segments / step + 1) vec4 per drawn
+//         strand (xyz = position, w = strand parameter in [0, 1]); `drawn[strand].width`,
+//         the rest width times the level of detail's width scale.
+// Dispatch: one invocation per strand of the groom (strand_total: every strand is
+//         simulated, drawn or not), workgroup_size(64); x = min(groups, limit),
+//         y = ceil(groups / x).
+//
+// One invocation walks its strand root to tip, substep after substep (Gauss-Seidel along
+// the strand: deterministic, no atomics but the held counter). Each substep of h seconds:
+//  1. the root's position and frame (normal, tangent from the triangle's first edge) are
+//     interpolated between last frame's and this frame's pose;
+//  2. Verlet: x' = x + (x - x_prev) exp(-damping h) + a h^2, a = gravity + wind_response
+//     force(x, t) (strands/force.wgsl, the wind of the stateless methods);
+//  3. root to tip, vertex k: global shape (pull toward its rest position carried by the
+//     root's frame, stiffness falling to 0 at global_range), local shape (toward the rest
+//     direction turned by the rotation accumulated from the segments before it, as
+//     groom.wgsl turns a groom), collisions (out of every sphere and capsule, friction
+//     taking tangential velocity off), then follow-the-leader: the vertex is put at its
+//     rest length from its parent, twice with a collision between, and the parent's
+//     velocity is corrected by -length_damping times that correction (Mueller et al.
+//     2012, "DFTL"). The root is pinned.
+// Every segment thus leaves each substep at its rest length (to float rounding).
+// A root that moved more than teleport_distance, a first frame, a reset or a non-finite
+// vertex put the strand at rest in its new pose.
+// The CPU mirror of this file is pelage-reference/src/simulate.rs: change both together.
+
+#import shared/math.wgsl
+#import shared/strand.wgsl
+#import strands/force.wgsl
+#import strands/lod.wgsl
+
+const MAX_COLLIDERS: u32 = 16u;
+// vec4s per strand before its vertices: root position (w = 1 once posed), normal, tangent.
+const STATE_HEADER: u32 = 3u;
+
+// A capsule from `a` to `b` of `radius` (a sphere when a = b), world space.
+struct Collider {
+    a: vec3<f32>,
+    radius: f32,
+    b: vec3<f32>,
+    pad: f32,
+}
+
+struct SimUniforms {
+    gravity: vec3<f32>,
+    wind_response: f32,
+    // Substeps this frame and their length, seconds.
+    substeps: u32,
+    h: f32,
+    // Time at the start of the frame, seconds.
+    time0: f32,
+    // 1: every strand back to rest in this frame's pose.
+    reset: u32,
+    // Velocity kept per substep, exp(-damping h).
+    keep: f32,
+    local_stiffness: f32,
+    global_stiffness: f32,
+    global_range: f32,
+    length_damping: f32,
+    friction: f32,
+    teleport_distance: f32,
+    collider_count: u32,
+    colliders: array<Collider, MAX_COLLIDERS>,
+}
+
+@group(0) @binding(1) var<storage, read> positions: array<f32>;
+@group(0) @binding(2) var<storage, read> normals: array<f32>;
+@group(0) @binding(3) var<storage, read> indices: array<u32>;
+@group(0) @binding(4) var<storage, read> roots: array<StrandRoot>;
+@group(0) @binding(5) var<uniform> sim: SimUniforms;
+@group(0) @binding(6) var<storage, read_write> state: array<vec4<f32>>;
+@group(0) @binding(7) var<storage, read_write> held: array<atomic<u32>>;
+@group(0) @binding(8) var<storage, read_write> vertices: array<vec4<f32>>;
+@group(0) @binding(9) var<storage, read_write> drawn: array<StrandRoot>;
+
+fn load_position(i: u32) -> vec3<f32> {
+    return vec3<f32>(positions[3u * i], positions[3u * i + 1u], positions[3u * i + 2u]);
+}
+
+fn load_normal(i: u32) -> vec3<f32> {
+    return vec3<f32>(normals[3u * i], normals[3u * i + 1u], normals[3u * i + 2u]);
+}
+
+// A root's pose: position, unit normal and unit tangent; `ok` false when the mesh under
+// it holds a non-finite value.
+struct Pose {
+    position: vec3<f32>,
+    normal: vec3<f32>,
+    tangent: vec3<f32>,
+    ok: bool,
+}
+
+// A unit vector perpendicular to unit `n`, as close to `hint` as possible (grow.wgsl's).
+fn perpendicular(n: vec3<f32>, hint: vec3<f32>) -> vec3<f32> {
+    var fallback = vec3<f32>(1.0, 0.0, 0.0);
+    if abs(n.x) > 0.9 {
+        fallback = vec3<f32>(0.0, 1.0, 0.0);
+    }
+    let f = safe_normalize(fallback - dot(fallback, n) * n, vec3<f32>(0.0, 0.0, 1.0));
+    return safe_normalize(hint - dot(hint, n) * n, f);
+}
+
+// The flat surface at barycentrics (u, v, w = 1 - u - v) of triangle `tri`: position,
+// normal, and the tangent from the triangle's first edge.
+fn root_pose(tri: u32, bary: vec2<f32>) -> Pose {
+    let i1 = indices[3u * tri];
+    let i2 = indices[3u * tri + 1u];
+    let i3 = indices[3u * tri + 2u];
+    let p1 = load_position(i1);
+    let p2 = load_position(i2);
+    let p3 = load_position(i3);
+    let n1 = load_normal(i1);
+    let n2 = load_normal(i2);
+    let n3 = load_normal(i3);
+    let bw = 1.0 - bary.x - bary.y;
+    var pose: Pose;
+    pose.ok = all_finite3(p1) && all_finite3(p2) && all_finite3(p3) && all_finite3(n1)
+        && all_finite3(n2) && all_finite3(n3);
+    pose.position = p1 * bary.x + p2 * bary.y + p3 * bw;
+    pose.normal = safe_normalize(n1 * bary.x + n2 * bary.y + n3 * bw, vec3<f32>(0.0, 1.0, 0.0));
+    pose.tangent = perpendicular(pose.normal, p2 - p1);
+    pose.ok = pose.ok && all_finite3(pose.position);
+    return pose;
+}
+
+// A point given in a root's frame (x along the tangent, y along the normal, z along
+// tangent x normal) in world space.
+fn to_world(pose: Pose, local: vec3<f32>) -> vec3<f32> {
+    return pose.position + pose.tangent * local.x + pose.normal * local.y
+        + cross(pose.tangent, pose.normal) * local.z;
+}
+
+// `v` turned by the unit quaternion `q` (groom.wgsl's).
+fn quat_rotate(q: vec4<f32>, v: vec3<f32>) -> vec3<f32> {
+    return v + 2.0 * cross(q.xyz, cross(q.xyz, v) + q.w * v);
+}
+
+// The rotation `a` after `b` (groom.wgsl's).
+fn quat_mul(a: vec4<f32>, b: vec4<f32>) -> vec4<f32> {
+    return vec4<f32>(a.w * b.xyz + b.w * a.xyz + cross(a.xyz, b.xyz), a.w * b.w - dot(a.xyz, b.xyz));
+}
+
+// The shortest rotation taking unit `a` to unit `b` (groom.wgsl's).
+fn quat_between(a: vec3<f32>, b: vec3<f32>) -> vec4<f32> {
+    let w = 1.0 + dot(a, b);
+    if w < 1e-6 {
+        var hint = vec3<f32>(1.0, 0.0, 0.0);
+        if abs(a.x) > 0.9 {
+            hint = vec3<f32>(0.0, 1.0, 0.0);
+        }
+        return vec4<f32>(safe_normalize(cross(a, hint), vec3<f32>(0.0, 0.0, 1.0)), 0.0);
+    }
+    let q = vec4<f32>(cross(a, b), w);
+    return q / length(q);
+}
+
+// A vertex and its previous position, as collisions move them.
+struct Moved {
+    p: vec3<f32>,
+    prev: vec3<f32>,
+}
+
+// `p` pushed out of every collider to `margin` beyond its surface (along the direction
+// from the nearest point of its axis; `fallback` when on the axis), and `prev` moved along
+// the contact's tangent plane by `friction` of the tangential motion.
+fn collide(p_in: vec3<f32>, prev_in: vec3<f32>, margin: f32, fallback: vec3<f32>) -> Moved {
+    var m = Moved(p_in, prev_in);
+    for (var c = 0u; c < min(sim.collider_count, MAX_COLLIDERS); c++) {
+        let col = sim.colliders[c];
+        let axis = col.b - col.a;
+        let len2 = dot(axis, axis);
+        var s = 0.0;
+        if len2 > 0.0 {
+            s = clamp(dot(m.p - col.a, axis) / len2, 0.0, 1.0);
+        }
+        let nearest = col.a + axis * s;
+        let r = col.radius + margin;
+        let d = m.p - nearest;
+        if dot(d, d) < r * r {
+            let n = safe_normalize(d, fallback);
+            m.p = nearest + n * r;
+            let v = m.p - m.prev;
+            m.prev = m.prev + (v - n * dot(v, n)) * sim.friction;
+        }
+    }
+    return m;
+}
+
+// Index of strand `strand`'s first state vec4 (its root position); its rest shape follows
+// at + STATE_HEADER, positions at + STATE_HEADER + n, previous positions at
+// + STATE_HEADER + 2n, n = segments + 1.
+fn state_base(strand: u32) -> u32 {
+    return strand * (STATE_HEADER + 3u * (u.segments + 1u));
+}
+
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let strand = gid.y * groups.x * 64u + gid.x;
+    if strand >= u.strand_total {
+        return;
+    }
+    let root = roots[strand];
+    let n = u.segments + 1u;
+    let base = state_base(strand);
+    let rest = base + STATE_HEADER;
+    let pos = rest + n;
+    let prv = pos + n;
+    let now = root_pose(root.triangle, root.bary);
+
+    if !now.ok {
+        // The mesh under the root is not finite: the strand keeps its last pose.
+        atomicAdd(&held[0], 1u);
+    } else {
+        var last: Pose;
+        last.position = state[base].xyz;
+        last.normal = state[base + 1u].xyz;
+        last.tangent = state[base + 2u].xyz;
+        last.ok = true;
+        let jump = now.position - last.position;
+        var at_rest = sim.reset == 1u || state[base].w != 1.0
+            || dot(jump, jump) > sim.teleport_distance * sim.teleport_distance;
+        let margin = 0.5 * root.width;
+        let segments = f32(u.segments);
+        for (var substep = 0u; substep < sim.substeps && !at_rest; substep++) {
+            let s = f32(substep + 1u) / f32(sim.substeps);
+            var pose: Pose;
+            pose.position = mix(last.position, now.position, s);
+            pose.normal = safe_normalize(mix(last.normal, now.normal, s), now.normal);
+            pose.tangent = perpendicular(pose.normal, mix(last.tangent, now.tangent, s));
+            let t = sim.time0 + sim.h * f32(substep + 1u) + root.phase * u.phase_spread;
+            let base_force = uniform_force(t);
+            let h2 = sim.h * sim.h;
+
+            let x0 = to_world(pose, state[rest].xyz);
+            state[pos] = vec4<f32>(x0, 0.0);
+            state[prv] = vec4<f32>(x0, 0.0);
+            var parent = x0;
+            var parent_prev = x0;
+            var rest_parent = x0;
+            var q = vec4<f32>(0.0, 0.0, 0.0, 1.0);
+            for (var k = 1u; k < n; k++) {
+                // Verlet.
+                var p = state[pos + k].xyz;
+                var prev = state[prv + k].xyz;
+                let a = sim.gravity + force(p, t, base_force) * sim.wind_response;
+                let v = (p - prev) * sim.keep;
+                prev = p;
+                p = p + v + a * h2;
+                // Global shape: toward the rest position in the root's frame.
+                let rest_k = to_world(pose, state[rest + k].xyz);
+                let reach = 1.0 - f32(k) / segments / sim.global_range;
+                p = mix(p, rest_k, sim.global_stiffness * max(reach, 0.0));
+                // Local shape: toward the rest direction turned like the segments before.
+                let rest_offset = rest_k - rest_parent;
+                let len = length(rest_offset);
+                let rest_dir = quat_rotate(q, safe_normalize(rest_offset, pose.normal));
+                p = mix(p, parent + rest_dir * len, sim.local_stiffness);
+                // Collisions, then follow the leader (twice: the second collision fixes
+                // what the first length projection pushed back in).
+                var m = collide(p, prev, margin, pose.normal);
+                var dir = safe_normalize(m.p - parent, rest_dir);
+                var on_length = parent + dir * len;
+                var correction = on_length - m.p;
+                m = collide(on_length, m.prev, margin, pose.normal);
+                dir = safe_normalize(m.p - parent, rest_dir);
+                on_length = parent + dir * len;
+                correction = correction + (on_length - m.p);
+                p = on_length;
+                prev = m.prev;
+                // DFTL: the parent's velocity loses length_damping of this correction.
+                if k > 1u {
+                    parent_prev = parent_prev + correction * sim.length_damping;
+                    state[prv + k - 1u] = vec4<f32>(parent_prev, 0.0);
+                }
+                q = quat_mul(quat_between(rest_dir, dir), q);
+                q = q / length(q);
+                if !all_finite3(p) || !all_finite3(prev) {
+                    at_rest = true;
+                }
+                state[pos + k] = vec4<f32>(p, 0.0);
+                parent = p;
+                parent_prev = prev;
+                rest_parent = rest_k;
+            }
+            state[prv + n - 1u] = vec4<f32>(parent_prev, 0.0);
+        }
+        if at_rest {
+            for (var k = 0u; k < n; k++) {
+                let p = to_world(now, state[rest + k].xyz);
+                state[pos + k] = vec4<f32>(p, 0.0);
+                state[prv + k] = vec4<f32>(p, 0.0);
+            }
+        }
+        state[base] = vec4<f32>(now.position, 1.0);
+        state[base + 1u] = vec4<f32>(now.normal, 0.0);
+        state[base + 2u] = vec4<f32>(now.tangent, 0.0);
+    }
+
+    if strand >= u.strand_count {
+        return;
+    }
+    let x = (f32(strand) + 0.5) / f32(u.strand_total);
+    drawn[strand].width = root.width * lod_scale(x, u.lod_lambda, u.lod_t_e, u.lod_s_max, u.lod_s_min);
+    let step = max(u.step, 1u);
+    let drawn_base = strand * (u.segments / step + 1u);
+    for (var k = 0u; k < n; k += step) {
+        vertices[drawn_base + k / step] = vec4<f32>(state[pos + k].xyz, f32(k) / f32(u.segments));
+    }
+}
