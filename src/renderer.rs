@@ -5,14 +5,18 @@ mod update;
 pub use update::{Change, Update};
 
 use pelage_gpu::{FramePlan, Gpu, GpuTimer, wgpu};
-use pelage_scene::{Camera, HairParams, Light, Mesh, Resampled, ShadeParams, ShadowParams};
+use pelage_scene::{
+    Camera, GuideParams, HairParams, Light, Mesh, Resampled, ShadeParams, ShadowParams,
+};
 #[cfg(not(target_arch = "wasm32"))]
 use pelage_shade::TargetViews;
 use pelage_shade::{
     HairInputs, HairPass, OitStats, TargetFormat, TargetViewSet, Targets, Visibility,
 };
 use pelage_shadow::{LightVisibility, ShadowMethod};
-use pelage_strands::{GroomStrands, GrowStrands, MeshBuffers, StrandFrame, StrandStage};
+use pelage_strands::{
+    GroomStrands, GrowStrands, GuideStrands, MeshBuffers, StrandFrame, StrandStage,
+};
 
 /// Everything a frame is made of.
 #[derive(Clone, Debug)]
@@ -24,6 +28,9 @@ pub struct Scene {
     /// A groom to draw instead of growing fur from `mesh` (see [`GroomStrands`] for the
     /// parts of `hair` it uses); `None` grows fur.
     pub groom: Option<Resampled>,
+    /// With a groom: take its strands as guides and interpolate render strands rooted on
+    /// `mesh` from them ([`GuideStrands`]); `None` draws the groom's own strands.
+    pub guides: Option<GuideParams>,
     /// Shadow method.
     pub shadow: ShadowParams,
     /// Raster and shading.
@@ -42,6 +49,7 @@ impl Default for Scene {
             mesh: Mesh::creature(),
             hair: HairParams::default(),
             groom: None,
+            guides: None,
             shadow: ShadowParams::default(),
             shade: ShadeParams::default(),
             camera: Camera::default(),
@@ -66,6 +74,7 @@ impl Scene {
             mesh: file.mesh(path)?,
             hair: file.hair.clone(),
             groom: file.groom(path)?,
+            guides: file.groom.as_ref().and_then(|g| g.guides.clone()),
             shadow: file.shadow.clone(),
             shade: file.shade.clone(),
             camera: file.camera.clone(),
@@ -95,8 +104,11 @@ impl Scene {
     pub fn reach(&self) -> (glam::Vec3, glam::Vec3) {
         let (lo, hi) = self.mesh.bounds();
         if let Some(groom) = &self.groom {
-            let (glo, ghi) =
-                GroomStrands::reach_of(groom, &self.hair).unwrap_or_else(|_| groom.bounds());
+            let reach = match &self.guides {
+                Some(guides) => GuideStrands::reach_of(groom, (lo, hi), &self.hair, guides),
+                None => GroomStrands::reach_of(groom, &self.hair),
+            };
+            let (glo, ghi) = reach.unwrap_or_else(|_| groom.bounds());
             return (lo.min(glo), hi.max(ghi));
         }
         let (glo, ghi) = GrowStrands::reach_of(&self.mesh, &self.hair);
@@ -179,9 +191,17 @@ impl Renderer {
         format: &TargetFormat,
     ) -> crate::Result<Self> {
         let mesh_buffers = MeshBuffers::upload(gpu, &scene.mesh)?;
-        let strands: Box<dyn StrandStage> = match &scene.groom {
-            Some(groom) => Box::new(GroomStrands::new(gpu, groom, &scene.hair)?),
-            None => Box::new(GrowStrands::new(
+        let strands: Box<dyn StrandStage> = match (&scene.groom, &scene.guides) {
+            (Some(groom), Some(guides)) => Box::new(GuideStrands::new(
+                gpu,
+                &scene.mesh,
+                &mesh_buffers,
+                groom,
+                &scene.hair,
+                guides,
+            )?),
+            (Some(groom), None) => Box::new(GroomStrands::new(gpu, groom, &scene.hair)?),
+            (None, _) => Box::new(GrowStrands::new(
                 gpu,
                 &scene.mesh,
                 &mesh_buffers,

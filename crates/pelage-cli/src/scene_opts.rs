@@ -314,7 +314,10 @@ impl SceneOpts {
             Some(LightsArg::KeyBack) => scene.lights = Light::key_and_back(&scene.camera),
             None => {}
         }
-        if let Some(n) = self.strands {
+        if let (Some(n), Some(guides)) = (self.strands, scene.guides.as_mut()) {
+            // Guides interpolated into render strands: --strands counts those.
+            guides.strands = n;
+        } else if let Some(n) = self.strands {
             if scene.groom.is_some() {
                 return Err(CliError::Usage(
                     "--strands: the scene draws a groom file, whose strands are its own; \

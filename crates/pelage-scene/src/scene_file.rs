@@ -43,6 +43,10 @@
 //! segments = 16           # resampled by arc length
 //! fit = 1.8               # centred, longest side 1.8 units (leave out: the file's units)
 //! ```
+//!
+//! `guides = { strands = 6000, clump = 0.3 }` in `[groom]` takes the file's strands as
+//! guides and interpolates render strands rooted on the mesh from them (see
+//! [`GuideParams`](crate::GuideParams)).
 
 use std::path::{Path, PathBuf};
 

@@ -11,9 +11,7 @@ use pelage_scene::{
     Camera, GrowthParams, HairParams, HairType, Mesh, ParamError, SurfaceInterpolation, WindParams,
 };
 
-use crate::{
-    LodLevel, MeshBuffers, StrandFrame, StrandLayout, StrandRoot, StrandsError, sample_roots,
-};
+use crate::{LodLevel, MeshBuffers, StrandFrame, StrandLayout, StrandRoot, sample_roots};
 
 /// The frame resource naming [`StrandBuffers::vertices`] in a [`FramePlan`](pelage_gpu::FramePlan).
 pub const STRAND_VERTICES: &str = "strands.vertices";
@@ -304,21 +302,7 @@ impl GrowStrands {
         params: &HairParams,
     ) -> crate::Result<Self> {
         params.validate(mesh.positions.len())?;
-        if mesh_buffers.vertex_count as usize != mesh.positions.len()
-            || mesh_buffers.triangle_count as usize != mesh.indices.len() / 3
-        {
-            return Err(StrandsError::MeshMismatch {
-                buffers: format!(
-                    "{} vertices, {} triangles",
-                    mesh_buffers.vertex_count, mesh_buffers.triangle_count
-                ),
-                mesh: format!(
-                    "{} vertices, {} triangles",
-                    mesh.positions.len(),
-                    mesh.indices.len() / 3
-                ),
-            });
-        }
+        mesh_buffers.check_matches(mesh)?;
         // Refuse a groom the device cannot hold before spending time on its roots.
         StrandPass::vertex_bytes(gpu, params)?;
         let roots = sample_roots(mesh, &params.roots, &params.growth)?;
@@ -415,7 +399,7 @@ pub struct StrandPass {
     /// The frame inputs the pass reads besides its own buffers (see
     /// [`StrandStage::passes`]).
     pub(crate) inputs: &'static [&'static str],
-    params: HairParams,
+    pub(crate) params: HairParams,
     pipeline: wgpu::ComputePipeline,
     bind_group: wgpu::BindGroup,
     uniforms: UniformBuffer<GrowUniforms>,
@@ -448,6 +432,22 @@ impl StrandPass {
         roots: &[StrandRoot],
         inputs: &[&wgpu::Buffer],
     ) -> crate::Result<Self> {
+        Self::with_constants(gpu, label, shader, params, reach, roots, inputs, None)
+    }
+
+    /// [`StrandPass::new`] with a uniform buffer of the method's own constants bound
+    /// after the drawn roots (`guides.wgsl`'s clump and noise, say).
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn with_constants(
+        gpu: &Gpu,
+        label: &'static str,
+        shader: &str,
+        params: &HairParams,
+        reach: (Vec3, Vec3),
+        roots: &[StrandRoot],
+        inputs: &[&wgpu::Buffer],
+        constants: Option<&wgpu::Buffer>,
+    ) -> crate::Result<Self> {
         let vertex_bytes = Self::vertex_bytes(gpu, params)?;
         let uniforms = UniformBuffer::new(
             gpu,
@@ -463,20 +463,24 @@ impl StrandPass {
             // grow.wgsl / groom.wgsl: the uniforms (force.wgsl), the read-only inputs,
             // then the vertices and drawn roots written.
             let inputs_end = inputs.len() as u32 + 1;
-            let layout = (1..inputs_end)
+            let mut layout = (1..inputs_end)
                 .fold(
                     BindLayout::new(label, wgpu::ShaderStages::COMPUTE).uniform(0),
                     BindLayout::storage,
                 )
                 .storage_rw(inputs_end)
-                .storage_rw(inputs_end + 1)
-                .build(device);
+                .storage_rw(inputs_end + 1);
+            if constants.is_some() {
+                layout = layout.uniform(inputs_end + 2);
+            }
+            let layout = layout.build(device);
             let pipeline =
                 compute_pipeline_with_layouts(device, label, &module, "main", &[Some(&layout)]);
             let mut entries = vec![&uniforms.buffer];
             entries.extend_from_slice(inputs);
             entries.push(&vertices);
             entries.push(&roots_buffer);
+            entries.extend(constants);
             let bind_group = bind_buffers(device, label, &layout, &entries);
             (pipeline, bind_group)
         })?;
@@ -506,6 +510,47 @@ impl StrandPass {
             frame: None,
             limits: gpu.limits().clone(),
         })
+    }
+}
+
+impl StrandPass {
+    /// Writes `uniforms` and starts a frame of the level of detail in use (what
+    /// [`StrandStage::prepare`] does once it has the uniforms).
+    pub(crate) fn begin_frame(
+        &mut self,
+        queue: &wgpu::Queue,
+        uniforms: &GrowUniforms,
+    ) -> crate::Result<StrandFrame> {
+        self.uniforms.write(queue, uniforms)?;
+        let frame = StrandFrame::next(self.level.layout());
+        self.frame = Some(frame);
+        Ok(frame)
+    }
+
+    /// Records the pass for `frame`, which must be the one [`StrandPass::begin_frame`]
+    /// last returned (what [`StrandStage::encode`] does).
+    pub(crate) fn record(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        frame: &StrandFrame,
+        timer: Option<&mut GpuTimer>,
+    ) -> crate::Result<()> {
+        frame.check_prepared(self.label, self.frame.map_or(0, |f| f.id))?;
+        let timestamp_writes = timer.and_then(|t| t.compute_pass(self.label));
+        let mut compute = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some(self.label),
+            timestamp_writes,
+        });
+        compute.set_pipeline(&self.pipeline);
+        compute.set_bind_group(0, &self.bind_group, &[]);
+        let groups = dispatch_size(&self.limits, u64::from(frame.layout.strands), WORKGROUP);
+        compute.dispatch_workgroups(groups.0, groups.1, 1);
+        Ok(())
+    }
+
+    /// The timestamp label of the pass.
+    pub(crate) fn label(&self) -> &'static str {
+        self.label
     }
 }
 
@@ -550,11 +595,7 @@ pub trait StrandStage: std::fmt::Debug {
             .into());
         }
         let uniforms = self.uniforms_at(time);
-        let pass = self.pass_mut();
-        pass.uniforms.write(queue, &uniforms)?;
-        let frame = StrandFrame::next(pass.level.layout());
-        pass.frame = Some(frame);
-        Ok(frame)
+        self.pass_mut().begin_frame(queue, &uniforms)
     }
 
     /// The frame the last [`StrandStage::prepare`] returned (`None` before the first).
@@ -638,18 +679,7 @@ pub trait StrandStage: std::fmt::Debug {
         frame: &StrandFrame,
         timer: Option<&mut GpuTimer>,
     ) -> crate::Result<()> {
-        let pass = self.pass();
-        frame.check_prepared(pass.label, pass.frame.map_or(0, |f| f.id))?;
-        let timestamp_writes = timer.and_then(|t| t.compute_pass(pass.label));
-        let mut compute = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some(pass.label),
-            timestamp_writes,
-        });
-        compute.set_pipeline(&pass.pipeline);
-        compute.set_bind_group(0, &pass.bind_group, &[]);
-        let groups = dispatch_size(&pass.limits, u64::from(frame.layout.strands), WORKGROUP);
-        compute.dispatch_workgroups(groups.0, groups.1, 1);
-        Ok(())
+        self.pass().record(encoder, frame, timer)
     }
 
     /// The passes [`StrandStage::encode`] records, with the named resources each reads
