@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 
 use glam::Vec4;
 use pelage::scene::{HairFile, SceneFile, WindParams};
-use pelage::strands::{GuideStrands, StrandStage};
+use pelage::strands::GuideStrands;
 use pelage::{Renderer, Scene, gpu::Gpu};
 
 const SIZE: (u32, u32) = (160, 120);
