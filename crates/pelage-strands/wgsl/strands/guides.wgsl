@@ -90,6 +90,11 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
         rest = rest - weight[n];
     }
     weight[k - 1u] = rest;
+    // The guides' roots, read once.
+    var guide_root: array<vec3<f32>, 4>;
+    for (var n = 0u; n < k; n++) {
+        guide_root[n] = guides[starts[n]].xyz;
+    }
 
     // The noise direction, from the strand's seed.
     var h = pcg_hash(root.seed ^ NOISE_SALT);
@@ -108,7 +113,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
         let s = f32(i) / f32(segments);
         var blend = r;
         for (var n = 0u; n < k; n++) {
-            blend = blend + (guides[starts[n] + i].xyz - guides[starts[n]].xyz) * weight[n];
+            blend = blend + (guides[starts[n] + i].xyz - guide_root[n]) * weight[n];
         }
         blend = blend + drift * (s * s);
         let nearest = guides[starts[0] + i].xyz;
