@@ -1002,18 +1002,6 @@ fn strand_raster_section(
     Ok(RasterSection { rows, summary })
 }
 
-#[cfg(test)]
-mod tests {
-    #[test]
-    fn every_shader_is_listed_and_validates() {
-        let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/wgsl");
-        let count = super::SHADERS
-            .check_against_dir(dir)
-            .unwrap_or_else(|e| panic!("{e}"));
-        assert_eq!(count, 2);
-    }
-}
-
 /// The memory of 1 000 guides interpolated into 50 000 strands of 16 segments on the
 /// creature of `s` against storing every strand ([`GuideMemory`]): prints both sides
 /// and returns their ratio. The guides are 1 000 strands grown on the creature.
@@ -1044,4 +1032,16 @@ fn guide_memory(gpu: &Gpu, s: &Scene) -> Result<f64, Error> {
         groom
     );
     Ok(ratio)
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn every_shader_is_listed_and_validates() {
+        let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/wgsl");
+        let count = super::SHADERS
+            .check_against_dir(dir)
+            .unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(count, 2);
+    }
 }
