@@ -229,7 +229,8 @@ pub struct SceneOpts {
     /// Image size in pixels, width x height.
     #[arg(long, value_name = "WxH", default_value = "480x360")]
     pub size: Size,
-    /// Number of strands (the scene's own count by default: 20000 for the built-in scene).
+    /// Number of strands (the scene's own count by default: 20000 for the built-in scene;
+    /// with guides, the render strands interpolated from them).
     #[arg(long, value_name = "N")]
     pub strands: Option<u32>,
     /// Shadow method (the scene's by default: voxel).
