@@ -6,8 +6,8 @@ pub use update::{Change, Update};
 
 use pelage_gpu::{FramePlan, Gpu, GpuTimer, wgpu};
 use pelage_scene::{
-    Camera, DynamicsParams, HairParams, Light, Mesh, MeshMotion, Resampled, ShadeParams,
-    ShadowParams,
+    Camera, DynamicsParams, GuideParams, HairParams, Light, Mesh, MeshMotion, Resampled,
+    ShadeParams, ShadowParams,
 };
 #[cfg(not(target_arch = "wasm32"))]
 use pelage_shade::TargetViews;
@@ -16,7 +16,7 @@ use pelage_shade::{
 };
 use pelage_shadow::{LightVisibility, ShadowMethod};
 use pelage_strands::{
-    GroomStrands, GrowStrands, MeshBuffers, SimulateStrands, StrandFrame, StrandStage,
+    GroomStrands, GrowStrands, GuideStrands, MeshBuffers, SimulateStrands, StrandFrame, StrandStage,
 };
 
 /// Everything a frame is made of.
@@ -31,6 +31,9 @@ pub struct Scene {
     /// A groom to draw instead of growing fur from `mesh` (see [`GroomStrands`] for the
     /// parts of `hair` it uses); `None` grows fur.
     pub groom: Option<Resampled>,
+    /// With a groom: take its strands as guides and interpolate render strands rooted on
+    /// `mesh` from them ([`GuideStrands`]); `None` draws the groom's own strands.
+    pub guides: Option<GuideParams>,
     /// Strand dynamics: `Some` simulates the hair (grown or the groom) with
     /// [`SimulateStrands`]; `None` (the default) bends it by the stateless wind.
     pub dynamics: Option<DynamicsParams>,
@@ -55,6 +58,7 @@ impl Default for Scene {
             mesh: Mesh::creature(),
             hair: HairParams::default(),
             groom: None,
+            guides: None,
             dynamics: None,
             motion: None,
             shadow: ShadowParams::default(),
@@ -81,6 +85,7 @@ impl Scene {
             mesh: file.mesh(path)?,
             hair: file.hair.clone(),
             groom: file.groom(path)?,
+            guides: file.groom.as_ref().and_then(|g| g.guides.clone()),
             dynamics: file.dynamics.clone(),
             motion: file.motion.clone(),
             shadow: file.shadow.clone(),
@@ -114,17 +119,21 @@ impl Scene {
     /// with a [`MeshMotion`] the box is the sphere around the pivot holding it.
     pub fn reach(&self) -> (glam::Vec3, glam::Vec3) {
         let (lo, hi) = self.mesh.bounds();
-        let (glo, ghi) = match (&self.groom, &self.dynamics) {
-            (Some(groom), None) => {
+        let (glo, ghi) = match (&self.groom, &self.guides, &self.dynamics) {
+            (Some(groom), Some(guides), _) => {
+                GuideStrands::reach_of(groom, (lo, hi), &self.hair, guides)
+                    .unwrap_or_else(|_| groom.bounds())
+            }
+            (Some(groom), None, None) => {
                 GroomStrands::reach_of(groom, &self.hair).unwrap_or_else(|_| groom.bounds())
             }
-            (Some(groom), Some(_)) => {
+            (Some(groom), None, Some(_)) => {
                 let pad = GroomStrands::params_for(groom, &self.hair)
                     .map_or(0.0, |p| p.growth.length + p.growth.width);
                 let (a, b) = groom.bounds();
                 (a - glam::Vec3::splat(pad), b + glam::Vec3::splat(pad))
             }
-            (None, _) => GrowStrands::reach_of(&self.mesh, &self.hair),
+            (None, _, _) => GrowStrands::reach_of(&self.mesh, &self.hair),
         };
         // A groom-only scene: the hair's reach alone.
         if self.groom.is_some() && self.mesh.indices.is_empty() {
@@ -230,24 +239,41 @@ impl Renderer {
             if scene.motion.is_some() {
                 return Err(refuse("motion", "to move").into());
             }
+            if scene.guides.is_some() {
+                return Err(refuse("guides", "to root the render strands on").into());
+            }
+        }
+        if scene.guides.is_some() && scene.dynamics.is_some() {
+            return Err(pelage_scene::ParamError::new(
+                "dynamics",
+                "set",
+                "guide strands are not simulated (SimulateStrands takes a groom's or grown strands); leave out guides or dynamics",
+            )
+            .into());
         }
         let (mut mesh_buffers, strands): (MeshBuffers, Box<dyn StrandStage>) =
-            match (&scene.groom, &scene.dynamics, draw_mesh) {
-                (Some(groom), None, false) => {
+            match (&scene.groom, &scene.guides, &scene.dynamics, draw_mesh) {
+                (Some(groom), Some(guides), None, _) => {
+                    let mesh = MeshBuffers::upload(gpu, &scene.mesh)?;
+                    let strands =
+                        GuideStrands::new(gpu, &scene.mesh, &mesh, groom, &scene.hair, guides)?;
+                    (mesh, Box::new(strands))
+                }
+                (Some(groom), _, None, false) => {
                     let strands = GroomStrands::new(gpu, groom, &scene.hair)?;
                     let mesh = no_mesh(gpu, strands.buffers().reach)?;
                     (mesh, Box::new(strands))
                 }
-                (Some(groom), None, true) => (
+                (Some(groom), _, None, true) => (
                     MeshBuffers::upload(gpu, &scene.mesh)?,
                     Box::new(GroomStrands::new(gpu, groom, &scene.hair)?),
                 ),
-                (None, None, _) => {
+                (None, _, None, _) => {
                     let mesh = MeshBuffers::upload(gpu, &scene.mesh)?;
                     let strands = GrowStrands::new(gpu, &scene.mesh, &mesh, &scene.hair)?;
                     (mesh, Box::new(strands))
                 }
-                (groom, Some(dynamics), _) => {
+                (groom, _, Some(dynamics), _) => {
                     let mut mesh = MeshBuffers::upload(gpu, &scene.mesh)?;
                     // The simulated hair reaches wherever the motion takes the mesh.
                     if let Some(motion) = &scene.motion {

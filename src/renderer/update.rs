@@ -71,7 +71,7 @@ fn structural(hair: &HairParams) -> HairParams {
     out
 }
 
-/// A 64-bit hash of every number of the scene's mesh and groom (a mixing hash over the
+/// A 64-bit hash of every number of the scene's mesh, groom and guides (a mixing hash over the
 /// bit patterns: a changed vertex changes it).
 fn geometry_fingerprint(scene: &Scene) -> u64 {
     let mut h = 0xcbf2_9ce4_8422_2325u64;
@@ -106,6 +106,16 @@ fn geometry_fingerprint(scene: &Scene) -> u64 {
             g.points
                 .iter()
                 .flat_map(|p| p.to_array())
+                .for_each(|f| add(f.to_bits()));
+        }
+    }
+    match &scene.guides {
+        None => add(0),
+        Some(p) => {
+            add(1);
+            [p.strands, p.k].into_iter().for_each(&mut add);
+            [p.clump, p.noise, p.max_root_distance]
+                .into_iter()
                 .for_each(|f| add(f.to_bits()));
         }
     }

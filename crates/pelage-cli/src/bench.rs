@@ -24,13 +24,15 @@
 use std::time::Instant;
 
 use pelage::gpu::{Gpu, GpuTimer, ShaderSources, compute_pipeline, dispatch_size, wgpu};
-use pelage::scene::Resampled;
 use pelage::scene::{
     ChiangParams, DirectionalLight, DynamicsParams, ShadingModel, ShadowParams, Transparency,
     VoxelParams, WindParams,
 };
+use pelage::scene::{GuideParams, Resampled};
 use pelage::shadow::{ShadowMethod, VoxelShadow};
-use pelage::strands::{GroomStrands, GrowStrands, MeshBuffers, SimulateStrands, StrandStage};
+use pelage::strands::{
+    GroomStrands, GrowStrands, GuideMemory, GuideStrands, MeshBuffers, SimulateStrands, StrandStage,
+};
 use pelage::{Renderer, Scene};
 use pelage_lab::{ScatterChart, ScatterPoint, Table};
 
@@ -166,6 +168,36 @@ fn grown_groom(gpu: &Gpu, grow: &mut GrowStrands) -> Result<Resampled, Error> {
     })
 }
 
+/// Every `every`-th strand of `groom` (at least one): guides to interpolate from.
+fn subsampled(groom: &Resampled, every: u32) -> Resampled {
+    let per_strand = groom.segments as usize + 1;
+    let kept: Vec<usize> = (0..groom.strands as usize)
+        .step_by(every.max(1) as usize)
+        .collect();
+    Resampled {
+        points: kept
+            .iter()
+            .flat_map(|&i| {
+                groom.points[i * per_strand..(i + 1) * per_strand]
+                    .iter()
+                    .copied()
+            })
+            .collect(),
+        widths: None,
+        segments: groom.segments,
+        strands: kept.len() as u32,
+        skipped: 0,
+        source_strands: kept.iter().map(|&i| i as u32).collect(),
+        colors: groom
+            .colors
+            .as_ref()
+            .map(|c| kept.iter().filter_map(|&i| c.get(i).copied()).collect()),
+    }
+}
+
+/// Grown strands taken as guides: one guide per this many render strands.
+const STRANDS_PER_GUIDE: u32 = 50;
+
 /// The default creature with `strands` strands of `segments` segments, in the default wind.
 fn scene(strands: u32, segments: u32) -> Scene {
     let mut scene = Scene::default();
@@ -262,6 +294,7 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
     ));
     let mut scan_ms = Vec::new();
     let mut grow_points = Vec::new();
+    let mut guide_ratios = Vec::new();
     for &strands in counts {
         let gpu = Gpu::headless()?;
         let s = scene(strands, 8);
@@ -395,6 +428,43 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
             &sim_note,
         ));
         bar.println(format!("           simulate: {sim_note}"));
+        // One grown strand in 50 as guides, interpolated into as many strands as grown:
+        // the interpolation pass against the growth pass for the same strand count.
+        let guide_groom = subsampled(&groom, STRANDS_PER_GUIDE);
+        let guide_params = GuideParams {
+            strands,
+            ..GuideParams::default()
+        };
+        let mut guided =
+            GuideStrands::new(&gpu, &s.mesh, &mesh, &guide_groom, &s.hair, &guide_params)?;
+        let guided_times = time_frames(&gpu, frames, |encoder, timer, frame| {
+            let frame = guided.prepare(&gpu.queue, frame as f32 / 24.0)?;
+            guided.encode(encoder, &frame, timer)?;
+            Ok(())
+        })?;
+        let memory = guided.memory();
+        let bent_bytes = memory.guide_vertices;
+        let interpolate_ms = get(&guided_times, "strands: guides");
+        rows.push(compute_row(
+            "strands: guides",
+            interpolate_ms,
+            roots + memory.records + mesh.positions.size() + mesh.indices.size() + bent_bytes
+                + vertices,
+            "interpolation from 1 guide per 50 strands: reads roots, records, mesh and bent guides, writes vertices",
+        ));
+        rows.push(compute_row(
+            "strands: guides bend",
+            get(&guided_times, "strands: guides bend"),
+            memory.guide_rest + memory.guide_roots / 2 + bent_bytes,
+            "the guides bent by the wind (groom.wgsl): the first of the two passes",
+        ));
+        let grow_ms = get(&times, "strands: grow");
+        bar.println(format!(
+            "  {strands:>7} strands  interpolation from {} guides: {:.2}x the growth pass",
+            guide_groom.strands,
+            interpolate_ms / grow_ms
+        ));
+        guide_ratios.push(interpolate_ms / grow_ms);
         bar.inc(1);
         scan_ms.push(get(&times, "shadow: scan"));
         grow_points.push((f64::from(strands), get(&times, "strands: grow")));
@@ -675,6 +745,7 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
     let vertices = u64::from(b.strand_count) * u64::from(b.segments + 1);
     let per_vertex = b.vertices.size() as f64 / vertices as f64;
     let per_strand = (b.vertices.size() + b.roots.size()) as f64 / f64::from(b.strand_count);
+    let guide_memory = guide_memory(&gpu, &s)?;
 
     let mut table = Table::new(&[
         "section", "stage", "strands", "pixels", "gpu_ms", "bytes", "ratio", "note",
@@ -721,6 +792,16 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
             "memory: bytes per strand",
             per_strand,
             "vertices + StrandRoot, 8 segments",
+        ),
+        (
+            "guides: interpolation over growth, same strands",
+            guide_ratios.last().copied().unwrap_or(f64::NAN),
+            "timestamps, largest strand count, 1 guide per 50 strands",
+        ),
+        (
+            "guides: memory over storing every strand",
+            guide_memory,
+            "1000 guides -> 50000 strands x 16 segments: guide rest + bent guides + guide roots + records, over GroomStrands' rest points",
         ),
     ] {
         table.push(vec![
@@ -952,6 +1033,38 @@ fn strand_raster_section(
         });
     }
     Ok(RasterSection { rows, summary })
+}
+
+/// The memory of 1 000 guides interpolated into 50 000 strands of 16 segments on the
+/// creature of `s` against storing every strand ([`GuideMemory`]): prints both sides
+/// and returns their ratio. The guides are 1 000 strands grown on the creature.
+fn guide_memory(gpu: &Gpu, s: &Scene) -> Result<f64, Error> {
+    let mesh = MeshBuffers::upload(gpu, &s.mesh)?;
+    let mut hair = s.hair.clone();
+    hair.roots.count = 1_000;
+    hair.growth.segments = 16;
+    let mut grow = GrowStrands::new(gpu, &s.mesh, &mesh, &hair)?;
+    let guides = grown_groom(gpu, &mut grow)?;
+    let params = GuideParams {
+        strands: 50_000,
+        ..GuideParams::default()
+    };
+    let guided = GuideStrands::new(gpu, &s.mesh, &mesh, &guides, &hair, &params)?;
+    let m = guided.memory();
+    let groom = GuideMemory::groom_rest_bytes(50_000, 16);
+    let ratio = m.total() as f64 / groom as f64;
+    println!(
+        "guides: 1000 guides -> 50000 strands x 16 segments: guide rest {} + bent guides {} + \
+         guide roots {} + records {} = {} bytes against GroomStrands' rest points {} bytes: {ratio:.3}x \
+         (not counted, in both: output vertices, the strands' rest and drawn roots)",
+        m.guide_rest,
+        m.guide_vertices,
+        m.guide_roots,
+        m.records,
+        m.total(),
+        groom
+    );
+    Ok(ratio)
 }
 
 #[cfg(test)]

@@ -225,7 +225,8 @@ pub struct SceneOpts {
     /// Image size in pixels, width x height.
     #[arg(long, value_name = "WxH", default_value = "480x360")]
     pub size: Size,
-    /// Number of strands (the scene's own count by default: 20000 for the built-in scene).
+    /// Number of strands (the scene's own count by default: 20000 for the built-in scene;
+    /// with guides, the render strands interpolated from them).
     #[arg(long, value_name = "N")]
     pub strands: Option<u32>,
     /// Shadow method (the scene's by default: voxel).
@@ -310,7 +311,10 @@ impl SceneOpts {
             Some(LightsArg::KeyBack) => scene.lights = Light::key_and_back(&scene.camera),
             None => {}
         }
-        if let Some(n) = self.strands {
+        if let (Some(n), Some(guides)) = (self.strands, scene.guides.as_mut()) {
+            // Guides interpolated into render strands: --strands counts those.
+            guides.strands = n;
+        } else if let Some(n) = self.strands {
             if scene.groom.is_some() {
                 return Err(CliError::Usage(
                     "--strands: the scene draws a groom file, whose strands are its own; \

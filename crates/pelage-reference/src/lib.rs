@@ -20,6 +20,7 @@
 
 pub mod chiang;
 pub mod flip;
+pub mod guides;
 pub mod noise;
 pub mod oit;
 pub mod oit_raster;

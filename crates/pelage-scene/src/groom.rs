@@ -624,6 +624,11 @@ pub struct GroomSource {
     /// Translation applied last, scene units (the default none).
     #[serde(default)]
     pub translation: Vec3,
+    /// Take the file's strands as guides and interpolate this many render strands
+    /// rooted on the mesh from them (`guides = { strands = 20000, clump = 0.3 }`; see
+    /// [`GuideParams`](crate::GuideParams)); left out, the file's strands are drawn.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub guides: Option<crate::GuideParams>,
 }
 
 impl GroomSource {
@@ -643,6 +648,7 @@ impl GroomSource {
             fit: None,
             scale: Self::default_scale(),
             translation: Vec3::ZERO,
+            guides: None,
         }
     }
 
@@ -661,6 +667,9 @@ impl GroomSource {
         crate::params::positive("groom.scale", self.scale)?;
         for (axis, v) in ["x", "y", "z"].iter().zip(self.translation.to_array()) {
             crate::params::finite(&format!("groom.translation.{axis}"), v)?;
+        }
+        if let Some(guides) = &self.guides {
+            guides.validate()?;
         }
         Ok(())
     }

@@ -8,6 +8,7 @@
 pub mod atomic_file;
 pub mod camera;
 pub mod groom;
+pub mod guides;
 pub mod hair_file;
 pub mod light;
 pub mod limits;
@@ -25,6 +26,7 @@ pub mod usd_file;
 
 pub use camera::{Camera, CameraMatrices};
 pub use groom::{Groom, GroomError, GroomSource, Resampled};
+pub use guides::{GuideParams, MAX_GUIDE_NEIGHBOURS, MAX_GUIDES};
 pub use hair_file::{HairFile, HairFileError};
 pub use light::{DirectionalLight, Light, MAX_LIGHTS, PointLight};
 pub use limits::{MAX_EXTENT, MAX_GROOM_FILE_BYTES, MAX_OBJ_FILE_BYTES, MAX_SCENE_FILE_BYTES};

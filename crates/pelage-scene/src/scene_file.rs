@@ -64,6 +64,10 @@
 //! a groom the default breeze stays). A **groom-only scene** draws no mesh at all, and
 //! shadows none: `[mesh] kind = "none"` (which needs a `[groom]`; leaving `[mesh]` out
 //! still means the creature).
+//!
+//! `guides = { strands = 6000, clump = 0.3 }` in `[groom]` takes the file's strands as
+//! guides and interpolates render strands rooted on the mesh from them (see
+//! [`GuideParams`](crate::GuideParams)).
 
 use std::path::{Path, PathBuf};
 

@@ -4,10 +4,10 @@
 
 use glam::Vec3;
 use pelage_scene::{
-    AdsmParams, ChiangParams, DeepOpacityParams, DirectionalLight, GroomSource, HairType,
-    KajiyaKayParams, LayerSpacing, Light, MarschnerParams, MeshSource, PointLight, SadeghiParams,
-    SceneFile, SceneFileError, ShadingModel, ShadowMapParams, ShadowParams, Transparency,
-    VoxelParams, WboitWeight,
+    AdsmParams, ChiangParams, DeepOpacityParams, DirectionalLight, GroomSource, GuideParams,
+    HairType, KajiyaKayParams, LayerSpacing, Light, MarschnerParams, MeshSource, PointLight,
+    SadeghiParams, SceneFile, SceneFileError, ShadingModel, ShadowMapParams, ShadowParams,
+    Transparency, VoxelParams, WboitWeight,
 };
 
 /// Parses `text`, which must fail with a TOML error naming `key` at `line`.
@@ -415,6 +415,17 @@ fn every_variant() -> Vec<SceneFile> {
     push(&|f| {
         f.mesh = MeshSource::None;
         f.groom = Some(GroomSource::new("hair/long.usda"));
+    });
+    push(&|f| {
+        f.groom = Some(GroomSource {
+            guides: Some(GuideParams {
+                strands: 6000,
+                clump: 0.3,
+                noise: 0.1,
+                ..GuideParams::default()
+            }),
+            ..GroomSource::new("long_hair.hair")
+        })
     });
     files
 }

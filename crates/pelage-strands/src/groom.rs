@@ -50,9 +50,9 @@ pub struct GroomStrands {
     source_strands: Vec<u32>,
     /// `chord_error[k]`: the farthest any rest point is from the chord that skips it when
     /// every `k`-th vertex is kept, world units (0 where `k` does not divide the segments).
-    chord_error: Vec<f32>,
+    pub(crate) chord_error: Vec<f32>,
     /// The longest rest segment, world units.
-    longest_segment: f32,
+    pub(crate) longest_segment: f32,
     pass: StrandPass,
     /// The rest roots the pass reads (rewritten by [`StrandStage::set_color`]).
     rest_roots: wgpu::Buffer,
@@ -67,6 +67,17 @@ impl GroomStrands {
     /// or hold a non-finite point (its fields are public), and a groom the device
     /// cannot bind.
     pub fn new(gpu: &Gpu, groom: &Resampled, hair: &HairParams) -> crate::Result<Self> {
+        Self::labelled(gpu, groom, hair, "strands: groom")
+    }
+
+    /// [`GroomStrands::new`] with the pass timed as `label` (the guides of
+    /// [`GuideStrands`](crate::GuideStrands) are bent by this pass).
+    pub(crate) fn labelled(
+        gpu: &Gpu,
+        groom: &Resampled,
+        hair: &HairParams,
+        label: &'static str,
+    ) -> crate::Result<Self> {
         let params = Self::params_for(groom, hair)?;
         // Refuse a groom the device cannot hold before shuffling it.
         StrandPass::vertex_bytes(gpu, &params)?;
@@ -123,7 +134,7 @@ impl GroomStrands {
         let rest_roots = storage_buffer(gpu, "pelage groom rest roots", &roots, storage)?;
         let pass = StrandPass::new(
             gpu,
-            "strands: groom",
+            label,
             "strands/groom.wgsl",
             &params,
             Self::reach_of(groom, hair)?,

@@ -11,9 +11,7 @@ use pelage_scene::{
     Camera, GrowthParams, HairParams, HairType, Mesh, ParamError, SurfaceInterpolation, WindParams,
 };
 
-use crate::{
-    LodLevel, MeshBuffers, StrandFrame, StrandLayout, StrandRoot, StrandsError, sample_roots,
-};
+use crate::{LodLevel, MeshBuffers, StrandFrame, StrandLayout, StrandRoot, sample_roots};
 
 /// The frame resource naming [`StrandBuffers::vertices`] in a [`FramePlan`](pelage_gpu::FramePlan).
 pub const STRAND_VERTICES: &str = "strands.vertices";
@@ -304,21 +302,7 @@ impl GrowStrands {
         params: &HairParams,
     ) -> crate::Result<Self> {
         params.validate(mesh.positions.len())?;
-        if mesh_buffers.vertex_count as usize != mesh.positions.len()
-            || mesh_buffers.triangle_count as usize != mesh.indices.len() / 3
-        {
-            return Err(StrandsError::MeshMismatch {
-                buffers: format!(
-                    "{} vertices, {} triangles",
-                    mesh_buffers.vertex_count, mesh_buffers.triangle_count
-                ),
-                mesh: format!(
-                    "{} vertices, {} triangles",
-                    mesh.positions.len(),
-                    mesh.indices.len() / 3
-                ),
-            });
-        }
+        mesh_buffers.check_matches(mesh)?;
         // Refuse a groom the device cannot hold before spending time on its roots.
         StrandPass::vertex_bytes(gpu, params)?;
         let roots = sample_roots(mesh, &params.roots, &params.growth)?;
@@ -415,7 +399,7 @@ pub struct StrandPass {
     /// The frame inputs the pass reads besides its own buffers (see
     /// [`StrandStage::passes`]).
     pub(crate) inputs: &'static [&'static str],
-    params: HairParams,
+    pub(crate) params: HairParams,
     pipeline: wgpu::ComputePipeline,
     bind_group: wgpu::BindGroup,
     uniforms: UniformBuffer<GrowUniforms>,
@@ -450,10 +434,29 @@ impl StrandPass {
         inputs: &[&wgpu::Buffer],
     ) -> crate::Result<Self> {
         let inputs: Vec<Input> = inputs.iter().copied().map(Input::Read).collect();
-        Self::with_inputs(gpu, label, shader, params, reach, roots, &inputs)
+        Self::with_inputs(gpu, label, shader, params, reach, roots, &inputs, None)
     }
 
-    /// [`StrandPass::new`] with inputs of any [`Input`] kind.
+    /// [`StrandPass::new`] with a uniform buffer of the method's own constants bound
+    /// after the drawn roots (`guides.wgsl`'s clump and noise, say).
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn with_constants(
+        gpu: &Gpu,
+        label: &'static str,
+        shader: &str,
+        params: &HairParams,
+        reach: (Vec3, Vec3),
+        roots: &[StrandRoot],
+        inputs: &[&wgpu::Buffer],
+        constants: Option<&wgpu::Buffer>,
+    ) -> crate::Result<Self> {
+        let inputs: Vec<Input> = inputs.iter().copied().map(Input::Read).collect();
+        Self::with_inputs(gpu, label, shader, params, reach, roots, &inputs, constants)
+    }
+
+    /// [`StrandPass::new`] with inputs of any [`Input`] kind, and optionally a uniform
+    /// buffer of the method's own constants bound after the drawn roots.
+    #[allow(clippy::too_many_arguments)]
     pub(crate) fn with_inputs(
         gpu: &Gpu,
         label: &'static str,
@@ -462,6 +465,7 @@ impl StrandPass {
         reach: (Vec3, Vec3),
         roots: &[StrandRoot],
         inputs: &[Input<'_>],
+        constants: Option<&wgpu::Buffer>,
     ) -> crate::Result<Self> {
         let vertex_bytes = Self::vertex_bytes(gpu, params)?;
         let uniforms = UniformBuffer::new(
@@ -478,7 +482,7 @@ impl StrandPass {
             // grow.wgsl / groom.wgsl: the uniforms (force.wgsl), the read-only inputs,
             // then the vertices and drawn roots written.
             let inputs_end = inputs.len() as u32 + 1;
-            let layout = (1..inputs_end)
+            let mut layout = (1..inputs_end)
                 .zip(inputs)
                 .fold(
                     BindLayout::new(label, wgpu::ShaderStages::COMPUTE).uniform(0),
@@ -489,8 +493,11 @@ impl StrandPass {
                     },
                 )
                 .storage_rw(inputs_end)
-                .storage_rw(inputs_end + 1)
-                .build(device);
+                .storage_rw(inputs_end + 1);
+            if constants.is_some() {
+                layout = layout.uniform(inputs_end + 2);
+            }
+            let layout = layout.build(device);
             let pipeline =
                 compute_pipeline_with_layouts(device, label, &module, "main", &[Some(&layout)]);
             let mut entries = vec![&uniforms.buffer];
@@ -499,6 +506,7 @@ impl StrandPass {
             }));
             entries.push(&vertices);
             entries.push(&roots_buffer);
+            entries.extend(constants);
             let bind_group = bind_buffers(device, label, &layout, &entries);
             (pipeline, bind_group)
         })?;
@@ -565,6 +573,11 @@ impl StrandPass {
         let groups = dispatch_size(&self.limits, u64::from(strands), WORKGROUP);
         compute.dispatch_workgroups(groups.0, groups.1, 1);
         Ok(())
+    }
+
+    /// The timestamp label of the pass.
+    pub(crate) fn label(&self) -> &'static str {
+        self.label
     }
 }
 

@@ -1,7 +1,7 @@
 //! Stage 1 of pelage: strands on the GPU, grown from a triangle mesh or read from a
 //! groom file.
 //!
-//! Three methods with one shape ([`StrandStage`]), each writing [`StrandBuffers`], which
+//! Four methods with one shape ([`StrandStage`]), each writing [`StrandBuffers`], which
 //! later stages bind directly:
 //! - [`GrowStrands`] samples roots over the mesh once (on the CPU, deterministic from a
 //!   seed), then every frame a compute pass evaluates the surface under each root (PN
@@ -9,7 +9,10 @@
 //! - [`GroomStrands`] takes the strands of a `.hair` or `.tfx` file (resampled to a
 //!   fixed segment count) and every frame bends their rest shape by the wind for `t`;
 //! - [`SimulateStrands`] simulates either (position-based dynamics with their roots
-//!   bound to the mesh, colliders, the wind as a force), stepping from frame to frame.
+//!   bound to the mesh, colliders, the wind as a force), stepping from frame to frame;
+//! - [`GuideStrands`] takes a groom's strands as guides: every frame it bends them by
+//!   the wind, then interpolates render strands rooted on the mesh from the guides
+//!   nearest each root (two passes).
 //!
 //! The mesh lives in [`MeshBuffers`]: tightly packed `f32 x3` positions and
 //! normals and a `u32` triangle list in storage buffers, which an engine may own
@@ -25,6 +28,7 @@
 
 mod groom;
 mod grow;
+mod guides;
 mod lod;
 mod mesh_buffers;
 mod roots;
@@ -35,6 +39,7 @@ pub use grow::{
     GrowStrands, GrowUniforms, MESH, STRAND_ROOTS, STRAND_VERTICES, StrandBuffers, StrandPass,
     StrandStage, StrandStyle,
 };
+pub use guides::{GUIDE_VERTICES, GuideMemory, GuideRecord, GuideStrands, GuideUniforms};
 pub use lod::{
     FrameOrderError, LodLevel, PreparedFrame, StrandFrame, StrandLayout, bend_error,
     bend_per_segment, fewest_segments, reduced_segments,
@@ -52,6 +57,7 @@ pub static SHADERS: ShaderSources = pelage_gpu::wgsl_sources!(
     "strands/force.wgsl",
     "strands/groom.wgsl",
     "strands/grow.wgsl",
+    "strands/guides.wgsl",
     "strands/lod.wgsl",
     "strands/simulate.wgsl",
 );
@@ -74,6 +80,21 @@ pub enum StrandsError {
     /// Roots cannot be placed: every triangle has zero area or zero density.
     #[error("no triangle can carry strands: {0}")]
     NoSurface(String),
+    /// A guide's root is too far from the mesh for render strands rooted on the mesh to
+    /// be interpolated from it.
+    #[error(
+        "guide {guide}'s root is {distance} from the mesh, farther than {limit} \
+         (guides.max_root_distance times the mesh's diagonal); place the groom on the mesh \
+         (groom.fit, groom.scale, groom.translation) or raise guides.max_root_distance"
+    )]
+    GuideOffMesh {
+        /// The guide (the groom file's strand index).
+        guide: u32,
+        /// Its root's distance from the nearest triangle.
+        distance: f32,
+        /// The largest distance allowed.
+        limit: f32,
+    },
     /// The caller's mesh buffers do not match the CPU mesh the roots were sampled on.
     #[error(
         "mesh buffers hold {buffers} but the mesh has {mesh}; pass buffers made from the same mesh"

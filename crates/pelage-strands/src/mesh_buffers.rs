@@ -103,6 +103,27 @@ impl MeshBuffers {
         })
     }
 
+    /// Errors unless the buffers hold as many vertices and triangles as `mesh` (the CPU
+    /// mesh roots are sampled on).
+    pub(crate) fn check_matches(&self, mesh: &Mesh) -> crate::Result<()> {
+        if self.vertex_count as usize != mesh.positions.len()
+            || self.triangle_count as usize != mesh.indices.len() / 3
+        {
+            return Err(crate::StrandsError::MeshMismatch {
+                buffers: format!(
+                    "{} vertices, {} triangles",
+                    self.vertex_count, self.triangle_count
+                ),
+                mesh: format!(
+                    "{} vertices, {} triangles",
+                    mesh.positions.len(),
+                    mesh.indices.len() / 3
+                ),
+            });
+        }
+        Ok(())
+    }
+
     /// Rewrites positions and normals (same vertex count), e.g. after skinning on the CPU.
     pub fn update(&self, queue: &wgpu::Queue, mesh: &Mesh) -> crate::Result<()> {
         if mesh.positions.len() != self.vertex_count as usize

@@ -307,6 +307,7 @@ impl SimulateStrands {
                 Input::ReadWrite(&state),
                 Input::ReadWrite(&held),
             ],
+            None,
         )?;
         pass.inputs = &[MESH];
         Ok(Self {

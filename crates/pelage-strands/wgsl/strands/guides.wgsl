@@ -1,0 +1,123 @@
+// Stage 1: render strands interpolated from guide strands (the second pass of
+// GuideStrands; the first bends the guides with strands/groom.wgsl).
+//
+// Reads:  the mesh (positions as tightly packed f32 x3, a u32 triangle list), one
+//         StrandRoot per render strand (triangle, barycentrics, seed, length, width),
+//         one GuideRecord per render strand (3 u32: four 16-bit guide indices, nearest
+//         first, and three 10-bit weights; the last used weight is 1 minus the others),
+//         the bent guides (`guides`: segments + 1 vec4 per guide, written by the first
+//         pass this frame), the frame's GrowUniforms (strand count, step, level of
+//         detail; nothing of the wind) and the GuideUniforms (k, clump, noise).
+// Writes: `vertices`, (segments / step + 1) vec4 per strand, one strand after the other:
+//         xyz = position, w = strand parameter in [0, 1] (0 at the root, 1 at the tip);
+//         and `drawn[strand].width`, the rest width times the level of detail's width
+//         scale s(x) for x = (strand + 1/2) / strand_total.
+// Dispatch: one invocation per drawn strand (strand_count, a prefix of the render
+//         strands, whose roots are in random order), workgroup_size(64);
+//         x = min(groups, limit), y = ceil(groups / x).
+//
+// At parameter s = i / segments, with r the root on the (flat) triangle and G_k the bent
+// guides, G_0 the nearest:
+//   blend(s) = r + sum_k w_k (G_k(s) - G_k(0)) + noise * length * s^2 * j
+//   p(s)     = blend(s) + clump * s * (G_0(s) - blend(s))
+// where j is a vector in [-1, 1]^3 drawn from the strand's seed. Offsets are blended in
+// world space, so one guide gives copies of itself translated to the roots.
+// The CPU mirror of this file is `interpolate` in pelage-reference/src/guides.rs:
+// change both together.
+
+#import shared/strand.wgsl
+#import strands/force.wgsl
+#import strands/lod.wgsl
+
+struct GuideUniforms {
+    // Guides blended per strand (1 to 4).
+    k: u32,
+    // Clumping toward the nearest guide, in [0, 1].
+    clump: f32,
+    // Per-strand noise, a fraction of the strand's length.
+    noise: f32,
+}
+
+@group(0) @binding(1) var<storage, read> positions: array<f32>;
+@group(0) @binding(2) var<storage, read> indices: array<u32>;
+@group(0) @binding(3) var<storage, read> roots: array<StrandRoot>;
+@group(0) @binding(4) var<storage, read> records: array<u32>;
+@group(0) @binding(5) var<storage, read> guides: array<vec4<f32>>;
+@group(0) @binding(6) var<storage, read_write> vertices: array<vec4<f32>>;
+@group(0) @binding(7) var<storage, read_write> drawn: array<StrandRoot>;
+@group(0) @binding(8) var<uniform> g: GuideUniforms;
+
+// Salt of the hash the noise direction is drawn from.
+const NOISE_SALT: u32 = 0x6a09e667u;
+
+fn load_position(i: u32) -> vec3<f32> {
+    return vec3<f32>(positions[3u * i], positions[3u * i + 1u], positions[3u * i + 2u]);
+}
+
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let strand = gid.y * groups.x * 64u + gid.x;
+    if strand >= u.strand_count {
+        return;
+    }
+    let root = roots[strand];
+    let x = (f32(strand) + 0.5) / f32(u.strand_total);
+    drawn[strand].width = root.width * lod_scale(x, u.lod_lambda, u.lod_t_e, u.lod_s_max, u.lod_s_min);
+
+    // The root on the triangle as the mesh is drawn (flat).
+    let tri = root.triangle;
+    let bw = 1.0 - root.bary.x - root.bary.y;
+    let r = load_position(indices[3u * tri]) * root.bary.x
+        + load_position(indices[3u * tri + 1u]) * root.bary.y
+        + load_position(indices[3u * tri + 2u]) * bw;
+
+    // The record: guide indices (nearest first) and weights summing to 1.
+    let r0 = records[3u * strand];
+    let r1 = records[3u * strand + 1u];
+    let r2 = records[3u * strand + 2u];
+    let per_guide = u.segments + 1u;
+    var starts = array<u32, 4>(
+        (r0 & 0xffffu) * per_guide,
+        (r0 >> 16u) * per_guide,
+        (r1 & 0xffffu) * per_guide,
+        (r1 >> 16u) * per_guide,
+    );
+    var weight = array<f32, 4>(0.0, 0.0, 0.0, 0.0);
+    let k = clamp(g.k, 1u, 4u);
+    var rest = 1.0;
+    for (var n = 0u; n + 1u < k; n++) {
+        weight[n] = f32((r2 >> (10u * n)) & 1023u) / 1023.0;
+        rest = rest - weight[n];
+    }
+    weight[k - 1u] = rest;
+    // The guides' roots, read once.
+    var guide_root: array<vec3<f32>, 4>;
+    for (var n = 0u; n < k; n++) {
+        guide_root[n] = guides[starts[n]].xyz;
+    }
+
+    // The noise direction, from the strand's seed.
+    var h = pcg_hash(root.seed ^ NOISE_SALT);
+    let jx = 2.0 * hash_to_unit(h) - 1.0;
+    h = pcg_hash(h);
+    let jy = 2.0 * hash_to_unit(h) - 1.0;
+    h = pcg_hash(h);
+    let jz = 2.0 * hash_to_unit(h) - 1.0;
+    let drift = vec3<f32>(jx, jy, jz) * (g.noise * root.length);
+
+    let segments = u.segments;
+    let step = max(u.step, 1u);
+    let base = strand * (segments / step + 1u);
+    for (var v = 0u; v <= segments / step; v++) {
+        let i = v * step;
+        let s = f32(i) / f32(segments);
+        var blend = r;
+        for (var n = 0u; n < k; n++) {
+            blend = blend + (guides[starts[n] + i].xyz - guide_root[n]) * weight[n];
+        }
+        blend = blend + drift * (s * s);
+        let nearest = guides[starts[0] + i].xyz;
+        let p = blend + (nearest - blend) * (g.clump * s);
+        vertices[base + v] = vec4<f32>(p, s);
+    }
+}
