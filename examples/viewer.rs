@@ -38,7 +38,7 @@ use glam::Vec3;
 use pelage::gpu::{Gpu, ShaderSources, wgpu};
 use pelage::scene::sigma_a_from_color;
 use pelage::scene::{
-    Absorption, ChiangParams, MAX_MELANIN, ShadowParams, Transparency, WindParams,
+    Absorption, ChiangParams, DynamicsParams, MAX_MELANIN, ShadowParams, Transparency, WindParams,
 };
 use pelage::scene::{Camera, HairParams, HairType, Light, ShadeParams, ShadingModel};
 use pelage::{FrameStats, Renderer, Scene, Update};
@@ -159,6 +159,9 @@ impl Orbit {
 struct Controls {
     hair: HairParams,
     wind_on: bool,
+    /// Strand dynamics (`SimulateStrands`) instead of the stateless wind: the scene's
+    /// `[dynamics]`, or the default parameters when it has none.
+    simulate: bool,
     shadow: ShadowParams,
     shade: ShadeParams,
     key_and_back: bool,
@@ -176,6 +179,13 @@ impl Controls {
         if !self.wind_on {
             scene.hair.wind = WindParams::calm();
         }
+        scene.dynamics = match self.simulate {
+            true => base
+                .dynamics
+                .clone()
+                .or_else(|| Some(DynamicsParams::default())),
+            false => None,
+        };
         scene.shadow = self.shadow.clone();
         scene.shade = self.shade.clone();
         scene.lights = match self.key_and_back {
@@ -920,6 +930,10 @@ fn hair_ui(ui: &mut egui::Ui, c: &mut Controls, groom: Option<(u32, u32)>) {
 
 fn wind_ui(ui: &mut egui::Ui, c: &mut Controls) {
     ui.checkbox(&mut c.wind_on, "wind on");
+    ui.checkbox(&mut c.simulate, "simulate (dynamics)")
+        .on_hover_text(
+            "SimulateStrands: inertia, shape constraints, colliders; off: the stateless wind",
+        );
     let w = &mut c.hair.wind;
     ui.add_enabled_ui(c.wind_on, |ui| {
         slider(ui, &mut w.strength, 0.0..=5.0, "strength");
@@ -1225,6 +1239,7 @@ fn main() {
         let controls = Controls {
             hair: base.hair.clone(),
             wind_on: true,
+            simulate: base.dynamics.is_some(),
             shadow: base.shadow.clone(),
             shade: base.shade.clone(),
             key_and_back: false,
