@@ -59,6 +59,7 @@ pub static SHADERS: ShaderSources = pelage_gpu::wgsl_sources!(
     "strands/grow.wgsl",
     "strands/guides.wgsl",
     "strands/lod.wgsl",
+    "strands/rotation.wgsl",
     "strands/simulate.wgsl",
 );
 

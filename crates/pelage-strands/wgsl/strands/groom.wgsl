@@ -26,6 +26,7 @@
 
 #import shared/math.wgsl
 #import shared/strand.wgsl
+#import strands/rotation.wgsl
 #import strands/force.wgsl
 #import strands/lod.wgsl
 
@@ -33,31 +34,6 @@
 @group(0) @binding(2) var<storage, read> roots: array<StrandRoot>;
 @group(0) @binding(3) var<storage, read_write> vertices: array<vec4<f32>>;
 @group(0) @binding(4) var<storage, read_write> drawn: array<StrandRoot>;
-
-// `v` turned by the unit quaternion `q` (xyz = vector part, w = scalar part).
-fn quat_rotate(q: vec4<f32>, v: vec3<f32>) -> vec3<f32> {
-    return v + 2.0 * cross(q.xyz, cross(q.xyz, v) + q.w * v);
-}
-
-// The rotation `a` after `b`.
-fn quat_mul(a: vec4<f32>, b: vec4<f32>) -> vec4<f32> {
-    return vec4<f32>(a.w * b.xyz + b.w * a.xyz + cross(a.xyz, b.xyz), a.w * b.w - dot(a.xyz, b.xyz));
-}
-
-// The shortest rotation taking unit `a` to unit `b`; half a turn about an axis
-// perpendicular to `a` when they are opposite.
-fn quat_between(a: vec3<f32>, b: vec3<f32>) -> vec4<f32> {
-    let w = 1.0 + dot(a, b);
-    if w < 1e-6 {
-        var hint = vec3<f32>(1.0, 0.0, 0.0);
-        if abs(a.x) > 0.9 {
-            hint = vec3<f32>(0.0, 1.0, 0.0);
-        }
-        return vec4<f32>(safe_normalize(cross(a, hint), vec3<f32>(0.0, 0.0, 1.0)), 0.0);
-    }
-    let q = vec4<f32>(cross(a, b), w);
-    return q / length(q);
-}
 
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {

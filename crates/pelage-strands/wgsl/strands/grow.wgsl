@@ -19,6 +19,7 @@
 
 #import shared/math.wgsl
 #import shared/strand.wgsl
+#import strands/rotation.wgsl
 #import strands/force.wgsl
 #import strands/lod.wgsl
 
@@ -106,16 +107,6 @@ fn eval_surface(tri: u32, bary: vec2<f32>) -> Surface {
     }
     s.tangent = perpendicular(s.normal, p2 - p1);
     return s;
-}
-
-// A unit vector perpendicular to unit `n`, as close to `hint` as possible.
-fn perpendicular(n: vec3<f32>, hint: vec3<f32>) -> vec3<f32> {
-    var fallback = vec3<f32>(1.0, 0.0, 0.0);
-    if abs(n.x) > 0.9 {
-        fallback = vec3<f32>(0.0, 1.0, 0.0);
-    }
-    let f = safe_normalize(fallback - dot(fallback, n) * n, vec3<f32>(0.0, 0.0, 1.0));
-    return safe_normalize(hint - dot(hint, n) * n, f);
 }
 
 // The unit tangent of the segment whose midpoint lies at arc length s, for a strand

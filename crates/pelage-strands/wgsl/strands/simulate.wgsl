@@ -37,6 +37,7 @@
 
 #import shared/math.wgsl
 #import shared/strand.wgsl
+#import strands/rotation.wgsl
 #import strands/force.wgsl
 #import strands/lod.wgsl
 
@@ -101,16 +102,6 @@ struct Pose {
     ok: bool,
 }
 
-// A unit vector perpendicular to unit `n`, as close to `hint` as possible (grow.wgsl's).
-fn perpendicular(n: vec3<f32>, hint: vec3<f32>) -> vec3<f32> {
-    var fallback = vec3<f32>(1.0, 0.0, 0.0);
-    if abs(n.x) > 0.9 {
-        fallback = vec3<f32>(0.0, 1.0, 0.0);
-    }
-    let f = safe_normalize(fallback - dot(fallback, n) * n, vec3<f32>(0.0, 0.0, 1.0));
-    return safe_normalize(hint - dot(hint, n) * n, f);
-}
-
 // The flat surface at barycentrics (u, v, w = 1 - u - v) of triangle `tri`: position,
 // normal, and the tangent from the triangle's first edge.
 fn root_pose(tri: u32, bary: vec2<f32>) -> Pose {
@@ -139,30 +130,6 @@ fn root_pose(tri: u32, bary: vec2<f32>) -> Pose {
 fn to_world(pose: Pose, local: vec3<f32>) -> vec3<f32> {
     return pose.position + pose.tangent * local.x + pose.normal * local.y
         + cross(pose.tangent, pose.normal) * local.z;
-}
-
-// `v` turned by the unit quaternion `q` (groom.wgsl's).
-fn quat_rotate(q: vec4<f32>, v: vec3<f32>) -> vec3<f32> {
-    return v + 2.0 * cross(q.xyz, cross(q.xyz, v) + q.w * v);
-}
-
-// The rotation `a` after `b` (groom.wgsl's).
-fn quat_mul(a: vec4<f32>, b: vec4<f32>) -> vec4<f32> {
-    return vec4<f32>(a.w * b.xyz + b.w * a.xyz + cross(a.xyz, b.xyz), a.w * b.w - dot(a.xyz, b.xyz));
-}
-
-// The shortest rotation taking unit `a` to unit `b` (groom.wgsl's).
-fn quat_between(a: vec3<f32>, b: vec3<f32>) -> vec4<f32> {
-    let w = 1.0 + dot(a, b);
-    if w < 1e-6 {
-        var hint = vec3<f32>(1.0, 0.0, 0.0);
-        if abs(a.x) > 0.9 {
-            hint = vec3<f32>(0.0, 1.0, 0.0);
-        }
-        return vec4<f32>(safe_normalize(cross(a, hint), vec3<f32>(0.0, 0.0, 1.0)), 0.0);
-    }
-    let q = vec4<f32>(cross(a, b), w);
-    return q / length(q);
 }
 
 // A vertex and its previous position, as collisions move them.
