@@ -7,6 +7,10 @@ use pelage_strands::{GrowUniforms, STATE_HEADER, SimUniforms, StrandRoot};
 
 use crate::strands::{force, perpendicular, quat_between, quat_mul, quat_rotate, safe_normalize};
 
+/// Rounds of collision and length projection per vertex and substep
+/// (`COLLISION_PASSES` in WGSL).
+const COLLISION_PASSES: u32 = 3;
+
 /// WGSL `mix` on vectors: `a * (1 - t) + b * t`.
 fn mix(a: Vec3, b: Vec3, t: f32) -> Vec3 {
     a * (1.0 - t) + b * t
@@ -49,13 +53,15 @@ fn to_world(pose: &Pose, local: Vec3) -> Vec3 {
         + pose.tangent.cross(pose.normal) * local.z
 }
 
-/// `collide` in WGSL: `(p, prev)` pushed out of every collider of `sim`.
+/// `collide` in WGSL: `(p, prev)` pushed out of every collider of `sim`, `prev` moved
+/// by `friction` of the tangential motion.
 fn collide(
     sim: &SimUniforms,
     p_in: Vec3,
     prev_in: Vec3,
     margin: f32,
     fallback: Vec3,
+    friction: f32,
 ) -> (Vec3, Vec3) {
     let (mut p, mut prev) = (p_in, prev_in);
     for col in sim.colliders.iter().take(sim.collider_count as usize) {
@@ -73,7 +79,7 @@ fn collide(
             let n = safe_normalize(d, fallback);
             p = nearest + n * r;
             let v = p - prev;
-            prev += (v - n * v.dot(n)) * sim.friction;
+            prev += (v - n * v.dot(n)) * friction;
         }
     }
     (p, prev)
@@ -140,28 +146,33 @@ pub fn simulate_frame(
                 let mut q = Vec4::new(0.0, 0.0, 0.0, 1.0);
                 for k in 1..n {
                     let mut p = state[pos + k].truncate();
-                    let prev = state[prv + k].truncate();
+                    let mut prev = state[prv + k].truncate();
                     let a = sim.gravity + force(u, p, t) * sim.wind_response;
                     let v = (p - prev) * sim.keep;
-                    let prev = p;
+                    prev = p;
                     p = p + v + a * h2;
                     let rest_k = to_world(&pose, state[rest + k].truncate());
                     let reach = 1.0 - k as f32 / segments / sim.global_range;
-                    p = mix(p, rest_k, sim.global_stiffness * reach.max(0.0));
+                    let held = mix(p, rest_k, sim.global_stiffness * reach.max(0.0));
+                    prev += held - p;
+                    p = held;
                     let rest_offset = rest_k - rest_parent;
                     let len = rest_offset.length();
                     let rest_dir = quat_rotate(q, safe_normalize(rest_offset, pose.normal));
-                    p = mix(p, parent + rest_dir * len, sim.local_stiffness);
-                    let (mp, mprev) = collide(sim, p, prev, margin, pose.normal);
-                    let dir = safe_normalize(mp - parent, rest_dir);
-                    let fixed = parent + dir * len;
-                    let mut correction = fixed - mp;
-                    let (mp, mprev) = collide(sim, fixed, mprev, margin, pose.normal);
-                    let dir = safe_normalize(mp - parent, rest_dir);
-                    let fixed = parent + dir * len;
-                    correction += fixed - mp;
-                    let p = fixed;
-                    let prev = mprev;
+                    let pulled = mix(p, parent + rest_dir * len, sim.local_stiffness);
+                    prev += pulled - p;
+                    p = pulled;
+                    let mut dir = rest_dir;
+                    let mut correction = Vec3::ZERO;
+                    for round in 0..COLLISION_PASSES {
+                        let friction = if round == 0 { sim.friction } else { 0.0 };
+                        let (mp, mprev) = collide(sim, p, prev, margin, pose.normal, friction);
+                        dir = safe_normalize(mp - parent, rest_dir);
+                        let fixed = parent + dir * len;
+                        correction += fixed - mp;
+                        p = fixed;
+                        prev = mprev;
+                    }
                     if k > 1 {
                         parent_prev += correction * sim.length_damping;
                         state[prv + k - 1] = parent_prev.extend(0.0);

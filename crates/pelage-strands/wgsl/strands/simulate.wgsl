@@ -44,6 +44,9 @@
 const MAX_COLLIDERS: u32 = 16u;
 // vec4s per strand before its vertices: root position (w = 1 once posed), normal, tangent.
 const STATE_HEADER: u32 = 3u;
+// Rounds of collision and length projection per vertex and substep (the mirror's
+// COLLISION_PASSES).
+const COLLISION_PASSES: u32 = 3u;
 
 // A capsule from `a` to `b` of `radius` (a sphere when a = b), world space.
 struct Collider {
@@ -140,8 +143,10 @@ struct Moved {
 
 // `p` pushed out of every collider to `margin` beyond its surface (along the direction
 // from the nearest point of its axis; `fallback` when on the axis), and `prev` moved along
-// the contact's tangent plane by `friction` of the tangential motion.
-fn collide(p_in: vec3<f32>, prev_in: vec3<f32>, margin: f32, fallback: vec3<f32>) -> Moved {
+// the contact's tangent plane by `friction` of the tangential motion (the first round of
+// a substep only: a later round's contact is the same one, and its friction applied again
+// would hinge on whether rounding left the vertex a hair inside).
+fn collide(p_in: vec3<f32>, prev_in: vec3<f32>, margin: f32, fallback: vec3<f32>, friction: f32) -> Moved {
     var m = Moved(p_in, prev_in);
     for (var c = 0u; c < min(sim.collider_count, MAX_COLLIDERS); c++) {
         let col = sim.colliders[c];
@@ -158,7 +163,7 @@ fn collide(p_in: vec3<f32>, prev_in: vec3<f32>, margin: f32, fallback: vec3<f32>
             let n = safe_normalize(d, fallback);
             m.p = nearest + n * r;
             let v = m.p - m.prev;
-            m.prev = m.prev + (v - n * dot(v, n)) * sim.friction;
+            m.prev = m.prev + (v - n * dot(v, n)) * friction;
         }
     }
     return m;
@@ -227,23 +232,32 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
                 // Global shape: toward the rest position in the root's frame.
                 let rest_k = to_world(pose, state[rest + k].xyz);
                 let reach = 1.0 - f32(k) / segments / sim.global_range;
-                p = mix(p, rest_k, sim.global_stiffness * max(reach, 0.0));
+                let held = mix(p, rest_k, sim.global_stiffness * max(reach, 0.0));
+                prev = prev + (held - p);
+                p = held;
                 // Local shape: toward the rest direction turned like the segments before.
                 let rest_offset = rest_k - rest_parent;
                 let len = length(rest_offset);
                 let rest_dir = quat_rotate(q, safe_normalize(rest_offset, pose.normal));
-                p = mix(p, parent + rest_dir * len, sim.local_stiffness);
-                // Collisions, then follow the leader (twice: the second collision fixes
-                // what the first length projection pushed back in).
-                var m = collide(p, prev, margin, pose.normal);
-                var dir = safe_normalize(m.p - parent, rest_dir);
-                var on_length = parent + dir * len;
-                var correction = on_length - m.p;
-                m = collide(on_length, m.prev, margin, pose.normal);
-                dir = safe_normalize(m.p - parent, rest_dir);
-                on_length = parent + dir * len;
-                correction = correction + (on_length - m.p);
-                p = on_length;
+                // The pull moves the previous position with it: it bends the strand
+                // without giving it speed (a pull that became velocity, as every other
+                // correction does, set the free half of a strand kinking).
+                let pulled = mix(p, parent + rest_dir * len, sim.local_stiffness);
+                prev = prev + (pulled - p);
+                p = pulled;
+                // Collisions, then follow the leader, COLLISION_PASSES times: each
+                // collision fixes what the length projection before it pushed back in.
+                var m = Moved(p, prev);
+                var dir = rest_dir;
+                var correction = vec3<f32>(0.0);
+                for (var round = 0u; round < COLLISION_PASSES; round++) {
+                    m = collide(m.p, m.prev, margin, pose.normal, select(0.0, sim.friction, round == 0u));
+                    dir = safe_normalize(m.p - parent, rest_dir);
+                    let on_length = parent + dir * len;
+                    correction = correction + (on_length - m.p);
+                    m.p = on_length;
+                }
+                p = m.p;
                 prev = m.prev;
                 // DFTL: the parent's velocity loses length_damping of this correction.
                 if k > 1u {
