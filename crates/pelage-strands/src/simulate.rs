@@ -122,8 +122,10 @@ impl SimUniforms {
 /// damping, the stateless methods' wind field as a force), then, vertex after vertex,
 /// global shape (toward the rest position carried by the root's frame, stiffness falling
 /// linearly to 0 over `global_range` of the strand), local shape (toward the rest
-/// direction in the parent segment's frame, TressFX's local shape constraint),
-/// collisions with friction, and inextensibility by follow-the-leader with Müller et al.
+/// direction in the parent segment's frame, TressFX's local shape constraint) — both
+/// pulls move the previous position too, so they shape the strand without giving it
+/// speed (as velocity they set grown strands kinking) — then three rounds of collisions
+/// (friction in the first) and inextensibility by follow-the-leader, with Müller et al.
 /// 2012's velocity correction ("DFTL"). Gauss-Seidel along the strand converges in one
 /// pass where Jacobi iterations need many, FTL makes every segment exactly its rest
 /// length after every substep whatever the forces, and one thread per strand needs no

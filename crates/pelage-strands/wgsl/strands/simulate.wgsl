@@ -25,11 +25,13 @@
 //  3. root to tip, vertex k: global shape (pull toward its rest position carried by the
 //     root's frame, stiffness falling to 0 at global_range), local shape (toward the rest
 //     direction turned by the rotation accumulated from the segments before it, as
-//     groom.wgsl turns a groom), collisions (out of every sphere and capsule, friction
-//     taking tangential velocity off), then follow-the-leader: the vertex is put at its
-//     rest length from its parent, twice with a collision between, and the parent's
-//     velocity is corrected by -length_damping times that correction (Mueller et al.
-//     2012, "DFTL"). The root is pinned.
+//     groom.wgsl turns a groom); both pulls move the previous position with the vertex,
+//     so they shape the strand without giving it speed; then COLLISION_PASSES rounds of
+//     collisions (out of every sphere and capsule; friction, in the first round only,
+//     taking tangential velocity off) and follow-the-leader (the vertex put at its rest
+//     length from its parent), and the parent's velocity is corrected by -length_damping
+//     times the follow-the-leader corrections (Mueller et al. 2012, "DFTL"). The root is
+//     pinned.
 // Every segment thus leaves each substep at its rest length (to float rounding).
 // A root that moved more than teleport_distance, a first frame, a reset or a non-finite
 // vertex put the strand at rest in its new pose.
