@@ -125,9 +125,9 @@ fn help_of_every_command() {
     );
     assert_mentions(
         &ok(&["lab", "--help"]),
-        &["shadows", "oit", "shading", "lod"],
+        &["shadows", "oit", "shading", "lod", "dynamics"],
     );
-    for lab in ["shadows", "oit", "shading"] {
+    for lab in ["shadows", "oit", "shading", "dynamics"] {
         assert_mentions(
             &ok(&["lab", lab, "--help"]),
             &["--quick", "--out", "out/lab"],
@@ -1112,4 +1112,27 @@ fn the_fallback_to_gl_without_vulkan_draws_the_picture() {
     let (_, _, vulkan) = render_tiny(&dir, "vk", &[], &[("WGPU_BACKEND", "vulkan")]);
     let diff = mean_difference(&fallback, &vulkan.expect("a Vulkan picture"));
     assert!(diff < 1.0, "the fallback differs from Vulkan by {diff}");
+}
+
+/// `lab dynamics --scene` with a scene that has no `[dynamics]` table says so, naming the
+/// file and the table, before opening an adapter.
+#[test]
+fn lab_dynamics_refuses_a_scene_without_dynamics() {
+    let dir = Scratch::new("dynamics_lab");
+    let scene = scenes().join("default.toml");
+    let out = dir.0.to_string_lossy();
+    let stderr = fails(&[
+        "lab",
+        "dynamics",
+        "--quick",
+        "--scene",
+        &scene.to_string_lossy(),
+        "--out",
+        &out,
+    ]);
+    assert!(
+        stderr.contains("default.toml") && stderr.contains("[dynamics]"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("adapter"), "{stderr}");
 }

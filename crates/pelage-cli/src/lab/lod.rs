@@ -34,10 +34,8 @@ use pelage::scene::{Camera, LodParams, ShadowParams, Transparency};
 use pelage::strands::LodLevel;
 use pelage::{Renderer, Scene};
 use pelage_lab::{ScatterChart, ScatterPoint, Table, contact_sheet};
-use pelage_reference::flip::{DEFAULT_PIXELS_PER_DEGREE, LinearImage, flip};
-use pelage_reference::oit::linear_to_srgb8;
 
-use super::LabOpts;
+use super::{LabOpts, background, flip_scores};
 use crate::auto::{self, Budget, Candidate};
 use crate::progress;
 
@@ -173,30 +171,6 @@ fn measure(
     })
 }
 
-/// Mean FLIP over the whole image and over the pixels where either image is not the
-/// background.
-fn flip_scores(
-    reference: &image::RgbaImage,
-    test: &image::RgbaImage,
-    background: [u8; 3],
-) -> LabResult<(f64, f64)> {
-    let (w, h) = reference.dimensions();
-    let a = LinearImage::from_srgb8_rgba(w, h, reference.as_raw())?;
-    let b = LinearImage::from_srgb8_rgba(w, h, test.as_raw())?;
-    let map = flip(&a, &b, DEFAULT_PIXELS_PER_DEGREE)?;
-    let (mut sum, mut n) = (0.0f64, 0usize);
-    for ((p, q), v) in reference.pixels().zip(test.pixels()).zip(&map.values) {
-        let off = |px: &image::Rgba<u8>| {
-            (0..3).any(|c| (i16::from(px.0[c]) - i16::from(background[c])).abs() > 1)
-        };
-        if off(p) || off(q) {
-            sum += f64::from(*v);
-            n += 1;
-        }
-    }
-    Ok((map.mean(), if n > 0 { sum / n as f64 } else { 0.0 }))
-}
-
 /// Mean hair fragments per covered pixel, counted by an A-buffer frame.
 fn mean_fragments(gpu: &Gpu, scene: &Scene, camera: &Camera, size: (u32, u32)) -> LabResult<f64> {
     let mut s = scene.clone();
@@ -244,15 +218,6 @@ fn describe(scene: &Scene) -> String {
         Transparency::KBuffer { k } => format!("{shadow}, k={k}"),
         _ => shadow,
     }
-}
-
-fn background(scene: &Scene) -> [u8; 3] {
-    let b = scene.shade.background;
-    [
-        linear_to_srgb8(b.x),
-        linear_to_srgb8(b.y),
-        linear_to_srgb8(b.z),
-    ]
 }
 
 /// Runs the lab.

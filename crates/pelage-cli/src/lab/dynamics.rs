@@ -1,0 +1,435 @@
+//! The dynamics lab: the same long hair simulated and under the stateless wind, while the
+//! head turns and nods. Issue 20 asks that fur keep the stateless wind unless a scene
+//! needs more; this lab says how much more the simulation shows, and what it costs.
+//!
+//! ```text
+//! pelage lab dynamics [--quick] [--out DIR] [--scene FILE]
+//! ```
+//!
+//! The scene is [`SCENE`]: `scenes/head_turn.toml`'s head, motion, wind, dynamics, light
+//! and camera, with the hair grown on the head (the lab needs no file beside the
+//! binary). Three renderers draw every frame (30 per second, 4 s; `--quick`: 1 s,
+//! smaller and fewer strands), from the same roots:
+//!
+//! - **stateless**: `GrowStrands`, each frame grown for its time alone (the hair turns
+//!   rigidly with the head, bent by the wind);
+//! - **simulated**: `SimulateStrands` with the scene's `[dynamics]` (the hair lags,
+//!   swings and settles, and rests on the head's collider);
+//! - **floor**: the stateless hair grown from other random roots, whose difference from
+//!   the stateless image is what any change of strands shows (the same hair, other
+//!   strands): a simulated frame that differs from the stateless one by no more than
+//!   this looks no different. (`--scene` with a groom: none, a groom's strands are the
+//!   file's.)
+//!
+//! `--scene FILE` takes a scene file with a `[dynamics]` table (`scenes/head_turn.toml`)
+//! instead, compared with the same scene without the table.
+//!
+//! Per frame: mean LDR-FLIP of the simulated image against the stateless one and of the
+//! floor against the stateless one (over the image and over the head and hair: pixels
+//! where either image is not the background); the distance between each strand's
+//! simulated and stateless tip as a fraction of its length (mean and largest, read back
+//! from the strand buffers); how kinked the strands are (each strand's largest turn
+//! between consecutive segments, in degrees, averaged over the strands); each renderer's
+//! frame wall clock (render and wait). At the
+//! end, each renderer's strand stage submitted alone (median of the repeats), one frame
+//! step past the last.
+//!
+//! Writes `DIR/dynamics.csv` (a row per frame), `DIR/dynamics_summary.csv` (means over
+//! the frames after the first second, when the head has moved, and the cost ratios) and
+//! `DIR/dynamics_sheet.png` (stateless over simulated at six times).
+
+use std::path::Path;
+use std::time::Instant;
+
+use pelage::gpu::{Gpu, read_buffer};
+use pelage::scene::SceneFile;
+use pelage::{Renderer, Scene};
+use pelage_lab::{Table, contact_sheet};
+
+use super::{LabOpts, background, flip_scores};
+use crate::progress;
+
+type LabResult<T> = Result<T, Box<dyn std::error::Error>>;
+
+/// `scenes/head_turn.toml` with the hair grown on the head instead of read from
+/// `long_hair.hair` (same head, motion, wind, dynamics, shading, camera and light).
+pub const SCENE: &str = r#"
+[mesh]
+kind = "icosphere"
+radius = 0.5
+subdivisions = 3
+
+[dynamics]
+gravity = [0.0, -9.8, 0.0]
+wind_response = 2.0
+damping = 3.0
+local_stiffness = 0.3
+global_stiffness = 0.25
+global_range = 0.4
+friction = 0.3
+colliders = [{ center = [0.0, 0.0, 0.0], radius = 0.48 }]
+
+[motion]
+pivot = [0.0, -0.3, 0.0]
+turn = 0.9
+turn_frequency = 0.4
+nod = 0.3
+nod_frequency = 0.7
+
+[hair.roots]
+count = 3000
+seed = 7
+
+[hair.growth]
+segments = 16
+length = 0.9
+force_weight = 0.12
+direction_jitter = 0.15
+width = 0.003
+tip_width = 0.4
+color = [0.52, 0.36, 0.2]
+color_jitter = 0.2
+opacity = 0.55
+
+[hair.wind]
+direction = [1.0, 0.0, 0.4]
+strength = 0.8
+gust_strength = 0.6
+gust_frequency = 0.5
+turbulence = 0.4
+turbulence_scale = 2.0
+turbulence_speed = 1.0
+phase_spread = 0.4
+
+[shadow]
+method = "voxel"
+resolution = [96, 96, 96]
+
+[shade]
+mesh_color = [0.55, 0.4, 0.33]
+
+[shade.transparency]
+method = "k_buffer"
+k = 8
+
+[camera]
+eye = [1.6, 0.2, 3.0]
+target = [0.0, -0.35, 0.0]
+fov_y = 0.75
+near = 0.05
+far = 20.0
+
+[[lights]]
+kind = "directional"
+direction = [-0.6, -0.5, -0.6]
+color = [1.0, 1.0, 1.0]
+intensity = 1.8
+"#;
+
+/// Frames per second of the lab's animation.
+const FPS: f32 = 30.0;
+
+/// The scenes the lab compares: stateless, simulated and (grown hair only) the stateless
+/// hair from other roots. `path`: a scene file with a `[dynamics]` table instead of
+/// [`SCENE`]; its strand count is kept.
+fn scenes(path: Option<&Path>, strands: u32) -> LabResult<(Scene, Scene, Option<Scene>)> {
+    let simulated = match path {
+        Some(path) => {
+            let scene = Scene::from_file(path)?;
+            if scene.dynamics.is_none() {
+                return Err(format!(
+                    "{}: the scene has no [dynamics] table, so there is no simulation to \
+                     compare with its stateless wind; add one (see README \"Dynamics\")",
+                    path.display()
+                )
+                .into());
+            }
+            scene
+        }
+        None => {
+            let file = SceneFile::parse(SCENE)?;
+            let mut scene = Scene::from_scene_file(&file, Path::new("lab dynamics"))?;
+            scene.hair.roots.count = strands;
+            scene
+        }
+    };
+    let stateless = Scene {
+        dynamics: None,
+        ..simulated.clone()
+    };
+    // A groom's strands are the file's: other roots exist only for grown hair.
+    let floor = simulated.groom.is_none().then(|| {
+        let mut floor = stateless.clone();
+        floor.hair.roots.seed = floor.hair.roots.seed.wrapping_add(1000);
+        floor
+    });
+    Ok((stateless, simulated, floor))
+}
+
+/// Every strand's vertices (xyz) from the renderer's strand buffers, strand after strand.
+fn read_strands(gpu: &Gpu, renderer: &Renderer) -> LabResult<(Vec<[f32; 3]>, usize)> {
+    let buffers = renderer.strands().buffers();
+    let bytes = read_buffer(gpu, &buffers.vertices)?;
+    let per_strand = buffers.vertices_per_strand() as usize;
+    let vertices = bytes
+        .chunks_exact(16)
+        .take(buffers.strand_count as usize * per_strand)
+        .map(|v| {
+            let f = |i: usize| f32::from_le_bytes([v[i], v[i + 1], v[i + 2], v[i + 3]]);
+            [f(0), f(4), f(8)]
+        })
+        .collect();
+    Ok((vertices, per_strand))
+}
+
+/// The largest turn between consecutive segments of each strand, degrees: how kinked
+/// the strands are (grown hair turns a few degrees a segment).
+fn largest_turns(vertices: &[[f32; 3]], per_strand: usize) -> Vec<f64> {
+    let sub = |a: [f32; 3], b: [f32; 3]| glam::Vec3::from(a) - glam::Vec3::from(b);
+    vertices
+        .chunks_exact(per_strand)
+        .map(|strand| {
+            strand
+                .windows(3)
+                .map(|w| {
+                    let (a, b) = (sub(w[1], w[0]), sub(w[2], w[1]));
+                    f64::from(a.angle_between(b).to_degrees())
+                })
+                .filter(|d| d.is_finite())
+                .fold(0.0, f64::max)
+        })
+        .collect()
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
+}
+
+fn mean(v: impl Iterator<Item = f64>) -> f64 {
+    let (sum, n) = v.fold((0.0, 0usize), |(s, n), x| (s + x, n + 1));
+    if n == 0 { f64::NAN } else { sum / n as f64 }
+}
+
+/// One frame's measures.
+struct Row {
+    t: f32,
+    flip_sim: (f64, f64),
+    /// NaN for a groom (no other roots).
+    flip_floor: (f64, f64),
+    tip_mean: f64,
+    tip_max: f64,
+    /// Mean over strands of each strand's largest turn, stateless and simulated.
+    turn: [f64; 2],
+    wall_ms: [f64; 2],
+}
+
+/// Runs the lab: writes `dynamics.csv`, `dynamics_summary.csv` and `dynamics_sheet.png`
+/// under `opts.out`.
+pub fn run(opts: &LabOpts, scene: Option<&Path>) -> LabResult<()> {
+    let started = Instant::now();
+    let (size, strands, seconds, repeats) = if opts.quick {
+        ((160, 120), 600, 1.0, 3)
+    } else {
+        ((320, 240), 3000, 4.0, 9)
+    };
+    let frames = (seconds * FPS).round() as usize;
+    let (stateless, simulated, floor) = scenes(scene, strands)?;
+    let gpu = Gpu::headless()?;
+    println!("adapter: {}", gpu.describe());
+    let camera = stateless.camera.clone();
+    let bg = background(&stateless);
+    let mut renderers = [&stateless, &simulated]
+        .into_iter()
+        .chain(&floor)
+        .map(|scene| Renderer::new(&gpu, scene, size.0, size.1))
+        .collect::<Result<Vec<_>, _>>()?;
+    let roots = renderers[0].strands().roots();
+    let lengths: Vec<f64> = roots.iter().map(|r| f64::from(r.length)).collect();
+    println!(
+        "{} strands x {} segments, {}x{}, {frames} frames at {FPS} fps{}",
+        roots.len(),
+        renderers[0].strands().buffers().segments,
+        size.0,
+        size.1,
+        if floor.is_none() {
+            " (a groom: no floor of other roots)"
+        } else {
+            ""
+        }
+    );
+
+    let bar = progress::bar(frames as u64, "frames")?;
+    let mut rows = Vec::with_capacity(frames);
+    let sheet_every = (frames / 6).max(1);
+    let mut cells = Vec::new();
+    for frame in 0..frames {
+        let t = frame as f32 / FPS;
+        let mut wall_ms = [0.0; 2];
+        let mut images = Vec::with_capacity(3);
+        for (i, renderer) in renderers.iter_mut().enumerate() {
+            let began = Instant::now();
+            renderer.render(&gpu, t, &camera)?;
+            renderer.finish(&gpu)?;
+            if let Some(ms) = wall_ms.get_mut(i) {
+                *ms = began.elapsed().as_secs_f64() * 1e3;
+            }
+            images.push(renderer.image(&gpu)?);
+        }
+        let flip_sim = flip_scores(&images[0], &images[1], bg)?;
+        let flip_floor = match images.get(2) {
+            Some(other) => flip_scores(&images[0], other, bg)?,
+            None => (f64::NAN, f64::NAN),
+        };
+        let (a, per_strand) = read_strands(&gpu, &renderers[0])?;
+        let (b, _) = read_strands(&gpu, &renderers[1])?;
+        let distances: Vec<f64> = (a.chunks_exact(per_strand).zip(b.chunks_exact(per_strand)))
+            .zip(&lengths)
+            .map(|((a, b), &length)| {
+                let (a, b) = (a[per_strand - 1], b[per_strand - 1]);
+                let d = glam::Vec3::from(a).distance(glam::Vec3::from(b));
+                f64::from(d) / length.max(f64::MIN_POSITIVE)
+            })
+            .collect();
+        let row = Row {
+            t,
+            flip_sim,
+            flip_floor,
+            tip_mean: mean(distances.iter().copied()),
+            tip_max: distances.iter().copied().fold(0.0, f64::max),
+            turn: [
+                mean(largest_turns(&a, per_strand).into_iter()),
+                mean(largest_turns(&b, per_strand).into_iter()),
+            ],
+            wall_ms,
+        };
+        if frame % sheet_every == sheet_every - 1 && cells.len() < 12 {
+            cells.push((format!("stateless t = {t:.2} s"), images[0].clone()));
+            cells.push((format!("simulated t = {t:.2} s"), images[1].clone()));
+        }
+        bar.set_message(format!(
+            "t = {t:.2} s  FLIP {:.3} (floor {:.3}), largest turn {:.0} / {:.0} deg",
+            row.flip_sim.1, row.flip_floor.1, row.turn[0], row.turn[1]
+        ));
+        rows.push(row);
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    // Each strand stage alone, one frame step past the last (the simulation steps 1/FPS
+    // each repeat; the stateless growth does the same work at any time).
+    let t_next = frames as f32 / FPS;
+    let mut strand_ms = [0.0; 2];
+    for (renderer, ms) in renderers.iter_mut().zip(&mut strand_ms) {
+        let stages = renderer.stage_wall_times(&gpu, t_next, &camera, repeats)?;
+        *ms = stages
+            .iter()
+            .find(|(stage, _)| stage == "strands")
+            .map_or(f64::NAN, |(_, ms)| *ms);
+    }
+
+    let mut table = Table::new(&[
+        "t_s",
+        "flip_simulated",
+        "flip_simulated_subject",
+        "flip_floor",
+        "flip_floor_subject",
+        "tip_distance_mean",
+        "tip_distance_max",
+        "largest_turn_deg_stateless",
+        "largest_turn_deg_simulated",
+        "frame_ms_stateless",
+        "frame_ms_simulated",
+    ]);
+    for r in &rows {
+        table.push(vec![
+            format!("{:.4}", r.t),
+            format!("{:.4}", r.flip_sim.0),
+            format!("{:.4}", r.flip_sim.1),
+            format!("{:.4}", r.flip_floor.0),
+            format!("{:.4}", r.flip_floor.1),
+            format!("{:.4}", r.tip_mean),
+            format!("{:.4}", r.tip_max),
+            format!("{:.2}", r.turn[0]),
+            format!("{:.2}", r.turn[1]),
+            format!("{:.2}", r.wall_ms[0]),
+            format!("{:.2}", r.wall_ms[1]),
+        ])?;
+    }
+    table.write_csv(&opts.out.join("dynamics.csv"))?;
+
+    // The summary: frames after the first second (the head has turned; before it the
+    // simulation starts from rest and the two differ only by the wind's treatment).
+    let moving: Vec<&Row> = rows.iter().filter(|r| r.t >= 1.0).collect();
+    let moving = if moving.is_empty() {
+        rows.iter().collect()
+    } else {
+        moving
+    };
+    let frame_ratio = median(moving.iter().map(|r| r.wall_ms[1]).collect())
+        / median(moving.iter().map(|r| r.wall_ms[0]).collect());
+    let summary_rows = [
+        (
+            "mean FLIP, simulated vs stateless (image)",
+            mean(moving.iter().map(|r| r.flip_sim.0)),
+        ),
+        (
+            "mean FLIP, simulated vs stateless (head and hair)",
+            mean(moving.iter().map(|r| r.flip_sim.1)),
+        ),
+        (
+            "mean FLIP, other roots vs stateless (image): the floor",
+            mean(moving.iter().map(|r| r.flip_floor.0)),
+        ),
+        (
+            "mean FLIP, other roots vs stateless (head and hair): the floor",
+            mean(moving.iter().map(|r| r.flip_floor.1)),
+        ),
+        (
+            "tip distance, mean over strands and frames (strand lengths)",
+            mean(moving.iter().map(|r| r.tip_mean)),
+        ),
+        (
+            "tip distance, largest (strand lengths)",
+            moving.iter().map(|r| r.tip_max).fold(0.0, f64::max),
+        ),
+        (
+            "largest turn between segments, stateless (degrees, mean over strands)",
+            mean(moving.iter().map(|r| r.turn[0])),
+        ),
+        (
+            "largest turn between segments, simulated (degrees, mean over strands)",
+            mean(moving.iter().map(|r| r.turn[1])),
+        ),
+        (
+            "frame wall clock, simulated over stateless (median)",
+            frame_ratio,
+        ),
+        (
+            "strand stage alone, simulated over stateless (median)",
+            strand_ms[1] / strand_ms[0],
+        ),
+        ("strand stage alone, stateless (ms)", strand_ms[0]),
+        ("strand stage alone, simulated (ms)", strand_ms[1]),
+    ];
+    let mut summary = Table::new(&["measure", "value"]);
+    for (name, value) in summary_rows {
+        summary.push(vec![name.into(), format!("{value:.4}")])?;
+    }
+    summary.write_csv(&opts.out.join("dynamics_summary.csv"))?;
+    pelage::save_png(
+        &contact_sheet(&cells, 2)?,
+        &opts.out.join("dynamics_sheet.png"),
+    )?;
+    println!(
+        "frames from t = {:.1} s on ({} of {frames}):",
+        moving.first().map_or(0.0, |r| r.t),
+        moving.len()
+    );
+    println!("{}", summary.to_text());
+    println!(
+        "wrote {}/dynamics.csv, dynamics_summary.csv and dynamics_sheet.png in {:.0} s",
+        opts.out.display(),
+        started.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
