@@ -593,8 +593,10 @@ pub(crate) enum Input<'a> {
     Uniform(&'a wgpu::Buffer),
 }
 
-/// The shape every stage 1 method has: [`GrowStrands`] (fur grown from a mesh) and
-/// [`GroomStrands`](crate::GroomStrands) (a groom file bent by the wind). Each frame:
+/// The shape every stage 1 method has: [`GrowStrands`] (fur grown from a mesh),
+/// [`GroomStrands`](crate::GroomStrands) (a groom file bent by the wind),
+/// [`GuideStrands`](crate::GuideStrands) (render strands interpolated from guides) and
+/// [`SimulateStrands`](crate::SimulateStrands) (grown fur or a groom simulated). Each frame:
 /// [`StrandStage::set_lod`] (optional), [`StrandStage::prepare`], which returns the
 /// frame's [`StrandFrame`], then [`StrandStage::encode`] with that frame; later passes
 /// bind [`StrandStage::buffers`] and are prepared and recorded with the same frame
