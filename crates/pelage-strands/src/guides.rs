@@ -33,7 +33,7 @@ pub struct GuideUniforms {
 }
 
 /// What one render strand keeps to be interpolated: four 16-bit guide indices (nearest
-/// first; words 0 and 1, low half first) and the first `k - 1` weights as 10-bit
+/// first; words 0 and 1, low half first; slots past `k` repeat the nearest) and the first `k - 1` weights as 10-bit
 /// fractions of 1023 (word 2, lowest bits first); the `k`-th weight is 1 minus the
 /// others, so they sum to 1. 12 bytes per render strand.
 pub type GuideRecord = [u32; 3];
@@ -503,7 +503,10 @@ fn encode_record(nearest: &[(u32, f32)], k: usize, epsilon: f32) -> (GuideRecord
         .collect();
     let last = weights.iter().fold(1.0f32, |rest, w| rest - w);
     weights.push(last);
-    let index = |n: usize| taken.get(n).map_or(0, |&(g, _)| g);
+    // A slot past `k` repeats the nearest guide (weight 0: its points are read anyway,
+    // and the nearest guide's are already at hand).
+    let first = taken.first().map_or(0, |&(g, _)| g);
+    let index = |n: usize| taken.get(n).map_or(first, |&(g, _)| g);
     let packed = quantized
         .iter()
         .enumerate()
@@ -780,7 +783,7 @@ mod tests {
         assert!(w[2].abs() < 2e-3, "{w:?}");
         // One guide: weight 1, nothing stored.
         let (record, w) = encode_record(&[(5, 2.0)], 1, 1e-9);
-        assert_eq!((record, w), ([5, 0, 0], vec![1.0]));
+        assert_eq!((record, w), ([5 | (5 << 16), 5 | (5 << 16), 0], vec![1.0]));
         // Equal distances: equal weights.
         let (_, w) = encode_record(&[(0, 1.0), (1, 1.0), (2, 1.0)], 2, 1e-9);
         assert!(
