@@ -6,19 +6,19 @@ use encase::ShaderType;
 use glam::Vec3;
 use pelage_gpu::{Gpu, GpuTimer, PassInfo, UniformBuffer, storage_buffer, wgpu};
 use pelage_scene::{
-    Camera, GuideParams, HairParams, MAX_GUIDES, Mesh, ParamError, Resampled, SurfaceInterpolation,
-    WindParams,
+    Camera, DynamicsParams, GuideParams, HairParams, MAX_GUIDES, Mesh, ParamError, Resampled,
+    SurfaceInterpolation, WindParams,
 };
 
 use crate::grow::{StrandPass, StrandStage};
 use crate::lod::{bend_error, bend_per_segment, fewest_segments};
 use crate::{
-    GroomStrands, LodLevel, MESH, MeshBuffers, STRAND_ROOTS, STRAND_VERTICES, StrandFrame,
-    StrandRoot, StrandsError, sample_roots,
+    GroomStrands, LodLevel, MESH, MeshBuffers, STRAND_ROOTS, STRAND_VERTICES, SimulateStrands,
+    StrandFrame, StrandRoot, StrandsError, sample_roots,
 };
 
-/// The frame resource naming the bent guides, which the first pass of [`GuideStrands`]
-/// writes and the second reads.
+/// The frame resource naming the bent (or simulated) guides, which the first pass of
+/// [`GuideStrands`] writes and the second reads.
 pub const GUIDE_VERTICES: &str = "strands.guides";
 
 /// The constants of `guides.wgsl` (`GuideUniforms` there), written once.
@@ -72,10 +72,21 @@ const WEIGHT_ONE: u32 = 1023;
 /// longest edge, of a guide's root), the wind (on the guides), the level
 /// of detail, and what [`GroomStrands`] uses of `growth`. The wind acts on the guides
 /// only: later stages see only the interpolated strands.
+///
+/// **Simulated guides** ([`GuideStrands::simulated`]): the first pass is then a
+/// [`SimulateStrands`] of the guides (each guide's root bound to the triangle nearest
+/// it, as for a simulated groom), so inertia, gravity, the wind's forces and the
+/// colliders act on the guides only, and the render strands follow the simulated
+/// guides. The rest of the method is the same; every segment is drawn (the simulated
+/// shape has no bend bound for segment reduction).
 #[derive(Debug)]
 pub struct GuideStrands {
-    /// The first pass: the guides, bent by the wind.
+    /// The guides' rest shape and roots, and the first pass when they are not simulated:
+    /// the guides bent by the wind.
     guides: GroomStrands,
+    /// The first pass when the guides are simulated (its strands in the order of
+    /// `guides`'s).
+    simulation: Option<SimulateStrands>,
     /// The frame the guide pass was last prepared for.
     guide_frame: Option<StrandFrame>,
     roots: Vec<StrandRoot>,
@@ -101,12 +112,15 @@ pub struct GuideMemory {
     pub guide_roots: u64,
     /// One [`GuideRecord`] per render strand.
     pub records: u64,
+    /// The simulated guides' state ([`SimulateStrands::state`], 0 when not simulated):
+    /// root pose, rest shape, positions and previous positions.
+    pub guide_state: u64,
 }
 
 impl GuideMemory {
     /// Every byte counted.
     pub fn total(&self) -> u64 {
-        self.guide_rest + self.guide_vertices + self.guide_roots + self.records
+        self.guide_rest + self.guide_vertices + self.guide_roots + self.records + self.guide_state
     }
 
     /// What [`GroomStrands`] keeps for `strands` strands of `segments` segments beyond
@@ -133,7 +147,49 @@ impl GuideStrands {
         hair: &HairParams,
         params: &GuideParams,
     ) -> crate::Result<Self> {
+        Self::build(gpu, mesh, mesh_buffers, guides, hair, params, None)
+    }
+
+    /// [`GuideStrands::new`] with the guides simulated with `dynamics`
+    /// ([`SimulateStrands::groom`]) instead of bent by the stateless wind: the render
+    /// strands are interpolated from the simulated guides every frame.
+    /// `mesh_buffers` must hold `mesh` (in any later pose; their `bounds` where the
+    /// mesh goes).
+    ///
+    /// Errors: as [`GuideStrands::new`], and bad dynamics parameters (naming them).
+    pub fn simulated(
+        gpu: &Gpu,
+        mesh: &Mesh,
+        mesh_buffers: &MeshBuffers,
+        guides: &Resampled,
+        hair: &HairParams,
+        params: &GuideParams,
+        dynamics: &DynamicsParams,
+    ) -> crate::Result<Self> {
+        Self::build(
+            gpu,
+            mesh,
+            mesh_buffers,
+            guides,
+            hair,
+            params,
+            Some(dynamics),
+        )
+    }
+
+    fn build(
+        gpu: &Gpu,
+        mesh: &Mesh,
+        mesh_buffers: &MeshBuffers,
+        guides: &Resampled,
+        hair: &HairParams,
+        params: &GuideParams,
+        dynamics: Option<&DynamicsParams>,
+    ) -> crate::Result<Self> {
         params.validate()?;
+        if let Some(dynamics) = dynamics {
+            dynamics.validate()?;
+        }
         mesh_buffers.check_matches(mesh)?;
         if guides.strands > MAX_GUIDES {
             return Err(ParamError::new(
@@ -150,6 +206,15 @@ impl GuideStrands {
         check_guides_on_mesh(mesh, guides, params.max_root_distance * diagonal)?;
 
         let bend = GroomStrands::labelled(gpu, guides, hair, "strands: guides bend")?;
+        // The simulation shuffles, colours and sizes the guides as `bend` does: the same
+        // guide at the same index.
+        let simulation = dynamics
+            .map(|d| SimulateStrands::groom(gpu, guides, mesh, mesh_buffers, hair, d))
+            .transpose()?;
+        let guide_stage: &dyn StrandStage = match &simulation {
+            Some(sim) => sim,
+            None => &bend,
+        };
         let per_guide = guides.segments as usize + 1;
         let guide_roots: Vec<Vec3> = bend
             .rest_points()
@@ -190,7 +255,12 @@ impl GuideStrands {
         let records_buffer = storage_buffer(gpu, "pelage guide records", &flat, storage)?;
         let constants_buffer = UniformBuffer::new(gpu, "pelage guide uniforms", &constants)?;
         let mesh_bounds = mesh_buffers.bounds;
-        let reach = reach_around(bend.buffers().reach, mesh_bounds, &render, params.noise);
+        let reach = reach_around(
+            guide_stage.buffers().reach,
+            mesh_bounds,
+            &render,
+            params.noise,
+        );
         let pass = StrandPass::with_constants(
             gpu,
             "strands: guides",
@@ -203,12 +273,13 @@ impl GuideStrands {
                 &mesh_buffers.indices,
                 &rest_roots,
                 &records_buffer,
-                &bend.buffers().vertices,
+                &guide_stage.buffers().vertices,
             ],
             Some(&constants_buffer.buffer),
         )?;
         Ok(Self {
             guides: bend,
+            simulation,
             guide_frame: None,
             roots,
             records,
@@ -251,8 +322,23 @@ impl GuideStrands {
         hair: &HairParams,
         params: &GuideParams,
     ) -> crate::Result<(Vec3, Vec3)> {
-        let render = Self::params_for(guides, hair, params)?;
         let guide_reach = GroomStrands::reach_of(guides, hair)?;
+        Self::reach_around(guide_reach, mesh_bounds, guides, hair, params)
+    }
+
+    /// A world box holding every point render strands interpolated from `guides` can
+    /// reach on a mesh inside `mesh_bounds` when the guides stay inside `guide_reach`
+    /// (simulated guides: their simulation's reach).
+    ///
+    /// Errors: as [`GuideStrands::params_for`].
+    pub fn reach_around(
+        guide_reach: (Vec3, Vec3),
+        mesh_bounds: (Vec3, Vec3),
+        guides: &Resampled,
+        hair: &HairParams,
+        params: &GuideParams,
+    ) -> crate::Result<(Vec3, Vec3)> {
+        let render = Self::params_for(guides, hair, params)?;
         Ok(reach_around(
             guide_reach,
             mesh_bounds,
@@ -267,6 +353,20 @@ impl GuideStrands {
         &self.guides
     }
 
+    /// The guides' simulation, when they are simulated ([`GuideStrands::simulated`]):
+    /// its vertices are the guides the interpolation reads.
+    pub fn simulation(&self) -> Option<&SimulateStrands> {
+        self.simulation.as_ref()
+    }
+
+    /// The first pass: the simulation, or the guides bent by the wind.
+    fn guide_stage(&self) -> &dyn StrandStage {
+        match &self.simulation {
+            Some(sim) => sim,
+            None => &self.guides,
+        }
+    }
+
     /// One [`GuideRecord`] per render strand, in buffer order.
     pub fn records(&self) -> &[GuideRecord] {
         &self.records
@@ -279,13 +379,14 @@ impl GuideStrands {
 
     /// The bytes this method keeps beyond the buffers every stage 1 method keeps.
     pub fn memory(&self) -> GuideMemory {
-        let guides = self.guides.buffers();
+        let guides = self.guide_stage().buffers();
         let points = self.guides.rest_points().len() as u64 * 16;
         GuideMemory {
             guide_rest: points,
             guide_vertices: guides.vertices.size(),
             guide_roots: 2 * guides.roots.size(),
             records: self.record_bytes,
+            guide_state: self.simulation.as_ref().map_or(0, |s| s.state().size()),
         }
     }
 }
@@ -328,9 +429,14 @@ impl StrandStage for GuideStrands {
         &self.roots
     }
 
-    /// Prepares both passes: the guides bent for `time`, then the interpolation.
+    /// Prepares both passes: the guides bent for `time` (or simulated up to it), then the
+    /// interpolation.
     fn prepare(&mut self, queue: &wgpu::Queue, time: f32) -> crate::Result<StrandFrame> {
-        self.guide_frame = Some(self.guides.prepare(queue, time)?);
+        let guide_frame = match &mut self.simulation {
+            Some(sim) => sim.prepare(queue, time)?,
+            None => self.guides.prepare(queue, time)?,
+        };
+        self.guide_frame = Some(guide_frame);
         let uniforms = self.uniforms_at(time);
         self.pass.begin_frame(queue, &uniforms)
     }
@@ -352,15 +458,20 @@ impl StrandStage for GuideStrands {
             }
             .into());
         };
-        self.guides
+        self.guide_stage()
             .encode(encoder, guide_frame, timer.as_deref_mut())?;
         self.pass
             .record(encoder, frame, timer, frame.layout.strands)
     }
 
     fn passes(&self) -> Vec<PassInfo> {
+        let guides = PassInfo::new(self.guide_stage().pass().label());
+        let guides = match &self.simulation {
+            Some(_) => guides.reads([MESH]),
+            None => guides,
+        };
         vec![
-            PassInfo::new(self.guides.pass().label()).writes([GUIDE_VERTICES]),
+            guides.writes([GUIDE_VERTICES]),
             PassInfo::new(self.pass.label())
                 .reads([MESH, GUIDE_VERTICES])
                 .writes([STRAND_VERTICES, STRAND_ROOTS]),
@@ -369,12 +480,15 @@ impl StrandStage for GuideStrands {
 
     fn set_wind(&mut self, wind: WindParams) -> crate::Result<()> {
         self.guides.set_wind(wind.clone())?;
+        if let Some(sim) = &mut self.simulation {
+            sim.set_wind(wind.clone())?;
+        }
         self.pass.params.wind = wind;
         Ok(())
     }
 
     fn reach_with_wind(&self, wind: &WindParams) -> crate::Result<(Vec3, Vec3)> {
-        let guide_reach = self.guides.reach_with_wind(wind)?;
+        let guide_reach = self.guide_stage().reach_with_wind(wind)?;
         Ok(reach_around(
             guide_reach,
             self.mesh_bounds,
@@ -399,9 +513,15 @@ impl StrandStage for GuideStrands {
         )
     }
 
+    /// The guides' simulation, when they are simulated: the colliders a caller moves
+    /// with the body act on the guides.
+    fn as_simulation_mut(&mut self) -> Option<&mut SimulateStrands> {
+        self.simulation.as_mut()
+    }
+
     /// Segment reduction bounded by the guides' rest shape and the wind's bend (as for
     /// a groom), carried through the blend, the noise and the clumping
-    /// (`interpolation_error`).
+    /// (`interpolation_error`); simulated guides: every segment.
     fn level_for_view(
         &self,
         bounds: (Vec3, Vec3),
@@ -415,7 +535,11 @@ impl StrandStage for GuideStrands {
         let max_error = params.lod.segment_error_pixels;
         let longest = params.growth.length;
         let GuideUniforms { clump, noise, .. } = self.constants;
+        let simulated = self.simulation.is_some();
         LodLevel::for_view_with(params, bounds, camera, width, height, |pixels_per_unit| {
+            if simulated {
+                return (full, 0.0);
+            }
             fewest_segments(full, max_error, pixels_per_unit, |k| {
                 let rest = (self.guides.chord_error)
                     .get(k as usize)
