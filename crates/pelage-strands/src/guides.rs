@@ -12,6 +12,7 @@ use pelage_scene::{
 
 use crate::grow::{StrandPass, StrandStage};
 use crate::lod::{bend_error, bend_per_segment, fewest_segments};
+use crate::roots::GROWN_BRIGHTNESS_DRAW;
 use crate::{
     GroomStrands, LodLevel, MESH, MeshBuffers, STRAND_ROOTS, STRAND_VERTICES, SimulateStrands,
     StrandFrame, StrandRoot, StrandsError, sample_roots,
@@ -73,6 +74,10 @@ const WEIGHT_ONE: u32 = 1023;
 /// of detail, and what [`GroomStrands`] uses of `growth`. The wind acts on the guides
 /// only: later stages see only the interpolated strands.
 ///
+/// **Colour.** Guides with colours of their own ([`GroomStrands::file_colors`]) give
+/// each render strand the blend of its guides' colours with the shape's weights, times
+/// the strand's brightness jitter; without, `growth.color`.
+///
 /// **Simulated guides** ([`GuideStrands::simulated`]): the first pass is then a
 /// [`SimulateStrands`] of the guides (each guide's root bound to the triangle nearest
 /// it, as for a simulated groom), so inertia, gravity, the wind's forces and the
@@ -91,6 +96,9 @@ pub struct GuideStrands {
     guide_frame: Option<StrandFrame>,
     roots: Vec<StrandRoot>,
     records: Vec<GuideRecord>,
+    /// Per render strand, the weighted blend of its guides' own colours (before the
+    /// brightness jitter), when the guides have colours.
+    file_colors: Option<Vec<Vec3>>,
     constants: GuideUniforms,
     pass: StrandPass,
     rest_roots: wgpu::Buffer,
@@ -231,6 +239,9 @@ impl GuideStrands {
         let epsilon = 1e-7 * diagonal.max(f32::MIN_POSITIVE);
         let mut roots = sample_roots(mesh, &render.roots, &render.growth)?;
         let mut records = Vec::with_capacity(roots.len());
+        let guide_colors = bend.file_colors();
+        let mut file_colors = guide_colors.map(|_| Vec::with_capacity(roots.len()));
+        let jitter = render.growth.color_jitter;
         for root in &mut roots {
             let at = flat_root(mesh, root);
             let nearest = grid.nearest(at, k + 1);
@@ -242,6 +253,18 @@ impl GuideStrands {
             };
             root.length = blend(&|g| g.length);
             root.width = blend(&|g| g.width);
+            // The guides' own colours, blended with the same weights; the strand's own
+            // brightness jitter on top (as grown fur's).
+            if let (Some(colors), Some(blended)) = (guide_colors, file_colors.as_mut()) {
+                let base: Vec3 = (nearest.iter().zip(&weights))
+                    .map(|(&(guide, _), &w)| {
+                        colors.get(guide as usize).copied().unwrap_or(Vec3::ZERO) * w
+                    })
+                    .sum();
+                root.color =
+                    base * crate::strand_brightness(root.seed, GROWN_BRIGHTNESS_DRAW, jitter);
+                blended.push(base);
+            }
             records.push(record);
         }
         let constants = GuideUniforms {
@@ -283,6 +306,7 @@ impl GuideStrands {
             guide_frame: None,
             roots,
             records,
+            file_colors,
             constants,
             pass,
             rest_roots,
@@ -507,9 +531,18 @@ impl StrandStage for GuideStrands {
             &mut self.pass,
             &mut self.roots,
             &self.rest_roots,
-            crate::roots::GROWN_BRIGHTNESS_DRAW,
+            GROWN_BRIGHTNESS_DRAW,
             queue,
             (color, color_jitter),
+        )?;
+        // Colours blended from the guides' own stay; only their jitter changes.
+        let drawn = self.buffers().roots.clone();
+        crate::groom::keep_file_colors(
+            &mut self.roots,
+            (&self.rest_roots, &drawn),
+            self.file_colors.as_deref(),
+            (GROWN_BRIGHTNESS_DRAW, color_jitter),
+            queue,
         )
     }
 

@@ -562,3 +562,70 @@ fn simulated_guides_drive_the_render_strands_as_the_two_mirrors_composed() {
     assert!(root_off < 1e-5, "{root_off}");
     assert!(lag > 0.05, "the render strands do not move ({lag})");
 }
+
+#[test]
+fn render_strands_take_the_weighted_blend_of_their_guides_colours() {
+    let gpu = gpu();
+    let mut built = build(&gpu, 40, 8);
+    let count = built.guides.strands;
+    built.guides.colors = Some(
+        (0..count)
+            .map(|i| Vec3::new(i as f32 / count as f32, 1.0 - i as f32 / count as f32, 0.25))
+            .collect(),
+    );
+    let mut hair = calm();
+    hair.growth.color_jitter = 0.0;
+    let params = GuideParams {
+        strands: 500,
+        ..GuideParams::default()
+    };
+    let mut strands = built.strands(&gpu, &hair, &params);
+    let guide_colors = strands.guides().file_colors().unwrap().to_vec();
+    let k = strands.constants().k;
+    // The blend of each render strand's guides' colours with its record's weights, and
+    // the colour the GPU's drawn roots hold, per strand.
+    let colours = |strands: &mut GuideStrands| {
+        grow_on_gpu(&gpu, strands, 0.0);
+        let bytes = read_buffer(&gpu, &strands.buffers().roots).unwrap();
+        let drawn: Vec<StrandRoot> = encase::StorageBuffer::new(&bytes[..])
+            .create()
+            .expect("roots decode");
+        (strands.records().iter().zip(drawn))
+            .map(|(record, gpu_root)| {
+                let (index, weight) = decode_record(record, k);
+                let blend: Vec3 = (0..k as usize)
+                    .map(|n| guide_colors[index[n] as usize] * weight[n])
+                    .sum();
+                (blend, gpu_root.color)
+            })
+            .collect::<Vec<_>>()
+    };
+    let mut worst = 0.0f32;
+    let mut spread = (Vec3::MAX, Vec3::MIN);
+    for (blend, colour) in colours(&mut strands) {
+        worst = worst.max((blend - colour).abs().max_element());
+        spread = (spread.0.min(colour), spread.1.max(colour));
+    }
+    println!(
+        "guide colours: max |colour - weighted blend| = {worst:.1e}, red from {:.2} to {:.2}",
+        spread.0.x, spread.1.x
+    );
+    assert!(worst <= 1e-6, "{worst}");
+    assert!(spread.1.x - spread.0.x > 0.5, "{spread:?}");
+
+    // A new jitter keeps the blended colours, each strand scaled by its brightness.
+    strands.set_color(&gpu.queue, Vec3::ONE, 0.3).unwrap();
+    for (blend, colour) in colours(&mut strands) {
+        let b = colour.z / blend.z;
+        assert!((0.7..=1.3).contains(&b), "{b}");
+        assert!(
+            (colour - blend * b).abs().max_element() <= 1e-6,
+            "{colour} {blend}"
+        );
+    }
+
+    // Guides without colours: the render strands take growth.color.
+    built.guides.colors = None;
+    let plain = built.strands(&gpu, &hair, &params);
+    assert!(plain.roots().iter().all(|r| r.color == hair.growth.color));
+}
