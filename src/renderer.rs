@@ -115,24 +115,30 @@ impl Scene {
     /// ([`GroomStrands::reach_of`]; the rest bounds alone when its parameters are bad,
     /// which the renderer then refuses).
     ///
-    /// A simulated groom reaches its longest strand (and width) around its rest bounds;
-    /// with a [`MeshMotion`] the box is the sphere around the pivot holding it.
+    /// A simulated groom (or simulated guides) reaches its longest strand (and width)
+    /// around its rest bounds; with a [`MeshMotion`] the box is the sphere around the pivot holding it.
     pub fn reach(&self) -> (glam::Vec3, glam::Vec3) {
         let (lo, hi) = self.mesh.bounds();
+        // A simulated groom: its longest strand (and width) around its rest bounds.
+        let simulated = |groom: &Resampled| {
+            let pad = GroomStrands::params_for(groom, &self.hair)
+                .map_or(0.0, |p| p.growth.length + p.growth.width);
+            let (a, b) = groom.bounds();
+            (a - glam::Vec3::splat(pad), b + glam::Vec3::splat(pad))
+        };
         let (glo, ghi) = match (&self.groom, &self.guides, &self.dynamics) {
-            (Some(groom), Some(guides), _) => {
+            (Some(groom), Some(guides), None) => {
                 GuideStrands::reach_of(groom, (lo, hi), &self.hair, guides)
+                    .unwrap_or_else(|_| groom.bounds())
+            }
+            (Some(groom), Some(guides), Some(_)) => {
+                GuideStrands::reach_around(simulated(groom), (lo, hi), groom, &self.hair, guides)
                     .unwrap_or_else(|_| groom.bounds())
             }
             (Some(groom), None, None) => {
                 GroomStrands::reach_of(groom, &self.hair).unwrap_or_else(|_| groom.bounds())
             }
-            (Some(groom), None, Some(_)) => {
-                let pad = GroomStrands::params_for(groom, &self.hair)
-                    .map_or(0.0, |p| p.growth.length + p.growth.width);
-                let (a, b) = groom.bounds();
-                (a - glam::Vec3::splat(pad), b + glam::Vec3::splat(pad))
-            }
+            (Some(groom), None, Some(_)) => simulated(groom),
             (None, _, _) => GrowStrands::reach_of(&self.mesh, &self.hair),
         };
         // A groom-only scene: the hair's reach alone.
@@ -243,20 +249,30 @@ impl Renderer {
                 return Err(refuse("guides", "to root the render strands on").into());
             }
         }
-        if scene.guides.is_some() && scene.dynamics.is_some() {
-            return Err(pelage_scene::ParamError::new(
-                "dynamics",
-                "set",
-                "guide strands are not simulated (SimulateStrands takes a groom's or grown strands); leave out guides or dynamics",
-            )
-            .into());
-        }
         let (mut mesh_buffers, strands): (MeshBuffers, Box<dyn StrandStage>) =
             match (&scene.groom, &scene.guides, &scene.dynamics, draw_mesh) {
                 (Some(groom), Some(guides), None, _) => {
                     let mesh = MeshBuffers::upload(gpu, &scene.mesh)?;
                     let strands =
                         GuideStrands::new(gpu, &scene.mesh, &mesh, groom, &scene.hair, guides)?;
+                    (mesh, Box::new(strands))
+                }
+                // The guides simulated, the render strands interpolated from them.
+                (Some(groom), Some(guides), Some(dynamics), _) => {
+                    let mut mesh = MeshBuffers::upload(gpu, &scene.mesh)?;
+                    if let Some(motion) = &scene.motion {
+                        motion.validate()?;
+                        mesh.bounds = motion.reach(mesh.bounds);
+                    }
+                    let strands = GuideStrands::simulated(
+                        gpu,
+                        &scene.mesh,
+                        &mesh,
+                        groom,
+                        &scene.hair,
+                        guides,
+                        dynamics,
+                    )?;
                     (mesh, Box::new(strands))
                 }
                 (Some(groom), _, None, false) => {

@@ -137,16 +137,53 @@ fn guides_off_the_head_are_refused_naming_the_key_to_change() {
 }
 
 #[test]
-fn guides_with_dynamics_are_refused_naming_the_key() {
-    // Guide strands are not simulated: the scene is refused, not drawn unsimulated.
+fn guides_with_dynamics_simulate_the_guides_and_draw_the_interpolated_strands() {
+    // The guides are simulated on the turning head; the render strands follow them.
     let gpu = Gpu::headless().unwrap_or_else(|e| panic!("this test needs a GPU adapter: {e}"));
     let path = scenes().join("guides.toml");
-    let file = SceneFile::load(&path).unwrap();
+    let mut file = SceneFile::load(&path).unwrap();
+    if let Some(guides) = file.groom.as_mut().and_then(|g| g.guides.as_mut()) {
+        guides.strands = 1500;
+    }
     let mut scene = Scene::from_scene_file(&file, &path).unwrap();
     scene.dynamics = Some(pelage::scene::DynamicsParams::default());
-    let e = Renderer::new(&gpu, &scene, SIZE.0, SIZE.1).unwrap_err();
+    scene.motion = Some(pelage::scene::MeshMotion::default());
+    let mut renderer = Renderer::new(&gpu, &scene, SIZE.0, SIZE.1).unwrap();
+    let plan = renderer.plan().labels();
     assert!(
-        matches!(&e, pelage::Error::Param(p) if p.name == "dynamics"),
-        "{e}"
+        plan.contains(&"strands: simulate") && plan.contains(&"strands: guides"),
+        "{plan:?}"
     );
+    assert!(!plan.contains(&"strands: guides bend"), "{plan:?}");
+    let read = |renderer: &Renderer| {
+        let bytes = pelage::gpu::read_buffer(&gpu, &renderer.strands().buffers().vertices).unwrap();
+        bytemuck::cast_slice::<u8, [f32; 4]>(&bytes)
+            .iter()
+            .map(|v| Vec4::from_array(*v))
+            .collect::<Vec<_>>()
+    };
+    renderer.render(&gpu, 0.0, &scene.camera).unwrap();
+    let first = read(&renderer);
+    for frame in 1..=6 {
+        renderer
+            .render(&gpu, frame as f32 / 24.0, &scene.camera)
+            .unwrap();
+    }
+    let last = read(&renderer);
+    assert_eq!(renderer.strands().buffers().strand_count, 1500);
+    let moved = (first.iter().zip(&last))
+        .map(|(a, b)| a.truncate().distance(b.truncate()))
+        .fold(0.0f32, f32::max);
+    let reach = renderer.strands().buffers().reach;
+    assert!(
+        last.iter()
+            .all(|v| v.truncate().cmpge(reach.0).all() && v.truncate().cmple(reach.1).all()),
+        "a vertex leaves the reach"
+    );
+    println!("guides with dynamics: render strands moved up to {moved:.3} in 6 frames");
+    assert!(moved > 0.01, "{moved}");
+    let image = renderer.image(&gpu).unwrap();
+    let background = image.get_pixel(0, 0).0;
+    let drawn = image.pixels().filter(|p| p.0 != background).count();
+    assert!(drawn > 1000, "{drawn} pixels differ from the background");
 }

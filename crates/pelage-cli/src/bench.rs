@@ -746,6 +746,7 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
     let per_vertex = b.vertices.size() as f64 / vertices as f64;
     let per_strand = (b.vertices.size() + b.roots.size()) as f64 / f64::from(b.strand_count);
     let guide_memory = guide_memory(&gpu, &s)?;
+    let guide_simulation = guide_simulation(&gpu, &s, frames)?;
 
     let mut table = Table::new(&[
         "section", "stage", "strands", "pixels", "gpu_ms", "bytes", "ratio", "note",
@@ -802,6 +803,11 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
             "guides: memory over storing every strand",
             guide_memory,
             "1000 guides -> 50000 strands x 16 segments: guide rest + bent guides + guide roots + records, over GroomStrands' rest points",
+        ),
+        (
+            "guides: simulated guides + interpolation over simulating every strand",
+            guide_simulation,
+            "timestamps, 1000 guides simulated and interpolated into 50000 strands x 8 segments, over 50000 strands simulated; default dynamics, frames of 1/60 s",
         ),
     ] {
         table.push(vec![
@@ -1063,6 +1069,52 @@ fn guide_memory(gpu: &Gpu, s: &Scene) -> Result<f64, Error> {
         m.records,
         m.total(),
         groom
+    );
+    Ok(ratio)
+}
+
+/// The time of simulating 1 000 guides and interpolating 50 000 render strands from
+/// them ([`GuideStrands::simulated`]) against simulating 50 000 strands
+/// ([`SimulateStrands::grown`]) on the creature of `s`, 8 segments, the default
+/// dynamics, frames of 1/60 s after a first frame at rest: prints both and returns
+/// their ratio. The guides are 1 000 strands grown on the creature.
+fn guide_simulation(gpu: &Gpu, s: &Scene, frames: usize) -> Result<f64, Error> {
+    let mesh = MeshBuffers::upload(gpu, &s.mesh)?;
+    let dynamics = DynamicsParams::default();
+    let mut hair = s.hair.clone();
+    hair.roots.count = 50_000;
+    hair.growth.segments = 8;
+    let mut every = SimulateStrands::grown(gpu, &s.mesh, &mesh, &hair, &dynamics)?;
+    hair.roots.count = 1_000;
+    let mut grow = GrowStrands::new(gpu, &s.mesh, &mesh, &hair)?;
+    let guides = grown_groom(gpu, &mut grow)?;
+    let params = GuideParams {
+        strands: 50_000,
+        ..GuideParams::default()
+    };
+    let mut guided =
+        GuideStrands::simulated(gpu, &s.mesh, &mesh, &guides, &hair, &params, &dynamics)?;
+    let time = |stage: &mut dyn StrandStage| -> Result<Vec<(String, f64)>, Error> {
+        let rest = stage.prepare(&gpu.queue, 0.0)?;
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        stage.encode(&mut encoder, &rest, None)?;
+        gpu.submit_and_wait([encoder.finish()])?;
+        time_frames(gpu, frames, |encoder, timer, frame| {
+            let frame = stage.prepare(&gpu.queue, (frame + 1) as f32 / 60.0)?;
+            stage.encode(encoder, &frame, timer)?;
+            Ok(())
+        })
+    };
+    let every_ms = get(&time(&mut every)?, "strands: simulate");
+    let guided_times = time(&mut guided)?;
+    let (simulate_ms, interpolate_ms) = (
+        get(&guided_times, "strands: simulate"),
+        get(&guided_times, "strands: guides"),
+    );
+    let ratio = (simulate_ms + interpolate_ms) / every_ms;
+    println!(
+        "guides: 1000 guides simulated {simulate_ms:.3} ms + interpolated into 50000 strands \
+         {interpolate_ms:.3} ms against 50000 strands simulated {every_ms:.3} ms: {ratio:.3}x"
     );
     Ok(ratio)
 }

@@ -45,7 +45,6 @@ pub fn interpolate_strand(
     let per_guide = u.segments + 1;
     let (indices, weight) = decode_record(record, g.k);
     let first = indices.map(|i| i * per_guide);
-    let k = g.k.clamp(1, 4);
     let point = |i: u32| {
         guides
             .get(i as usize)
@@ -67,12 +66,13 @@ pub fn interpolate_strand(
         .map(|v| {
             let i = v * step;
             let s = i as f32 / u.segments as f32;
+            // All four guides, as the shader: a guide past k has weight 0 and adds 0.
+            let nearest = point(first[0] + i);
             let mut blend = r;
-            for (&start, &w) in first.iter().zip(&weight).take(k as usize) {
+            for (&start, &w) in first.iter().zip(&weight) {
                 blend += (point(start + i) - point(start)) * w;
             }
             blend += drift * (s * s);
-            let nearest = point(first[0] + i);
             let p = blend + (nearest - blend) * (g.clump * s);
             p.extend(s)
         })

@@ -203,6 +203,12 @@ impl GroomStrands {
         &self.rest
     }
 
+    /// The groom's own colour of every strand in buffer order (`displayColor`, a .hair
+    /// file's colours), before the per-strand brightness jitter; `None` without colours.
+    pub fn file_colors(&self) -> Option<&[Vec3]> {
+        self.file_colors.as_deref()
+    }
+
     /// The groom's index of every strand in the buffer (the file's strand, counting the
     /// degenerate ones `Resampled` skipped).
     pub fn source_strands(&self) -> &[u32] {
@@ -266,26 +272,14 @@ impl StrandStage for GroomStrands {
             (color, color_jitter),
         )?;
         // A groom's own colours stay; only their jitter changes.
-        let Some(colors) = &self.file_colors else {
-            return Ok(());
-        };
-        for (root, &base) in self.roots.iter_mut().zip(colors) {
-            root.color =
-                base * crate::strand_brightness(root.seed, GROOM_BRIGHTNESS_DRAW, color_jitter);
-        }
-        pelage_gpu::write_storage(
+        let drawn = StrandStage::buffers(self).roots.clone();
+        keep_file_colors(
+            &mut self.roots,
+            (&self.rest_roots, &drawn),
+            self.file_colors.as_deref(),
+            (GROOM_BRIGHTNESS_DRAW, color_jitter),
             queue,
-            "pelage strand rest roots",
-            &self.rest_roots,
-            &*self.roots,
-        )?;
-        pelage_gpu::write_storage(
-            queue,
-            "pelage strand roots",
-            &StrandStage::buffers(self).roots,
-            &*self.roots,
-        )?;
-        Ok(())
+        )
     }
 
     /// Segment reduction measured on the rest shape: the farthest rest point from the
@@ -389,6 +383,27 @@ fn check_groom(groom: &Resampled) -> Result<(), ParamError> {
             ),
         ));
     }
+    Ok(())
+}
+
+/// After [`crate::grow::recolor`]: strands with colours of their own (`colors`, one per
+/// root; none: nothing to do) keep them, times their brightness from the `draw`-th hash
+/// draw with `jitter`; rewrites the rest and drawn roots (`rest_roots`, `drawn_roots`).
+pub(crate) fn keep_file_colors(
+    roots: &mut [StrandRoot],
+    (rest_roots, drawn_roots): (&wgpu::Buffer, &wgpu::Buffer),
+    colors: Option<&[Vec3]>,
+    (draw, jitter): (u32, f32),
+    queue: &wgpu::Queue,
+) -> crate::Result<()> {
+    let Some(colors) = colors else {
+        return Ok(());
+    };
+    for (root, &base) in roots.iter_mut().zip(colors) {
+        root.color = base * crate::strand_brightness(root.seed, draw, jitter);
+    }
+    pelage_gpu::write_storage(queue, "pelage strand rest roots", rest_roots, &*roots)?;
+    pelage_gpu::write_storage(queue, "pelage strand roots", drawn_roots, &*roots)?;
     Ok(())
 }
 

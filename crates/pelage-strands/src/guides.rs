@@ -6,19 +6,20 @@ use encase::ShaderType;
 use glam::Vec3;
 use pelage_gpu::{Gpu, GpuTimer, PassInfo, UniformBuffer, storage_buffer, wgpu};
 use pelage_scene::{
-    Camera, GuideParams, HairParams, MAX_GUIDES, Mesh, ParamError, Resampled, SurfaceInterpolation,
-    WindParams,
+    Camera, DynamicsParams, GuideParams, HairParams, MAX_GUIDES, Mesh, ParamError, Resampled,
+    SurfaceInterpolation, WindParams,
 };
 
 use crate::grow::{StrandPass, StrandStage};
 use crate::lod::{bend_error, bend_per_segment, fewest_segments};
+use crate::roots::GROWN_BRIGHTNESS_DRAW;
 use crate::{
-    GroomStrands, LodLevel, MESH, MeshBuffers, STRAND_ROOTS, STRAND_VERTICES, StrandFrame,
-    StrandRoot, StrandsError, sample_roots,
+    GroomStrands, LodLevel, MESH, MeshBuffers, STRAND_ROOTS, STRAND_VERTICES, SimulateStrands,
+    StrandFrame, StrandRoot, StrandsError, sample_roots,
 };
 
-/// The frame resource naming the bent guides, which the first pass of [`GuideStrands`]
-/// writes and the second reads.
+/// The frame resource naming the bent (or simulated) guides, which the first pass of
+/// [`GuideStrands`] writes and the second reads.
 pub const GUIDE_VERTICES: &str = "strands.guides";
 
 /// The constants of `guides.wgsl` (`GuideUniforms` there), written once.
@@ -33,7 +34,7 @@ pub struct GuideUniforms {
 }
 
 /// What one render strand keeps to be interpolated: four 16-bit guide indices (nearest
-/// first; words 0 and 1, low half first) and the first `k - 1` weights as 10-bit
+/// first; words 0 and 1, low half first; slots past `k` repeat the nearest) and the first `k - 1` weights as 10-bit
 /// fractions of 1023 (word 2, lowest bits first); the `k`-th weight is 1 minus the
 /// others, so they sum to 1. 12 bytes per render strand.
 pub type GuideRecord = [u32; 3];
@@ -72,14 +73,32 @@ const WEIGHT_ONE: u32 = 1023;
 /// longest edge, of a guide's root), the wind (on the guides), the level
 /// of detail, and what [`GroomStrands`] uses of `growth`. The wind acts on the guides
 /// only: later stages see only the interpolated strands.
+///
+/// **Colour.** Guides with colours of their own ([`GroomStrands::file_colors`]) give
+/// each render strand the blend of its guides' colours with the shape's weights, times
+/// the strand's brightness jitter; without, `growth.color`.
+///
+/// **Simulated guides** ([`GuideStrands::simulated`]): the first pass is then a
+/// [`SimulateStrands`] of the guides (each guide's root bound to the triangle nearest
+/// it, as for a simulated groom), so inertia, gravity, the wind's forces and the
+/// colliders act on the guides only, and the render strands follow the simulated
+/// guides. The rest of the method is the same; every segment is drawn (the simulated
+/// shape has no bend bound for segment reduction).
 #[derive(Debug)]
 pub struct GuideStrands {
-    /// The first pass: the guides, bent by the wind.
+    /// The guides' rest shape and roots, and the first pass when they are not simulated:
+    /// the guides bent by the wind.
     guides: GroomStrands,
+    /// The first pass when the guides are simulated (its strands in the order of
+    /// `guides`'s).
+    simulation: Option<SimulateStrands>,
     /// The frame the guide pass was last prepared for.
     guide_frame: Option<StrandFrame>,
     roots: Vec<StrandRoot>,
     records: Vec<GuideRecord>,
+    /// Per render strand, the weighted blend of its guides' own colours (before the
+    /// brightness jitter), when the guides have colours.
+    file_colors: Option<Vec<Vec3>>,
     constants: GuideUniforms,
     pass: StrandPass,
     rest_roots: wgpu::Buffer,
@@ -101,12 +120,15 @@ pub struct GuideMemory {
     pub guide_roots: u64,
     /// One [`GuideRecord`] per render strand.
     pub records: u64,
+    /// The simulated guides' state ([`SimulateStrands::state`], 0 when not simulated):
+    /// root pose, rest shape, positions and previous positions.
+    pub guide_state: u64,
 }
 
 impl GuideMemory {
     /// Every byte counted.
     pub fn total(&self) -> u64 {
-        self.guide_rest + self.guide_vertices + self.guide_roots + self.records
+        self.guide_rest + self.guide_vertices + self.guide_roots + self.records + self.guide_state
     }
 
     /// What [`GroomStrands`] keeps for `strands` strands of `segments` segments beyond
@@ -133,7 +155,49 @@ impl GuideStrands {
         hair: &HairParams,
         params: &GuideParams,
     ) -> crate::Result<Self> {
+        Self::build(gpu, mesh, mesh_buffers, guides, hair, params, None)
+    }
+
+    /// [`GuideStrands::new`] with the guides simulated with `dynamics`
+    /// ([`SimulateStrands::groom`]) instead of bent by the stateless wind: the render
+    /// strands are interpolated from the simulated guides every frame.
+    /// `mesh_buffers` must hold `mesh` (in any later pose; their `bounds` where the
+    /// mesh goes).
+    ///
+    /// Errors: as [`GuideStrands::new`], and bad dynamics parameters (naming them).
+    pub fn simulated(
+        gpu: &Gpu,
+        mesh: &Mesh,
+        mesh_buffers: &MeshBuffers,
+        guides: &Resampled,
+        hair: &HairParams,
+        params: &GuideParams,
+        dynamics: &DynamicsParams,
+    ) -> crate::Result<Self> {
+        Self::build(
+            gpu,
+            mesh,
+            mesh_buffers,
+            guides,
+            hair,
+            params,
+            Some(dynamics),
+        )
+    }
+
+    fn build(
+        gpu: &Gpu,
+        mesh: &Mesh,
+        mesh_buffers: &MeshBuffers,
+        guides: &Resampled,
+        hair: &HairParams,
+        params: &GuideParams,
+        dynamics: Option<&DynamicsParams>,
+    ) -> crate::Result<Self> {
         params.validate()?;
+        if let Some(dynamics) = dynamics {
+            dynamics.validate()?;
+        }
         mesh_buffers.check_matches(mesh)?;
         if guides.strands > MAX_GUIDES {
             return Err(ParamError::new(
@@ -150,6 +214,15 @@ impl GuideStrands {
         check_guides_on_mesh(mesh, guides, params.max_root_distance * diagonal)?;
 
         let bend = GroomStrands::labelled(gpu, guides, hair, "strands: guides bend")?;
+        // The simulation shuffles, colours and sizes the guides as `bend` does: the same
+        // guide at the same index.
+        let simulation = dynamics
+            .map(|d| SimulateStrands::groom(gpu, guides, mesh, mesh_buffers, hair, d))
+            .transpose()?;
+        let guide_stage: &dyn StrandStage = match &simulation {
+            Some(sim) => sim,
+            None => &bend,
+        };
         let per_guide = guides.segments as usize + 1;
         let guide_roots: Vec<Vec3> = bend
             .rest_points()
@@ -166,6 +239,9 @@ impl GuideStrands {
         let epsilon = 1e-7 * diagonal.max(f32::MIN_POSITIVE);
         let mut roots = sample_roots(mesh, &render.roots, &render.growth)?;
         let mut records = Vec::with_capacity(roots.len());
+        let guide_colors = bend.file_colors();
+        let mut file_colors = guide_colors.map(|_| Vec::with_capacity(roots.len()));
+        let jitter = render.growth.color_jitter;
         for root in &mut roots {
             let at = flat_root(mesh, root);
             let nearest = grid.nearest(at, k + 1);
@@ -177,6 +253,18 @@ impl GuideStrands {
             };
             root.length = blend(&|g| g.length);
             root.width = blend(&|g| g.width);
+            // The guides' own colours, blended with the same weights; the strand's own
+            // brightness jitter on top (as grown fur's).
+            if let (Some(colors), Some(blended)) = (guide_colors, file_colors.as_mut()) {
+                let base: Vec3 = (nearest.iter().zip(&weights))
+                    .map(|(&(guide, _), &w)| {
+                        colors.get(guide as usize).copied().unwrap_or(Vec3::ZERO) * w
+                    })
+                    .sum();
+                root.color =
+                    base * crate::strand_brightness(root.seed, GROWN_BRIGHTNESS_DRAW, jitter);
+                blended.push(base);
+            }
             records.push(record);
         }
         let constants = GuideUniforms {
@@ -190,7 +278,12 @@ impl GuideStrands {
         let records_buffer = storage_buffer(gpu, "pelage guide records", &flat, storage)?;
         let constants_buffer = UniformBuffer::new(gpu, "pelage guide uniforms", &constants)?;
         let mesh_bounds = mesh_buffers.bounds;
-        let reach = reach_around(bend.buffers().reach, mesh_bounds, &render, params.noise);
+        let reach = reach_around(
+            guide_stage.buffers().reach,
+            mesh_bounds,
+            &render,
+            params.noise,
+        );
         let pass = StrandPass::with_constants(
             gpu,
             "strands: guides",
@@ -203,15 +296,17 @@ impl GuideStrands {
                 &mesh_buffers.indices,
                 &rest_roots,
                 &records_buffer,
-                &bend.buffers().vertices,
+                &guide_stage.buffers().vertices,
             ],
             Some(&constants_buffer.buffer),
         )?;
         Ok(Self {
             guides: bend,
+            simulation,
             guide_frame: None,
             roots,
             records,
+            file_colors,
             constants,
             pass,
             rest_roots,
@@ -251,8 +346,23 @@ impl GuideStrands {
         hair: &HairParams,
         params: &GuideParams,
     ) -> crate::Result<(Vec3, Vec3)> {
-        let render = Self::params_for(guides, hair, params)?;
         let guide_reach = GroomStrands::reach_of(guides, hair)?;
+        Self::reach_around(guide_reach, mesh_bounds, guides, hair, params)
+    }
+
+    /// A world box holding every point render strands interpolated from `guides` can
+    /// reach on a mesh inside `mesh_bounds` when the guides stay inside `guide_reach`
+    /// (simulated guides: their simulation's reach).
+    ///
+    /// Errors: as [`GuideStrands::params_for`].
+    pub fn reach_around(
+        guide_reach: (Vec3, Vec3),
+        mesh_bounds: (Vec3, Vec3),
+        guides: &Resampled,
+        hair: &HairParams,
+        params: &GuideParams,
+    ) -> crate::Result<(Vec3, Vec3)> {
+        let render = Self::params_for(guides, hair, params)?;
         Ok(reach_around(
             guide_reach,
             mesh_bounds,
@@ -267,6 +377,20 @@ impl GuideStrands {
         &self.guides
     }
 
+    /// The guides' simulation, when they are simulated ([`GuideStrands::simulated`]):
+    /// its vertices are the guides the interpolation reads.
+    pub fn simulation(&self) -> Option<&SimulateStrands> {
+        self.simulation.as_ref()
+    }
+
+    /// The first pass: the simulation, or the guides bent by the wind.
+    fn guide_stage(&self) -> &dyn StrandStage {
+        match &self.simulation {
+            Some(sim) => sim,
+            None => &self.guides,
+        }
+    }
+
     /// One [`GuideRecord`] per render strand, in buffer order.
     pub fn records(&self) -> &[GuideRecord] {
         &self.records
@@ -279,13 +403,14 @@ impl GuideStrands {
 
     /// The bytes this method keeps beyond the buffers every stage 1 method keeps.
     pub fn memory(&self) -> GuideMemory {
-        let guides = self.guides.buffers();
+        let guides = self.guide_stage().buffers();
         let points = self.guides.rest_points().len() as u64 * 16;
         GuideMemory {
             guide_rest: points,
             guide_vertices: guides.vertices.size(),
             guide_roots: 2 * guides.roots.size(),
             records: self.record_bytes,
+            guide_state: self.simulation.as_ref().map_or(0, |s| s.state().size()),
         }
     }
 }
@@ -328,9 +453,14 @@ impl StrandStage for GuideStrands {
         &self.roots
     }
 
-    /// Prepares both passes: the guides bent for `time`, then the interpolation.
+    /// Prepares both passes: the guides bent for `time` (or simulated up to it), then the
+    /// interpolation.
     fn prepare(&mut self, queue: &wgpu::Queue, time: f32) -> crate::Result<StrandFrame> {
-        self.guide_frame = Some(self.guides.prepare(queue, time)?);
+        let guide_frame = match &mut self.simulation {
+            Some(sim) => sim.prepare(queue, time)?,
+            None => self.guides.prepare(queue, time)?,
+        };
+        self.guide_frame = Some(guide_frame);
         let uniforms = self.uniforms_at(time);
         self.pass.begin_frame(queue, &uniforms)
     }
@@ -352,15 +482,20 @@ impl StrandStage for GuideStrands {
             }
             .into());
         };
-        self.guides
+        self.guide_stage()
             .encode(encoder, guide_frame, timer.as_deref_mut())?;
         self.pass
             .record(encoder, frame, timer, frame.layout.strands)
     }
 
     fn passes(&self) -> Vec<PassInfo> {
+        let guides = PassInfo::new(self.guide_stage().pass().label());
+        let guides = match &self.simulation {
+            Some(_) => guides.reads([MESH]),
+            None => guides,
+        };
         vec![
-            PassInfo::new(self.guides.pass().label()).writes([GUIDE_VERTICES]),
+            guides.writes([GUIDE_VERTICES]),
             PassInfo::new(self.pass.label())
                 .reads([MESH, GUIDE_VERTICES])
                 .writes([STRAND_VERTICES, STRAND_ROOTS]),
@@ -369,12 +504,15 @@ impl StrandStage for GuideStrands {
 
     fn set_wind(&mut self, wind: WindParams) -> crate::Result<()> {
         self.guides.set_wind(wind.clone())?;
+        if let Some(sim) = &mut self.simulation {
+            sim.set_wind(wind.clone())?;
+        }
         self.pass.params.wind = wind;
         Ok(())
     }
 
     fn reach_with_wind(&self, wind: &WindParams) -> crate::Result<(Vec3, Vec3)> {
-        let guide_reach = self.guides.reach_with_wind(wind)?;
+        let guide_reach = self.guide_stage().reach_with_wind(wind)?;
         Ok(reach_around(
             guide_reach,
             self.mesh_bounds,
@@ -393,15 +531,30 @@ impl StrandStage for GuideStrands {
             &mut self.pass,
             &mut self.roots,
             &self.rest_roots,
-            crate::roots::GROWN_BRIGHTNESS_DRAW,
+            GROWN_BRIGHTNESS_DRAW,
             queue,
             (color, color_jitter),
+        )?;
+        // Colours blended from the guides' own stay; only their jitter changes.
+        let drawn = self.buffers().roots.clone();
+        crate::groom::keep_file_colors(
+            &mut self.roots,
+            (&self.rest_roots, &drawn),
+            self.file_colors.as_deref(),
+            (GROWN_BRIGHTNESS_DRAW, color_jitter),
+            queue,
         )
+    }
+
+    /// The guides' simulation, when they are simulated: the colliders a caller moves
+    /// with the body act on the guides.
+    fn as_simulation_mut(&mut self) -> Option<&mut SimulateStrands> {
+        self.simulation.as_mut()
     }
 
     /// Segment reduction bounded by the guides' rest shape and the wind's bend (as for
     /// a groom), carried through the blend, the noise and the clumping
-    /// (`interpolation_error`).
+    /// (`interpolation_error`); simulated guides: every segment.
     fn level_for_view(
         &self,
         bounds: (Vec3, Vec3),
@@ -415,7 +568,11 @@ impl StrandStage for GuideStrands {
         let max_error = params.lod.segment_error_pixels;
         let longest = params.growth.length;
         let GuideUniforms { clump, noise, .. } = self.constants;
+        let simulated = self.simulation.is_some();
         LodLevel::for_view_with(params, bounds, camera, width, height, |pixels_per_unit| {
+            if simulated {
+                return (full, 0.0);
+            }
             fewest_segments(full, max_error, pixels_per_unit, |k| {
                 let rest = (self.guides.chord_error)
                     .get(k as usize)
@@ -503,7 +660,10 @@ fn encode_record(nearest: &[(u32, f32)], k: usize, epsilon: f32) -> (GuideRecord
         .collect();
     let last = weights.iter().fold(1.0f32, |rest, w| rest - w);
     weights.push(last);
-    let index = |n: usize| taken.get(n).map_or(0, |&(g, _)| g);
+    // A slot past `k` repeats the nearest guide (weight 0: its points are read anyway,
+    // and the nearest guide's are already at hand).
+    let first = taken.first().map_or(0, |&(g, _)| g);
+    let index = |n: usize| taken.get(n).map_or(first, |&(g, _)| g);
     let packed = quantized
         .iter()
         .enumerate()
@@ -780,7 +940,7 @@ mod tests {
         assert!(w[2].abs() < 2e-3, "{w:?}");
         // One guide: weight 1, nothing stored.
         let (record, w) = encode_record(&[(5, 2.0)], 1, 1e-9);
-        assert_eq!((record, w), ([5, 0, 0], vec![1.0]));
+        assert_eq!((record, w), ([5 | (5 << 16), 5 | (5 << 16), 0], vec![1.0]));
         // Equal distances: equal weights.
         let (_, w) = encode_record(&[(0, 1.0), (1, 1.0), (2, 1.0)], 2, 1e-9);
         assert!(

@@ -1,15 +1,18 @@
 //! Guide strands on a real adapter: the interpolated strands equal the CPU mirror
 //! (`pelage_reference::guides`), one guide gives copies of itself, full clumping brings
 //! the tips onto the nearest guide, a build is deterministic, bad input is a typed error,
-//! a device with WebGPU's default limits runs it, and the memory against storing every
-//! strand.
+//! a device with WebGPU's default limits runs it, the memory against storing every
+//! strand, and simulated guides drive the render strands (`pelage_reference::simulate`
+//! then `pelage_reference::guides`).
 
-use glam::{Vec3, Vec4};
+use glam::{Quat, Vec3, Vec4};
 use pelage_gpu::{Gpu, read_buffer, wgpu};
 use pelage_reference::guides::{decode_record, interpolate};
+use pelage_reference::simulate::simulate_frame;
 use pelage_reference::strands::{deform_groom, drawn_width};
 use pelage_scene::{
-    Groom, GuideParams, HairParams, Mesh, ParamError, Resampled, Transition, WindParams,
+    DynamicsParams, Groom, GuideParams, HairParams, Mesh, ParamError, Resampled, Transition,
+    WindParams,
 };
 use pelage_strands::{
     GuideMemory, GuideStrands, LodLevel, MeshBuffers, StrandRoot, StrandStage, StrandsError,
@@ -439,4 +442,190 @@ fn memory_of_1000_guides_for_50000_strands_against_storing_every_strand() {
     );
     assert_eq!(memory.records, 50_000 * 12);
     assert!(ratio <= 0.1, "{ratio}");
+}
+
+/// `mesh` turned by `rotation` about the origin.
+fn turned(mesh: &Mesh, rotation: Quat) -> Mesh {
+    Mesh {
+        positions: mesh.positions.iter().map(|&p| rotation * p).collect(),
+        normals: mesh.normals.iter().map(|&n| rotation * n).collect(),
+        indices: mesh.indices.clone(),
+    }
+}
+
+#[test]
+fn simulated_guides_drive_the_render_strands_as_the_two_mirrors_composed() {
+    let gpu = gpu();
+    let built = build(&gpu, 60, 8);
+    let params = GuideParams {
+        strands: 800,
+        clump: 0.4,
+        noise: 0.2,
+        ..GuideParams::default()
+    };
+    let dynamics = DynamicsParams::default();
+    let mut strands = GuideStrands::simulated(
+        &gpu,
+        &built.mesh,
+        &built.buffers,
+        &built.guides,
+        &windy(),
+        &params,
+        &dynamics,
+    )
+    .unwrap();
+    let tolerance = 1e-5 * size(&built.guides);
+    // The simulation holds the guides in the order the records index.
+    let sim = strands.simulation().unwrap();
+    let seeds = |roots: &[StrandRoot]| roots.iter().map(|r| r.seed).collect::<Vec<_>>();
+    assert_eq!(seeds(sim.roots()), seeds(strands.guides().roots()));
+    let labels: Vec<String> = strands.passes().into_iter().map(|p| p.label).collect();
+    assert_eq!(labels, ["strands: simulate", "strands: guides"]);
+    assert!(strands.memory().guide_state > 0);
+
+    // Frame 0 puts the guides at rest; frame 1 is one substep of a turning head: the GPU
+    // against the simulation's mirror followed by the interpolation's.
+    let rest = grow_on_gpu(&gpu, &mut strands, 0.0);
+    let read_state =
+        |strands: &GuideStrands| read_vertices(&gpu, strands.simulation().unwrap().state());
+    let mut state = read_state(&strands);
+    let h = dynamics.max_substep;
+    let mut mesh = turned(&built.mesh, Quat::from_rotation_y(0.02));
+    built.buffers.update(&gpu.queue, &mesh).unwrap();
+    let out = grow_on_gpu(&gpu, &mut strands, h);
+    let sim = strands.simulation().unwrap();
+    let (bent, held) = simulate_frame(
+        &mesh,
+        sim.roots(),
+        &mut state,
+        &sim.uniforms_at(h),
+        sim.sim_uniforms(),
+    );
+    assert_eq!(held, 0);
+    let cpu = interpolate(
+        &mesh,
+        strands.roots(),
+        strands.records(),
+        &bent,
+        &strands.uniforms_at(h),
+        &strands.constants(),
+    );
+    let err = worst(&out, &cpu);
+    println!(
+        "simulated guides, 1 substep: max |GPU - CPU| = {err:.2e} (tolerance {tolerance:.1e})"
+    );
+    assert!(err <= tolerance, "{err} > {tolerance}");
+
+    // 40 frames of 1/60 s with the head turning 0.8 rad: each frame the render strands
+    // are the mirror's interpolation of the GPU's simulated guides, their roots on the
+    // turned head, and they have left the turned rest pose (inertia and gravity: a
+    // rigid turn would carry every vertex).
+    let mut t = h;
+    let mut err = 0.0f32;
+    let mut out = rest.clone();
+    for frame in 1..=40 {
+        t += 1.0 / 60.0;
+        let rotation = Quat::from_rotation_y(0.02 * frame as f32);
+        mesh = turned(&built.mesh, rotation);
+        built.buffers.update(&gpu.queue, &mesh).unwrap();
+        out = grow_on_gpu(&gpu, &mut strands, t);
+        let guides = read_vertices(&gpu, &strands.simulation().unwrap().buffers().vertices);
+        let cpu = interpolate(
+            &mesh,
+            strands.roots(),
+            strands.records(),
+            &guides,
+            &strands.uniforms_at(t),
+            &strands.constants(),
+        );
+        err = err.max(worst(&out, &cpu));
+    }
+    println!("40 frames: max |GPU - mirror of the GPU's guides| = {err:.2e}");
+    assert!(err <= tolerance, "{err} > {tolerance}");
+    let rotation = Quat::from_rotation_y(0.8);
+    let reach = strands.buffers().reach;
+    let (mut root_off, mut lag) = (0.0f32, 0.0f32);
+    for (now, then) in out.chunks(9).zip(rest.chunks(9)) {
+        root_off = root_off.max(now[0].truncate().distance(rotation * then[0].truncate()));
+        lag = lag.max(now[8].truncate().distance(rotation * then[8].truncate()));
+        for v in now {
+            let p = v.truncate();
+            assert!(
+                p.cmpge(reach.0).all() && p.cmple(reach.1).all(),
+                "{p} leaves the reach"
+            );
+        }
+    }
+    println!(
+        "after the turn: roots {root_off:.1e} from the turned rest roots, tips up to {lag:.3} from the turned rest tips"
+    );
+    assert!(root_off < 1e-5, "{root_off}");
+    assert!(lag > 0.05, "the render strands do not move ({lag})");
+}
+
+#[test]
+fn render_strands_take_the_weighted_blend_of_their_guides_colours() {
+    let gpu = gpu();
+    let mut built = build(&gpu, 40, 8);
+    let count = built.guides.strands;
+    built.guides.colors = Some(
+        (0..count)
+            .map(|i| Vec3::new(i as f32 / count as f32, 1.0 - i as f32 / count as f32, 0.25))
+            .collect(),
+    );
+    let mut hair = calm();
+    hair.growth.color_jitter = 0.0;
+    let params = GuideParams {
+        strands: 500,
+        ..GuideParams::default()
+    };
+    let mut strands = built.strands(&gpu, &hair, &params);
+    let guide_colors = strands.guides().file_colors().unwrap().to_vec();
+    let k = strands.constants().k;
+    // The blend of each render strand's guides' colours with its record's weights, and
+    // the colour the GPU's drawn roots hold, per strand.
+    let colours = |strands: &mut GuideStrands| {
+        grow_on_gpu(&gpu, strands, 0.0);
+        let bytes = read_buffer(&gpu, &strands.buffers().roots).unwrap();
+        let drawn: Vec<StrandRoot> = encase::StorageBuffer::new(&bytes[..])
+            .create()
+            .expect("roots decode");
+        (strands.records().iter().zip(drawn))
+            .map(|(record, gpu_root)| {
+                let (index, weight) = decode_record(record, k);
+                let blend: Vec3 = (0..k as usize)
+                    .map(|n| guide_colors[index[n] as usize] * weight[n])
+                    .sum();
+                (blend, gpu_root.color)
+            })
+            .collect::<Vec<_>>()
+    };
+    let mut worst = 0.0f32;
+    let mut spread = (Vec3::MAX, Vec3::MIN);
+    for (blend, colour) in colours(&mut strands) {
+        worst = worst.max((blend - colour).abs().max_element());
+        spread = (spread.0.min(colour), spread.1.max(colour));
+    }
+    println!(
+        "guide colours: max |colour - weighted blend| = {worst:.1e}, red from {:.2} to {:.2}",
+        spread.0.x, spread.1.x
+    );
+    assert!(worst <= 1e-6, "{worst}");
+    assert!(spread.1.x - spread.0.x > 0.5, "{spread:?}");
+
+    // A new jitter keeps the blended colours, each strand scaled by its brightness.
+    strands.set_color(&gpu.queue, Vec3::ONE, 0.3).unwrap();
+    for (blend, colour) in colours(&mut strands) {
+        let b = colour.z / blend.z;
+        assert!((0.7..=1.3).contains(&b), "{b}");
+        assert!(
+            (colour - blend * b).abs().max_element() <= 1e-6,
+            "{colour} {blend}"
+        );
+    }
+
+    // Guides without colours: the render strands take growth.color.
+    built.guides.colors = None;
+    let plain = built.strands(&gpu, &hair, &params);
+    assert!(plain.roots().iter().all(|r| r.color == hair.growth.color));
 }

@@ -71,30 +71,32 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
         + load_position(indices[3u * tri + 1u]) * root.bary.y
         + load_position(indices[3u * tri + 2u]) * bw;
 
-    // The record: guide indices (nearest first) and weights summing to 1.
+    // The record: guide indices (nearest first) and weights summing to 1. Four guides
+    // in named variables, never a private array indexed by a variable (which the
+    // compiler keeps in memory: on lavapipe that cost as much as growing the strand);
+    // a guide past k has weight 0 and adds exactly 0.
     let r0 = records[3u * strand];
     let r1 = records[3u * strand + 1u];
     let r2 = records[3u * strand + 2u];
     let per_guide = u.segments + 1u;
-    var starts = array<u32, 4>(
-        (r0 & 0xffffu) * per_guide,
-        (r0 >> 16u) * per_guide,
-        (r1 & 0xffffu) * per_guide,
-        (r1 >> 16u) * per_guide,
-    );
-    var weight = array<f32, 4>(0.0, 0.0, 0.0, 0.0);
+    let a0 = (r0 & 0xffffu) * per_guide;
+    let a1 = (r0 >> 16u) * per_guide;
+    let a2 = (r1 & 0xffffu) * per_guide;
+    let a3 = (r1 >> 16u) * per_guide;
     let k = clamp(g.k, 1u, 4u);
-    var rest = 1.0;
-    for (var n = 0u; n + 1u < k; n++) {
-        weight[n] = f32((r2 >> (10u * n)) & 1023u) / 1023.0;
-        rest = rest - weight[n];
-    }
-    weight[k - 1u] = rest;
+    let q0 = select(0.0, f32(r2 & 1023u) / 1023.0, k > 1u);
+    let q1 = select(0.0, f32((r2 >> 10u) & 1023u) / 1023.0, k > 2u);
+    let q2 = select(0.0, f32((r2 >> 20u) & 1023u) / 1023.0, k > 3u);
+    let rest = 1.0 - q0 - q1 - q2;
+    let w0 = select(q0, rest, k == 1u);
+    let w1 = select(q1, rest, k == 2u);
+    let w2 = select(q2, rest, k == 3u);
+    let w3 = select(0.0, rest, k == 4u);
     // The guides' roots, read once.
-    var guide_root: array<vec3<f32>, 4>;
-    for (var n = 0u; n < k; n++) {
-        guide_root[n] = guides[starts[n]].xyz;
-    }
+    let o0 = guides[a0].xyz;
+    let o1 = guides[a1].xyz;
+    let o2 = guides[a2].xyz;
+    let o3 = guides[a3].xyz;
 
     // The noise direction, from the strand's seed.
     var h = pcg_hash(root.seed ^ NOISE_SALT);
@@ -111,12 +113,12 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     for (var v = 0u; v <= segments / step; v++) {
         let i = v * step;
         let s = f32(i) / f32(segments);
-        var blend = r;
-        for (var n = 0u; n < k; n++) {
-            blend = blend + (guides[starts[n] + i].xyz - guide_root[n]) * weight[n];
-        }
+        let nearest = guides[a0 + i].xyz;
+        var blend = r + (nearest - o0) * w0;
+        blend = blend + (guides[a1 + i].xyz - o1) * w1;
+        blend = blend + (guides[a2 + i].xyz - o2) * w2;
+        blend = blend + (guides[a3 + i].xyz - o3) * w3;
         blend = blend + drift * (s * s);
-        let nearest = guides[starts[0] + i].xyz;
         let p = blend + (nearest - blend) * (g.clump * s);
         vertices[base + v] = vec4<f32>(p, s);
     }
