@@ -6,9 +6,8 @@ side view over its bounding box: u from the tail (-z) to the nose (+z), v from t
 to the ear tips. This script paints, in the creature's own coordinates (z, y) before it
 is centred, region 1 (the mane) on the crown, down the neck and along the back ridge;
 everything else is region 0 (the short fur of [hair.growth]). It needs only Python's
-standard library: the bounding box is computed from the same parts (ellipsoids whose
-extremes are their radii along the axes, the ears and tail turned: their extremes come
-from the same rotation the Rust code applies, sampled finely).
+standard library: the bounding box is computed from the same parts, subdivided
+icospheres scaled, turned and moved as the Rust code does.
 
     python3 scripts/creature_mane_map.py        # rewrites the PNG (8-bit grey, 128 x 96)
 """
@@ -20,18 +19,19 @@ from pathlib import Path
 
 WIDTH, HEIGHT = 128, 96
 
-# (radii, rotation about (axis, angle), centre) of each part, as in Mesh::creature.
+# (radii, rotation about (axis, angle), centre, subdivisions) of each part, as in
+# Mesh::creature.
 PARTS = [
-    ((0.5, 0.42, 0.7), None, (0.0, -0.1, -0.15)),
-    ((0.36, 0.36, 0.36), None, (0.0, 0.32, 0.5)),
-    ((0.15, 0.12, 0.14), None, (0.0, 0.24, 0.82)),
-    ((0.1, 0.22, 0.05), ("z", -0.35), (0.2, 0.66, 0.45)),
-    ((0.1, 0.22, 0.05), ("z", 0.35), (-0.2, 0.66, 0.45)),
-    ((0.12, 0.12, 0.3), ("x", 0.6), (0.0, 0.12, -0.88)),
-    ((0.12, 0.22, 0.12), None, (0.28, -0.5, 0.25)),
-    ((0.12, 0.22, 0.12), None, (-0.28, -0.5, 0.25)),
-    ((0.12, 0.22, 0.12), None, (0.28, -0.5, -0.5)),
-    ((0.12, 0.22, 0.12), None, (-0.28, -0.5, -0.5)),
+    ((0.5, 0.42, 0.7), None, (0.0, -0.1, -0.15), 3),
+    ((0.36, 0.36, 0.36), None, (0.0, 0.32, 0.5), 2),
+    ((0.15, 0.12, 0.14), None, (0.0, 0.24, 0.82), 1),
+    ((0.1, 0.22, 0.05), ("z", -0.35), (0.2, 0.66, 0.45), 2),
+    ((0.1, 0.22, 0.05), ("z", 0.35), (-0.2, 0.66, 0.45), 2),
+    ((0.12, 0.12, 0.3), ("x", 0.6), (0.0, 0.12, -0.88), 1),
+    ((0.12, 0.22, 0.12), None, (0.28, -0.5, 0.25), 1),
+    ((0.12, 0.22, 0.12), None, (-0.28, -0.5, 0.25), 1),
+    ((0.12, 0.22, 0.12), None, (0.28, -0.5, -0.5), 1),
+    ((0.12, 0.22, 0.12), None, (-0.28, -0.5, -0.5), 1),
 ]
 
 
@@ -46,19 +46,48 @@ def rotate(p, rotation):
     return (x, c * y - s * z, s * y + c * z)
 
 
+def icosphere(level):
+    """The unit directions of Mesh::icosphere(1, level): the icosahedron's 12, then each
+    edge's normalised midpoint, `level` times (the set of vertices Rust makes)."""
+    t = (1 + 5 ** 0.5) / 2
+    raw = [(-1, t, 0), (1, t, 0), (-1, -t, 0), (1, -t, 0), (0, -1, t), (0, 1, t),
+           (0, -1, -t), (0, 1, -t), (t, 0, -1), (t, 0, 1), (-t, 0, -1), (-t, 0, 1)]
+    dirs = [normalise(v) for v in raw]
+    tris = [0, 11, 5, 0, 5, 1, 0, 1, 7, 0, 7, 10, 0, 10, 11, 1, 5, 9, 5, 11, 4, 11, 10, 2,
+            10, 7, 6, 7, 1, 8, 3, 9, 4, 3, 4, 2, 3, 2, 6, 3, 6, 8, 3, 8, 9, 4, 9, 5, 2, 4, 11,
+            6, 2, 10, 8, 6, 7, 9, 8, 1]
+    for _ in range(level):
+        cache, out = {}, []
+
+        def mid(a, b):
+            key = (min(a, b), max(a, b))
+            if key not in cache:
+                cache[key] = len(dirs)
+                dirs.append(normalise(tuple(p + q for p, q in zip(dirs[a], dirs[b]))))
+            return cache[key]
+
+        for i in range(0, len(tris), 3):
+            a, b, c = tris[i:i + 3]
+            ab, bc, ca = mid(a, b), mid(b, c), mid(c, a)
+            out += [a, ab, ca, b, bc, ab, c, ca, bc, ab, bc, ca]
+        tris = out
+    return dirs
+
+
+def normalise(v):
+    n = math.sqrt(sum(c * c for c in v))
+    return tuple(c / n for c in v)
+
+
 def bounds():
-    """The (y, z) bounds of the parts: a fine sampling of each ellipsoid's surface."""
+    """The (y, z) bounds of the creature's vertices before it is centred."""
     lo, hi = [math.inf, math.inf], [-math.inf, -math.inf]
-    for radii, rotation, centre in PARTS:
-        for i in range(181):
-            theta = math.pi * i / 180
-            for j in range(360):
-                phi = 2 * math.pi * j / 360
-                d = (math.sin(theta) * math.cos(phi), math.cos(theta), math.sin(theta) * math.sin(phi))
-                p = rotate(tuple(r * c for r, c in zip(radii, d)), rotation)
-                y, z = p[1] + centre[1], p[2] + centre[2]
-                lo = [min(lo[0], y), min(lo[1], z)]
-                hi = [max(hi[0], y), max(hi[1], z)]
+    for radii, rotation, centre, level in PARTS:
+        for d in icosphere(level):
+            p = rotate(tuple(r * c for r, c in zip(radii, d)), rotation)
+            y, z = p[1] + centre[1], p[2] + centre[2]
+            lo = [min(lo[0], y), min(lo[1], z)]
+            hi = [max(hi[0], y), max(hi[1], z)]
     return lo, hi
 
 
