@@ -36,9 +36,9 @@ pub use mesh::{Mesh, MeshError, MeshReport};
 pub use obj::{ObjError, load_obj, parse_obj};
 pub use params::{
     AdsmParams, Collider, DeepOpacityParams, DynamicsParams, GrowthParams, HairParams, HairType,
-    LayerSpacing, MAX_ACCELERATION, MAX_COLLIDERS, MAX_FORCE, MAX_SEGMENTS, MapParams, MeshMotion,
-    OpacityFormat, ParamError, RootParams, ShadeParams, ShadowMapParams, ShadowParams, Splat,
-    SurfaceInterpolation, VoxelParams, WindParams, MAX_REGIONS, RegionParams, RootTextures,
+    LayerSpacing, MAX_ACCELERATION, MAX_COLLIDERS, MAX_FORCE, MAX_REGIONS, MAX_SEGMENTS, MapParams,
+    MeshMotion, OpacityFormat, ParamError, RegionParams, RootParams, RootTextures, ShadeParams,
+    ShadowMapParams, ShadowParams, Splat, SurfaceInterpolation, VoxelParams, WindParams,
 };
 pub use scene_file::{MeshSource, SceneFile, SceneFileError};
 pub use shading::{

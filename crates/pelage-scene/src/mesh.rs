@@ -111,7 +111,9 @@ pub enum MeshError {
         uvs: usize,
     },
     /// A texture coordinate is NaN or infinite.
-    #[error("texture coordinate {vertex} is not finite ({value}); every UV must be a finite number")]
+    #[error(
+        "texture coordinate {vertex} is not finite ({value}); every UV must be a finite number"
+    )]
     NonFiniteUv {
         /// Vertex index.
         vertex: usize,

@@ -93,11 +93,12 @@ impl MapImage {
 
     /// Reads and decodes the file at `path` (at most [`MAX_MAP_FILE_BYTES`]).
     pub fn load(path: &Path) -> Result<Self, MapError> {
-        let bytes = crate::limits::read_capped(path, MAX_MAP_FILE_BYTES, "texture maps")
-            .map_err(|source| MapError::Io {
+        let bytes = crate::limits::read_capped(path, MAX_MAP_FILE_BYTES, "texture maps").map_err(
+            |source| MapError::Io {
                 path: path.to_path_buf(),
                 source,
-            })?;
+            },
+        )?;
         Self::decode(&bytes, path)
     }
 
@@ -151,7 +152,8 @@ impl MapImage {
 
     /// The red channel / 255 at `uv`, blended bilinearly (a scalar map's value, in [0, 1]).
     pub fn scalar(&self, uv: Vec2) -> f32 {
-        self.bilinear(uv, |t| Vec3::splat(f32::from(t[0]) / 255.0)).x
+        self.bilinear(uv, |t| Vec3::splat(f32::from(t[0]) / 255.0))
+            .x
     }
 
     /// The linear RGB colour at `uv`: each texel's sRGB colour made linear, then blended
@@ -236,7 +238,12 @@ mod tests {
         MapImage::new(
             2,
             2,
-            vec![[0, 0, 0, 255], [255, 0, 0, 255], [100, 0, 0, 255], [200, 0, 0, 255]],
+            vec![
+                [0, 0, 0, 255],
+                [255, 0, 0, 255],
+                [100, 0, 0, 255],
+                [200, 0, 0, 255],
+            ],
         )
         .unwrap()
     }
@@ -281,14 +288,19 @@ mod tests {
         assert!(matches!(e, MapError::Io { .. }), "{e}");
         assert!(MapImage::new(0, 1, vec![]).is_none());
         assert!(MapImage::new(2, 2, vec![[0; 4]; 3]).is_none());
-        assert!(MapImage::new(MAX_MAP_SIZE + 1, 1, vec![[0; 4]; MAX_MAP_SIZE as usize + 1]).is_none());
+        assert!(
+            MapImage::new(MAX_MAP_SIZE + 1, 1, vec![[0; 4]; MAX_MAP_SIZE as usize + 1]).is_none()
+        );
     }
 
     #[test]
     fn an_oversized_png_is_refused() {
         let mut bytes = Vec::new();
         image::RgbaImage::new(MAX_MAP_SIZE + 1, 1)
-            .write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png)
+            .write_to(
+                &mut std::io::Cursor::new(&mut bytes),
+                image::ImageFormat::Png,
+            )
             .unwrap();
         let e = MapImage::decode(&bytes, Path::new("big.png")).unwrap_err();
         assert!(matches!(e, MapError::Decode { .. }), "{e}");

@@ -106,7 +106,11 @@ fn creature_uvs_are_its_side_view() {
         assert!((*uv - expected).abs().max_element() < 1e-5, "{p} {uv}");
     }
     // The nose is at u = 1, the tail at u = 0, the ear tips at v = 1.
-    let top = mesh.positions.iter().zip(&mesh.uvs).max_by(|a, b| a.0.y.total_cmp(&b.0.y));
+    let top = mesh
+        .positions
+        .iter()
+        .zip(&mesh.uvs)
+        .max_by(|a, b| a.0.y.total_cmp(&b.0.y));
     assert_eq!(top.map(|(_, uv)| uv.y), Some(1.0));
     println!("creature bounds (centred): {lo} .. {hi}");
 }
@@ -284,10 +288,7 @@ width = 0.006
     assert!(e.to_string().contains("line 2"), "{e}");
     // A bad value is named.
     let e = SceneFile::parse("[[hair.growth.regions]]\nlength = -0.4\n").unwrap_err();
-    assert!(
-        e.to_string().contains("growth.regions[0].length"),
-        "{e}"
-    );
+    assert!(e.to_string().contains("growth.regions[0].length"), "{e}");
     // Regions with dynamics are refused.
     let e = SceneFile::parse("[[hair.growth.regions]]\nlength = 0.4\n[dynamics]\n").unwrap_err();
     assert!(e.to_string().contains("growth.regions"), "{e}");

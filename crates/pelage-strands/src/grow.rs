@@ -342,7 +342,12 @@ impl GrowStrands {
                 .iter()
                 .map(|r| {
                     let (u, v) = (r.bary.x, r.bary.y);
-                    crate::root_tint(mesh, &params.roots, r.triangle as usize, [u, v, 1.0 - u - v])
+                    crate::root_tint(
+                        mesh,
+                        &params.roots,
+                        r.triangle as usize,
+                        [u, v, 1.0 - u - v],
+                    )
                 })
                 .collect()
         } else {
@@ -829,7 +834,9 @@ pub(crate) fn recolor(
     queue: &wgpu::Queue,
     (color, jitter): (Vec3, f32),
 ) -> crate::Result<()> {
-    recolor_with(pass, roots, rest, draw, queue, (color, jitter), &|_, _| color)
+    recolor_with(pass, roots, rest, draw, queue, (color, jitter), &|_, _| {
+        color
+    })
 }
 
 /// [`recolor`] with each strand's colour before its brightness given by `base` (of the

@@ -36,8 +36,8 @@ mod simulate;
 
 pub use groom::GroomStrands;
 pub use grow::{
-    GrowStrands, GrowUniforms, MESH, RegionShape, STRAND_ROOTS, STRAND_VERTICES, StrandBuffers, StrandPass,
-    StrandStage, StrandStyle,
+    GrowStrands, GrowUniforms, MESH, RegionShape, STRAND_ROOTS, STRAND_VERTICES, StrandBuffers,
+    StrandPass, StrandStage, StrandStyle,
 };
 pub use guides::{GUIDE_VERTICES, GuideMemory, GuideRecord, GuideStrands, GuideUniforms};
 pub use lod::{

@@ -92,7 +92,11 @@ pub fn root_region(mesh: &Mesh, roots: &RootParams, tri: usize, bary: [f32; 3]) 
 /// The colour texture's linear RGB at a root (what its colour is multiplied by), or 1
 /// without a colour texture.
 pub fn root_tint(mesh: &Mesh, roots: &RootParams, tri: usize, bary: [f32; 3]) -> Vec3 {
-    let image = roots.textures.color.as_ref().and_then(|m| m.image.as_deref());
+    let image = roots
+        .textures
+        .color
+        .as_ref()
+        .and_then(|m| m.image.as_deref());
     match (image, mesh.uv_at(tri, bary)) {
         (Some(image), Some(uv)) => image.color(uv),
         _ => Vec3::ONE,
@@ -221,6 +225,42 @@ pub fn sample_roots(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_region_fits_in_the_padding_of_a_64_byte_root() {
+        assert_eq!(StrandRoot::min_size().get(), 64);
+        assert_eq!(<StrandRoot as encase::ShaderSize>::SHADER_SIZE.get(), 64);
+    }
+
+    #[test]
+    fn per_vertex_regions_take_the_nearest_corner() {
+        let mesh = Mesh::plane(1.0, 1.0, 1, 1).unwrap();
+        let roots = RootParams {
+            count: 2000,
+            region: Some(vec![1, 0, 0, 0]),
+            ..Default::default()
+        };
+        let growth = GrowthParams {
+            regions: vec![pelage_scene::RegionParams {
+                width: Some(0.01),
+                ..Default::default()
+            }],
+            ..Default::default()
+        };
+        let sampled = sample_roots(&mesh, &roots, &growth).unwrap();
+        for r in &sampled {
+            let bary = [r.bary.x, r.bary.y, 1.0 - r.bary.x - r.bary.y];
+            let nearest = (0..3)
+                .max_by(|&a, &b| bary[a].total_cmp(&bary[b]))
+                .unwrap();
+            let vertex = mesh.indices[r.triangle as usize * 3 + nearest];
+            assert_eq!(r.region, u32::from(vertex == 0));
+            assert_eq!(r.width, if r.region == 1 { 0.01 } else { growth.width });
+        }
+        // Only the roots nearest vertex 0 are in region 1: some, not all.
+        let ones = sampled.iter().filter(|r| r.region == 1).count();
+        assert!(ones > 0 && ones < sampled.len(), "{ones}");
+    }
 
     #[test]
     fn brightness_reproduces_sampled_colours_exactly() {

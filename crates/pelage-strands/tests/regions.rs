@@ -5,9 +5,7 @@ use std::path::Path;
 
 use glam::{Vec2, Vec3};
 use pelage_reference::strands::grow_strands;
-use pelage_scene::{
-    HairParams, HairType, MapImage, Mesh, RegionParams, SceneFile, TextureMap,
-};
+use pelage_scene::{HairParams, HairType, MapImage, Mesh, RegionParams, SceneFile, TextureMap};
 use pelage_strands::{GrowStrands, MeshBuffers, RegionShape, StrandStage, sample_roots};
 
 mod common;
@@ -90,13 +88,21 @@ fn gpu_matches_cpu_mirror_with_three_regions_of_different_hair_types() {
         println!("three regions t={t}: max |GPU - CPU| = {worst:.2e} (tolerance {tolerance:.2e})");
         assert!(worst <= tolerance, "t={t}: GPU and CPU differ by {worst}");
         // The mirror with every strand in region 0 is another fur: the regions matter.
-        let straight = grow_strands(&mesh, strands.roots(), &strands.uniforms_at(t), &shapes[..1]);
+        let straight = grow_strands(
+            &mesh,
+            strands.roots(),
+            &strands.uniforms_at(t),
+            &shapes[..1],
+        );
         let moved = straight
             .iter()
             .zip(&cpu)
             .map(|(s, c)| (s.truncate() - c.truncate()).length())
             .fold(0.0f32, f32::max);
-        assert!(moved > 100.0 * tolerance, "regions change nothing ({moved})");
+        assert!(
+            moved > 100.0 * tolerance,
+            "regions change nothing ({moved})"
+        );
     }
 }
 
@@ -189,7 +195,9 @@ fn creature_mane_roots_follow_the_region_map() {
     // Every root's region is the texel under its UV.
     for r in roots.iter().take(500) {
         let (u, v) = (r.bary.x, r.bary.y);
-        let uv: Vec2 = mesh.uv_at(r.triangle as usize, [u, v, 1.0 - u - v]).unwrap();
+        let uv: Vec2 = mesh
+            .uv_at(r.triangle as usize, [u, v, 1.0 - u - v])
+            .unwrap();
         assert_eq!(r.region, u32::from(image.nearest(uv)[0]));
     }
 }
