@@ -250,9 +250,7 @@ mod tests {
         let sampled = sample_roots(&mesh, &roots, &growth).unwrap();
         for r in &sampled {
             let bary = [r.bary.x, r.bary.y, 1.0 - r.bary.x - r.bary.y];
-            let nearest = (0..3)
-                .max_by(|&a, &b| bary[a].total_cmp(&bary[b]))
-                .unwrap();
+            let nearest = (0..3).max_by(|&a, &b| bary[a].total_cmp(&bary[b])).unwrap();
             let vertex = mesh.indices[r.triangle as usize * 3 + nearest];
             assert_eq!(r.region, u32::from(vertex == 0));
             assert_eq!(r.width, if r.region == 1 { 0.01 } else { growth.width });
