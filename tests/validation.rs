@@ -665,6 +665,7 @@ fn a_few_zero_area_triangles_are_skipped_and_counted() {
         let p = scene.mesh.positions[i];
         scene.mesh.positions.push(p);
         scene.mesh.normals.push(scene.mesh.normals[i]);
+        scene.mesh.uvs.push(scene.mesh.uvs[i]);
         let n = (scene.mesh.positions.len() - 1) as u32;
         scene.mesh.indices[3 * t as usize + 1] = n;
         scene.mesh.indices[3 * t as usize + 2] = n;

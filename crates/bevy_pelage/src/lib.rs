@@ -170,6 +170,7 @@ pub fn pelage_mesh(mesh: &Mesh) -> Result<pelage::scene::Mesh, FurError> {
         positions,
         normals,
         indices,
+        uvs: Vec::new(),
     };
     mesh.validate().map_err(|e| FurError::Mesh(e.to_string()))?;
     Ok(mesh)

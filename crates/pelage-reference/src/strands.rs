@@ -5,7 +5,7 @@ use std::f32::consts::PI;
 
 use glam::{Vec3, Vec4};
 use pelage_scene::Mesh;
-use pelage_strands::{GrowUniforms, StrandRoot};
+use pelage_strands::{GrowUniforms, RegionShape, StrandRoot};
 
 use crate::noise::{value_noise_1d, value_noise_3d};
 
@@ -126,17 +126,17 @@ pub fn force(u: &GrowUniforms, p: Vec3, t: f32) -> Vec3 {
     f
 }
 
-fn shaped_tangent(u: &GrowUniforms, d: Vec3, e1: Vec3, e2: Vec3, s: f32) -> Vec3 {
-    match u.hair_type {
+fn shaped_tangent(shape: &RegionShape, d: Vec3, e1: Vec3, e2: Vec3, s: f32) -> Vec3 {
+    match shape.kind {
         1 => {
-            let k = 2.0 * PI * u.shape_b;
-            let theta = (k * u.shape_a * (k * s).cos()).atan();
+            let k = 2.0 * PI * shape.b;
+            let theta = (k * shape.a * (k * s).cos()).atan();
             d * theta.cos() + e1 * theta.sin()
         }
         2 => {
-            let circumference = 2.0 * PI * u.shape_a;
-            let turn_length = (circumference * circumference + u.shape_b * u.shape_b).sqrt();
-            let theta = circumference.atan2(u.shape_b);
+            let circumference = 2.0 * PI * shape.a;
+            let turn_length = (circumference * circumference + shape.b * shape.b).sqrt();
+            let theta = circumference.atan2(shape.b);
             let phi = 2.0 * PI * s / turn_length;
             d * theta.cos() + (e1 * phi.cos() + e2 * phi.sin()) * theta.sin()
         }
@@ -145,8 +145,19 @@ fn shaped_tangent(u: &GrowUniforms, d: Vec3, e1: Vec3, e2: Vec3, s: f32) -> Vec3
 }
 
 /// Grows one strand: `segments / step + 1` vertices (xyz position, w strand parameter),
-/// every `step`-th vertex of the strand grown at full resolution.
-pub fn grow_strand(mesh: &Mesh, root: &StrandRoot, u: &GrowUniforms) -> Vec<Vec4> {
+/// every `step`-th vertex of the strand grown at full resolution, with the shape of its
+/// region among `shapes` (the last for a region beyond them, as in WGSL).
+pub fn grow_strand(
+    mesh: &Mesh,
+    root: &StrandRoot,
+    u: &GrowUniforms,
+    shapes: &[RegionShape],
+) -> Vec<Vec4> {
+    let shape = shapes
+        .get(root.region as usize)
+        .or(shapes.last())
+        .copied()
+        .unwrap_or_default();
     let surf = eval_surface(mesh, root.triangle, root.bary, u.surface == 1);
     let side =
         surf.tangent * root.azimuth.cos() + surf.normal.cross(surf.tangent) * root.azimuth.sin();
@@ -166,7 +177,7 @@ pub fn grow_strand(mesh: &Mesh, root: &StrandRoot, u: &GrowUniforms) -> Vec<Vec4
     out.push(p.extend(0.0));
     for i in 0..segments {
         let s = (i as f32 + 0.5) * seg_len;
-        let tangent = shaped_tangent(u, d, e1, e2, s);
+        let tangent = shaped_tangent(&shape, d, e1, e2, s);
         p += tangent * seg_len;
         if (i + 1) % step == 0 {
             out.push(p.extend((i + 1) as f32 / segments as f32));
@@ -180,12 +191,18 @@ pub fn grow_strand(mesh: &Mesh, root: &StrandRoot, u: &GrowUniforms) -> Vec<Vec4
 }
 
 /// Grows the strands `u` grows (the first `u.strand_count`), in the layout of
-/// `StrandBuffers::vertices`.
-pub fn grow_strands(mesh: &Mesh, roots: &[StrandRoot], u: &GrowUniforms) -> Vec<Vec4> {
+/// `StrandBuffers::vertices`, each region with its shape in `shapes`
+/// (`GrowStrands::region_shapes`).
+pub fn grow_strands(
+    mesh: &Mesh,
+    roots: &[StrandRoot],
+    u: &GrowUniforms,
+    shapes: &[RegionShape],
+) -> Vec<Vec4> {
     roots
         .iter()
         .take(u.strand_count as usize)
-        .flat_map(|r| grow_strand(mesh, r, u))
+        .flat_map(|r| grow_strand(mesh, r, u, shapes))
         .collect()
 }
 

@@ -19,6 +19,7 @@ pub mod params;
 pub mod scene_file;
 mod scene_keys;
 pub mod shading;
+pub mod surface_map;
 pub mod tfx_file;
 pub mod transparency;
 #[cfg(feature = "usd")]
@@ -35,9 +36,9 @@ pub use mesh::{Mesh, MeshError, MeshReport};
 pub use obj::{ObjError, load_obj, parse_obj};
 pub use params::{
     AdsmParams, Collider, DeepOpacityParams, DynamicsParams, GrowthParams, HairParams, HairType,
-    LayerSpacing, MAX_ACCELERATION, MAX_COLLIDERS, MAX_FORCE, MAX_SEGMENTS, MapParams, MeshMotion,
-    OpacityFormat, ParamError, RootParams, ShadeParams, ShadowMapParams, ShadowParams, Splat,
-    SurfaceInterpolation, VoxelParams, WindParams,
+    LayerSpacing, MAX_ACCELERATION, MAX_COLLIDERS, MAX_FORCE, MAX_REGIONS, MAX_SEGMENTS, MapParams,
+    MeshMotion, OpacityFormat, ParamError, RegionParams, RootParams, RootTextures, ShadeParams,
+    ShadowMapParams, ShadowParams, Splat, SurfaceInterpolation, VoxelParams, WindParams,
 };
 pub use scene_file::{MeshSource, SceneFile, SceneFileError};
 pub use shading::{
@@ -45,6 +46,7 @@ pub use shading::{
     PHEOMELANIN_SIGMA_A, SadeghiParams, ShadingModel, chiang_color_scale, sigma_a_from_color,
     sigma_a_from_melanin, sigma_a_from_reflectance,
 };
+pub use surface_map::{MAX_MAP_FILE_BYTES, MAX_MAP_SIZE, MapError, MapImage, TextureMap};
 pub use tfx_file::{TfxFile, TfxFileError};
 pub use transparency::{MAX_OIT_K, Transparency, WboitWeight};
 #[cfg(feature = "usd")]

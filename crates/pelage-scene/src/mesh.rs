@@ -9,7 +9,7 @@
 
 use std::collections::HashMap;
 
-use glam::{Affine3A, DVec3, Mat3A, Vec3};
+use glam::{Affine3A, DVec3, Mat3A, Vec2, Vec3};
 use serde::{Deserialize, Serialize};
 
 /// Highest subdivision level [`Mesh::icosphere`] accepts (20 · 4⁸ ≈ 1.3 million triangles).
@@ -28,7 +28,8 @@ pub const DEGENERATE_AREA_FACTOR: f64 = 1e-12;
 const MIN_NORMAL_LENGTH: f32 = 1e-6;
 
 /// An indexed triangle mesh: triangle list, counter-clockwise front faces,
-/// one unit-length normal per position.
+/// one unit-length normal per position, and optionally one texture coordinate per
+/// position.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Mesh {
     /// Vertex positions.
@@ -37,6 +38,11 @@ pub struct Mesh {
     pub normals: Vec<Vec3>,
     /// Triangle list: three indices into `positions` per triangle, CCW = front.
     pub indices: Vec<u32>,
+    /// Texture coordinates, one per position, or none at all (empty). `(0, 0)` is the
+    /// bottom-left corner of a texture and `(1, 1)` its top-right, as in OBJ files;
+    /// outside [0, 1] a texture repeats.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub uvs: Vec<Vec2>,
 }
 
 /// What [`Mesh::validate`] found in a mesh that is usable.
@@ -93,6 +99,26 @@ pub enum MeshError {
         positions: usize,
         /// Number of normals.
         normals: usize,
+    },
+    /// Texture coordinates are given, but not one per position.
+    #[error(
+        "mesh has {positions} positions but {uvs} texture coordinates; give one per position or none"
+    )]
+    UvCountMismatch {
+        /// Number of positions.
+        positions: usize,
+        /// Number of texture coordinates.
+        uvs: usize,
+    },
+    /// A texture coordinate is NaN or infinite.
+    #[error(
+        "texture coordinate {vertex} is not finite ({value}); every UV must be a finite number"
+    )]
+    NonFiniteUv {
+        /// Vertex index.
+        vertex: usize,
+        /// The value found.
+        value: Vec2,
     },
     /// A position is NaN or infinite.
     #[error("position {vertex} is not finite ({value}); every coordinate must be a finite number")]
@@ -190,7 +216,8 @@ impl Mesh {
     /// Checks everything the GPU stages rely on and measures the mesh.
     ///
     /// Errors (checked in this order): no triangles, index count not a
-    /// multiple of 3, positions/normals count mismatch, a NaN/infinite
+    /// multiple of 3, positions/normals count mismatch, UVs given but not one per
+    /// position, a NaN/infinite UV, a NaN/infinite
     /// position, a NaN/infinite or zero-length normal, an index out of range,
     /// and every triangle degenerate. Degenerate triangles among good ones
     /// are reported in [`MeshReport::degenerate_triangles`], not refused.
@@ -210,6 +237,15 @@ impl Mesh {
                 positions: self.positions.len(),
                 normals: self.normals.len(),
             });
+        }
+        if !self.uvs.is_empty() && self.uvs.len() != self.positions.len() {
+            return Err(MeshError::UvCountMismatch {
+                positions: self.positions.len(),
+                uvs: self.uvs.len(),
+            });
+        }
+        if let Some((vertex, &value)) = self.uvs.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+            return Err(MeshError::NonFiniteUv { vertex, value });
         }
         for (vertex, &value) in self.positions.iter().enumerate() {
             if !value.is_finite() {
@@ -349,7 +385,9 @@ impl Mesh {
     }
 
     /// Appends `other` to this mesh: its vertices go after this mesh's and
-    /// its indices are offset accordingly. Overlapping parts are fine.
+    /// its indices are offset accordingly. Overlapping parts are fine. The result
+    /// has texture coordinates when both parts have them (or this mesh is empty);
+    /// otherwise it has none.
     ///
     /// Errors with [`MeshError::TooManyVertices`] (and leaves `self`
     /// unchanged) when the result would need indices beyond `u32`.
@@ -363,6 +401,13 @@ impl Mesh {
                 vertices: total,
                 max,
             })?;
+        if self.positions.is_empty() {
+            self.uvs = other.uvs.clone();
+        } else if self.has_uvs() && other.has_uvs() {
+            self.uvs.extend_from_slice(&other.uvs);
+        } else {
+            self.uvs.clear();
+        }
         self.positions.extend_from_slice(&other.positions);
         self.normals.extend_from_slice(&other.normals);
         // Cannot overflow: every valid index is below `total <= u32::MAX`;
@@ -400,7 +445,28 @@ impl Mesh {
             positions,
             normals,
             indices,
+            uvs: self.uvs.clone(),
         }
+    }
+
+    /// Whether the mesh has texture coordinates (one per position).
+    pub fn has_uvs(&self) -> bool {
+        !self.uvs.is_empty() && self.uvs.len() == self.positions.len()
+    }
+
+    /// The texture coordinate at barycentrics `bary` (of the triangle's first, second
+    /// and third corner) of triangle `tri`; `None` without UVs or for a triangle or
+    /// index out of range.
+    pub fn uv_at(&self, tri: usize, bary: [f32; 3]) -> Option<Vec2> {
+        if !self.has_uvs() {
+            return None;
+        }
+        let corners = self.indices.get(tri * 3..tri * 3 + 3)?;
+        let mut uv = Vec2::ZERO;
+        for (&index, w) in corners.iter().zip(bary) {
+            uv += *self.uvs.get(index as usize)? * w;
+        }
+        Some(uv)
     }
 
     /// A sphere of `radius` centred at the origin, made from an icosahedron
@@ -430,6 +496,7 @@ impl Mesh {
             positions: directions.iter().map(|&d| d * radius).collect(),
             normals: directions,
             indices,
+            uvs: Vec::new(),
         })
     }
 
@@ -504,12 +571,14 @@ impl Mesh {
             positions,
             normals,
             indices,
+            uvs: Vec::new(),
         })
     }
 
     /// A flat rectangle in the XZ plane at `y = 0`, centred at the origin,
     /// `size_x` by `size_z`, split into `subdivisions_x` × `subdivisions_z`
-    /// quads (two triangles each), facing `+Y`.
+    /// quads (two triangles each), facing `+Y`. Its UVs run from `(0, 0)` at
+    /// `(-size_x/2, -size_z/2)` to `(1, 1)` at `(size_x/2, size_z/2)`.
     ///
     /// Errors: sizes not finite or not > 0, subdivision counts outside
     /// 1..=[`MAX_GRID_SEGMENTS`].
@@ -540,11 +609,13 @@ impl Mesh {
         let columns = subdivisions_x + 1;
         let rows = subdivisions_z + 1;
         let mut positions = Vec::with_capacity((columns * rows) as usize);
+        let mut uvs = Vec::with_capacity((columns * rows) as usize);
         for k in 0..rows {
-            let z = size_z * (k as f32 / subdivisions_z as f32 - 0.5);
+            let v = k as f32 / subdivisions_z as f32;
             for i in 0..columns {
-                let x = size_x * (i as f32 / subdivisions_x as f32 - 0.5);
-                positions.push(Vec3::new(x, 0.0, z));
+                let u = i as f32 / subdivisions_x as f32;
+                positions.push(Vec3::new(size_x * (u - 0.5), 0.0, size_z * (v - 0.5)));
+                uvs.push(Vec2::new(u, v));
             }
         }
         let normals = vec![Vec3::Y; positions.len()];
@@ -563,6 +634,7 @@ impl Mesh {
             positions,
             normals,
             indices,
+            uvs,
         })
     }
 
@@ -571,6 +643,11 @@ impl Mesh {
     /// on its bounding box at the origin and within about `[-1.2, 1.2]³`.
     /// Made of scaled and rotated icospheres appended into one mesh
     /// (overlapping, not welded); 2720 triangles, none degenerate.
+    ///
+    /// Its UVs are its side view, the same on both flanks: `u` runs from the tail
+    /// (`-Z`, 0) to the nose (`+Z`, 1) and `v` from the feet (0) to the ear tips (1)
+    /// over the bounding box, so a texture map over it is painted on a picture of the
+    /// creature seen from its left side (`+X`), nose to the right.
     pub fn creature() -> Mesh {
         use glam::{Quat, Vec3 as V};
         // (radii, rotation, centre, subdivision level) of each part.
@@ -656,6 +733,15 @@ impl Mesh {
         for p in &mut mesh.positions {
             *p -= centre;
         }
+        let size = (hi - lo).max(Vec3::splat(f32::MIN_POSITIVE));
+        mesh.uvs = mesh
+            .positions
+            .iter()
+            .map(|p| {
+                let q = (*p + centre - lo) / size;
+                Vec2::new(q.z, q.y)
+            })
+            .collect();
         mesh
     }
 }

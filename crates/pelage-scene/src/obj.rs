@@ -1,15 +1,18 @@
 //! Wavefront OBJ loading (through `tobj`) into a validated [`Mesh`].
 //!
 //! All objects and groups of the file are merged into one mesh; polygons are
-//! triangulated; points and lines are ignored; materials and texture
-//! coordinates are ignored. Before `tobj` sees the text, every face index is
+//! triangulated; points and lines are ignored; materials are ignored. Texture
+//! coordinates (`vt`) are kept as [`Mesh::uvs`] when every face corner has one: a
+//! position used with several UVs (a seam) becomes one vertex per UV (as `tobj`'s
+//! `single_index` splits it). A file whose faces mix corners with and without a
+//! `vt` index is refused with the line ([`ObjError::MixedUvs`]). Before `tobj` sees the text, every face index is
 //! checked against the number of vertices, texture coordinates and normals
 //! the file defines, so a bad index is reported with its line number (and
 //! cannot reach the arithmetic in `tobj` that could overflow).
 
 use std::path::{Path, PathBuf};
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 use crate::mesh::{Mesh, MeshError};
 
@@ -60,6 +63,21 @@ pub enum ObjError {
         /// How many elements of that kind are defined (in the file, or before
         /// the line for a negative index).
         count: usize,
+    },
+    /// Some face corners have a texture coordinate index and others do not.
+    #[error(
+        "{source_name}, line {line}: a face corner {} a texture coordinate index but one on line {first_line} {}; give every face corner a `vt` index (f v/vt or v/vt/vn) or none",
+        if *.has_uv { "has" } else { "lacks" }, if *.has_uv { "lacks one" } else { "has one" }
+    )]
+    MixedUvs {
+        /// The file path, or `"in-memory OBJ text"`.
+        source_name: String,
+        /// The line of the corner that differs from the first face's, starting at 1.
+        line: usize,
+        /// Whether that corner has a texture coordinate index.
+        has_uv: bool,
+        /// The line of the first face.
+        first_line: usize,
     },
     /// The file has no triangles (no faces with three or more vertices).
     #[error(
@@ -162,10 +180,20 @@ fn parse(text: &str, source_name: String) -> Result<Mesh, ObjError> {
         if part_normals.len() != part_positions.len() {
             all_normals = false;
         }
+        let mut part_uvs: Vec<Vec2> = m
+            .texcoords
+            .chunks_exact(2)
+            .map(|c| Vec2::new(c[0], c[1]))
+            .collect();
+        // A part without UVs leaves the merged mesh without any (see `Mesh::append`).
+        if part_uvs.len() != part_positions.len() {
+            part_uvs.clear();
+        }
         let part = Mesh {
             positions: part_positions,
             normals: part_normals,
             indices: m.indices.clone(),
+            uvs: part_uvs,
         };
         // Normals are rebuilt below if any part lacks them, so a
         // misaligned normal array is never used.
@@ -219,6 +247,9 @@ fn check_face_indices(text: &str, source_name: &str) -> Result<(), ObjError> {
     }
     let mut counts = [0usize; 3];
     let mut references = Vec::new();
+    // (line, has a vt index) of the first face corner, and the first corner that differs.
+    let mut first_corner: Option<(usize, bool)> = None;
+    let mut mixed: Option<(usize, bool)> = None;
     for (line_number, line) in text.lines().enumerate() {
         let mut words = line.split_whitespace();
         match words.next() {
@@ -228,8 +259,18 @@ fn check_face_indices(text: &str, source_name: &str) -> Result<(), ObjError> {
             // `tobj` parses `l` like `f` and turns an `l` with three or
             // more vertices into triangles even with `ignore_lines`, so its
             // indices reach the same arithmetic.
-            Some("f" | "l") => {
+            Some(keyword @ ("f" | "l")) => {
                 for word in words {
+                    if keyword == "f" {
+                        let has_uv = word.split('/').nth(1).is_some_and(|t| !t.is_empty());
+                        match first_corner {
+                            None => first_corner = Some((line_number + 1, has_uv)),
+                            Some((_, first)) if first != has_uv && mixed.is_none() => {
+                                mixed = Some((line_number + 1, has_uv));
+                            }
+                            _ => {}
+                        }
+                    }
                     for (kind, part) in word.split('/').take(3).enumerate() {
                         if part.is_empty() {
                             continue;
@@ -254,6 +295,16 @@ fn check_face_indices(text: &str, source_name: &str) -> Result<(), ObjError> {
                 }
             }
             _ => {}
+        }
+    }
+    if let (Some((first_line, _)), Some((line, has_uv))) = (first_corner, mixed) {
+        if counts[1] > 0 {
+            return Err(ObjError::MixedUvs {
+                source_name: source_name.to_owned(),
+                line,
+                has_uv,
+                first_line,
+            });
         }
     }
     for r in references {

@@ -108,6 +108,71 @@ pub struct RootParams {
     pub density: Option<Vec<f32>>,
     /// Optional per-vertex length scale (>= 0), interpolated at each root.
     pub length_scale: Option<Vec<f32>>,
+    /// Optional per-vertex region index, one per mesh vertex: each root takes the
+    /// region of its triangle's corner nearest to it (the largest barycentric). 0 is
+    /// `[hair.growth]` itself, `k` its `k`-th `[[hair.growth.regions]]` entry.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub region: Option<Vec<u32>>,
+    /// Texture maps over the mesh's UVs, sampled at each root (`[hair.roots.textures]`).
+    #[serde(skip_serializing_if = "RootTextures::is_empty")]
+    pub textures: RootTextures,
+}
+
+/// Texture maps over the mesh's UVs (PNG; see [`crate::surface_map`]), each sampled at
+/// every root. They combine with the per-vertex maps of [`RootParams`] by multiplying
+/// (density, length); a region may come from one or the other, not both.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct RootTextures {
+    /// Region index per texel: the red channel (0..=255), read at the texel holding
+    /// the root (nearest: regions are not blended). 0 is `[hair.growth]`, `k` its
+    /// `k`-th `[[hair.growth.regions]]`; a texel naming a region that does not exist
+    /// is an error.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub region: Option<crate::TextureMap>,
+    /// Density weight: red / 255 (bilinear). A triangle's share of the strands is its
+    /// area times the mean of the map at four points (its centroid and the midpoints
+    /// from the centroid to each corner), so features smaller than a triangle are
+    /// averaged away.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub density: Option<crate::TextureMap>,
+    /// Length scale: red / 255 (bilinear) at the root, in [0, 1].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub length_scale: Option<crate::TextureMap>,
+    /// Colour: the texel's sRGB colour made linear (bilinear), multiplying the strand's
+    /// colour (its region's, or `growth.color`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub color: Option<crate::TextureMap>,
+}
+
+impl RootTextures {
+    /// Whether no map is given.
+    pub fn is_empty(&self) -> bool {
+        self.maps().all(|(_, m)| m.is_none())
+    }
+
+    /// Every map with its key (`roots.textures.region`, ...).
+    pub fn maps(&self) -> impl Iterator<Item = (&'static str, Option<&crate::TextureMap>)> {
+        [
+            ("roots.textures.region", self.region.as_ref()),
+            ("roots.textures.density", self.density.as_ref()),
+            ("roots.textures.length_scale", self.length_scale.as_ref()),
+            ("roots.textures.color", self.color.as_ref()),
+        ]
+        .into_iter()
+    }
+
+    /// The same, to change (to load every map, say).
+    pub fn maps_mut(&mut self) -> impl Iterator<Item = (&'static str, &mut crate::TextureMap)> {
+        [
+            ("roots.textures.region", self.region.as_mut()),
+            ("roots.textures.density", self.density.as_mut()),
+            ("roots.textures.length_scale", self.length_scale.as_mut()),
+            ("roots.textures.color", self.color.as_mut()),
+        ]
+        .into_iter()
+        .filter_map(|(name, m)| m.map(|m| (name, m)))
+    }
 }
 
 impl Default for RootParams {
@@ -117,6 +182,8 @@ impl Default for RootParams {
             seed: 1,
             density: None,
             length_scale: None,
+            region: None,
+            textures: RootTextures::default(),
         }
     }
 }
@@ -156,8 +223,127 @@ impl RootParams {
                 }
             }
         }
+        if let Some(map) = &self.region {
+            if map.len() != vertex_count {
+                return Err(ParamError::new(
+                    "roots.region",
+                    format!("{} values", map.len()),
+                    &format!("needs one value per mesh vertex ({vertex_count})"),
+                ));
+            }
+            if self.textures.region.is_some() {
+                return Err(ParamError::new(
+                    "roots.textures.region",
+                    "given with roots.region",
+                    "give the region map either per vertex or as a texture, not both",
+                ));
+            }
+        }
         Ok(())
     }
+
+    /// Checks the region maps against `region_count` regions (`[hair.growth]` and its
+    /// `regions`) and, for a mesh, that every texture map is loaded and the mesh has
+    /// UVs: what [`RootParams::validate`] cannot know.
+    pub fn validate_maps(
+        &self,
+        region_count: usize,
+        mesh: Option<&crate::Mesh>,
+    ) -> Result<(), ParamError> {
+        let reason = |value: usize| {
+            ParamError::new(
+                "roots.region",
+                value,
+                &format!(
+                    "names a region that does not exist: there are {region_count} (0 = \
+                     [hair.growth], k = its k-th [[hair.growth.regions]])"
+                ),
+            )
+        };
+        if let Some(map) = &self.region {
+            if let Some((i, &v)) = map
+                .iter()
+                .enumerate()
+                .find(|(_, v)| **v as usize >= region_count)
+            {
+                let mut e = reason(v as usize);
+                e.name = format!("roots.region[{i}]");
+                return Err(e);
+            }
+        }
+        if let Some(map) = &self.textures.region {
+            if let Some(image) = map.image.as_deref() {
+                let width = image.width() as usize;
+                if let Some((i, t)) = image
+                    .texels()
+                    .iter()
+                    .enumerate()
+                    .find(|(_, t)| t[0] as usize >= region_count)
+                {
+                    let mut e = reason(t[0] as usize);
+                    e.name = "roots.textures.region".into();
+                    e.value = format!(
+                        "{} at texel ({}, {}) of {}",
+                        t[0],
+                        i % width,
+                        i / width,
+                        map.path.display()
+                    );
+                    return Err(e);
+                }
+            }
+        }
+        let Some(mesh) = mesh else {
+            return Ok(());
+        };
+        for (name, map) in self.textures.maps() {
+            let Some(map) = map else { continue };
+            map.loaded(name)?;
+            if !mesh.has_uvs() {
+                return Err(ParamError::new(
+                    name,
+                    &map.path,
+                    "the mesh has no texture coordinates (UVs) to read a texture map with: \
+                     use a mesh with UVs (an OBJ with `vt`, the creature, a plane) or a \
+                     per-vertex map",
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The most regions a groom may have besides `[hair.growth]` (an 8-bit region map's
+/// largest index).
+pub const MAX_REGIONS: usize = 255;
+
+/// A region of the fur: the keys of [`GrowthParams`] it grows with instead of the
+/// base ones (any left out keep the base value). Only what each strand carries on its
+/// own can differ by region: its shape (`hair_type`), length, jitters, width and colour.
+/// `segments` stays one per groom (the vertex buffer and the level of detail are laid
+/// out by it), and `force_weight`, `gravity`, `tip_width`, `opacity`, `color_jitter`
+/// and `surface` are read once by the passes for every strand.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct RegionParams {
+    /// Straight, wavy or curly.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub hair_type: Option<HairType>,
+    /// Strand length, scene units.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub length: Option<f32>,
+    /// Relative length jitter in [0, 1).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub length_jitter: Option<f32>,
+    /// Largest tilt away from the normal, radians, in [0, π/2].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub direction_jitter: Option<f32>,
+    /// Root width, scene units.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub width: Option<f32>,
+    /// Base colour, linear RGB.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub color: Option<Vec3>,
 }
 
 /// The shape a strand is grown in, on top of gravity and wind.
@@ -216,6 +402,11 @@ pub struct GrowthParams {
     pub opacity: f32,
     /// How the root position and normal are interpolated.
     pub surface: SurfaceInterpolation,
+    /// Regions 1, 2, ... of a region map ([`RootParams::region`] or
+    /// [`RootTextures::region`]), each overriding some of the keys above; region 0 is
+    /// these parameters themselves. At most [`MAX_REGIONS`].
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub regions: Vec<RegionParams>,
 }
 
 impl Default for GrowthParams {
@@ -234,13 +425,61 @@ impl Default for GrowthParams {
             color_jitter: 0.25,
             opacity: 0.6,
             surface: SurfaceInterpolation::PnTriangle,
+            regions: Vec::new(),
         }
     }
 }
 
 impl GrowthParams {
-    /// Checks every field; the error names the first bad one.
+    /// The parameters of every region, region 0 (these, without `regions`) first, then
+    /// each of `regions` over them.
+    pub fn resolved_regions(&self) -> Vec<GrowthParams> {
+        let base = GrowthParams {
+            regions: Vec::new(),
+            ..self.clone()
+        };
+        let mut out = Vec::with_capacity(self.regions.len() + 1);
+        out.push(base.clone());
+        for r in &self.regions {
+            out.push(GrowthParams {
+                hair_type: r.hair_type.unwrap_or(base.hair_type),
+                length: r.length.unwrap_or(base.length),
+                length_jitter: r.length_jitter.unwrap_or(base.length_jitter),
+                direction_jitter: r.direction_jitter.unwrap_or(base.direction_jitter),
+                width: r.width.unwrap_or(base.width),
+                color: r.color.unwrap_or(base.color),
+                ..base.clone()
+            });
+        }
+        out
+    }
+
+    /// Checks every field and every region; the error names the first bad one (a
+    /// region's as `growth.regions[i].length`, `i` counting from 0 in file order: region
+    /// `i + 1` of the map).
     pub fn validate(&self) -> Result<(), ParamError> {
+        if self.regions.len() > MAX_REGIONS {
+            return Err(ParamError::new(
+                "growth.regions",
+                format!("{} regions", self.regions.len()),
+                &format!("at most {MAX_REGIONS} (an 8-bit region map's largest index)"),
+            ));
+        }
+        for (i, region) in self.resolved_regions().iter().enumerate() {
+            region.validate_fields().map_err(|mut e| {
+                if i > 0 {
+                    e.name = e
+                        .name
+                        .replacen("growth.", &format!("growth.regions[{}].", i - 1), 1);
+                }
+                e
+            })?;
+        }
+        Ok(())
+    }
+
+    /// Checks every field but `regions`.
+    fn validate_fields(&self) -> Result<(), ParamError> {
         if self.segments == 0 || self.segments > MAX_SEGMENTS {
             return Err(ParamError::new(
                 "growth.segments",
@@ -604,6 +843,7 @@ impl MeshMotion {
                 .collect(),
             normals: mesh.normals.iter().map(|&n| q * n).collect(),
             indices: mesh.indices.clone(),
+            uvs: mesh.uvs.clone(),
         }
     }
 
@@ -801,6 +1041,8 @@ impl HairParams {
     pub fn validate(&self, vertex_count: usize) -> Result<(), ParamError> {
         self.roots.validate(vertex_count)?;
         self.growth.validate()?;
+        self.roots
+            .validate_maps(self.growth.regions.len() + 1, None)?;
         self.wind.validate()?;
         self.lod.validate()
     }

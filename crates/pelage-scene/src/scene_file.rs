@@ -65,6 +65,25 @@
 //! shadows none: `[mesh] kind = "none"` (which needs a `[groom]`; leaving `[mesh]` out
 //! still means the creature).
 //!
+//! **Regions** give parts of the fur their own shape, length, width and colour: each
+//! `[[hair.growth.regions]]` entry overrides some of `[hair.growth]`'s keys (see
+//! [`RegionParams`](crate::RegionParams)), and a region map over the mesh says which
+//! region each root is in, as a texture over the mesh's UVs or per vertex (see
+//! [`RootTextures`](crate::RootTextures); `scenes/creature_mane.toml`):
+//!
+//! ```toml
+//! [hair.roots.textures]
+//! region = "creature_mane_regions.png"  # red channel: 0 = [hair.growth], 1 = first region
+//!
+//! [[hair.growth.regions]]
+//! length = 0.5
+//! color = [0.5, 0.3, 0.12]
+//! hair_type = { kind = "wavy", amplitude = 0.02, frequency = 6.0 }
+//! ```
+//!
+//! Regions are grown by the growth pass alone: with `[groom]` or `[dynamics]` they are
+//! refused.
+//!
 //! `guides = { strands = 6000, clump = 0.3 }` in `[groom]` takes the file's strands as
 //! guides and interpolates render strands rooted on the mesh from them (see
 //! [`GuideParams`](crate::GuideParams)).
@@ -216,6 +235,16 @@ pub enum SceneFileError {
         /// Why (boxed: a file error is large).
         source: Box<GroomError>,
     },
+    /// A texture map could not be loaded (its path is in the message).
+    #[error("scene file {}: {key}: {source}", path.display())]
+    Map {
+        /// The scene file.
+        path: PathBuf,
+        /// The key naming the map (`roots.textures.region`, ...).
+        key: &'static str,
+        /// Why.
+        source: crate::MapError,
+    },
     /// The OBJ file could not be loaded (its path is in the message).
     #[error("scene file {}: {source}", path.display())]
     Obj {
@@ -259,8 +288,8 @@ impl SceneFile {
         Ok(file)
     }
 
-    /// Reads and parses `path`; relative OBJ and groom paths are made relative to the
-    /// file's folder. At most [`MAX_SCENE_FILE_BYTES`](crate::MAX_SCENE_FILE_BYTES) are
+    /// Reads and parses `path`; relative OBJ, groom and texture map paths are made
+    /// relative to the file's folder, and the texture maps are read. At most [`MAX_SCENE_FILE_BYTES`](crate::MAX_SCENE_FILE_BYTES) are
     /// read.
     pub fn load(path: &Path) -> Result<Self, SceneFileError> {
         let io = |source| SceneFileError::Io {
@@ -289,6 +318,21 @@ impl SceneFile {
         if let Some(groom) = &mut file.groom {
             relative(&mut groom.path);
         }
+        for (key, map) in file.hair.roots.textures.maps_mut() {
+            relative(&mut map.path);
+            map.load().map_err(|source| SceneFileError::Map {
+                path: path.to_path_buf(),
+                key,
+                source,
+            })?;
+        }
+        file.hair
+            .roots
+            .validate_maps(file.hair.growth.regions.len() + 1, None)
+            .map_err(|source| SceneFileError::Param {
+                path: path.to_path_buf(),
+                source,
+            })?;
         Ok(file)
     }
 
@@ -308,6 +352,23 @@ impl SceneFile {
                 "none",
                 "needs a [groom] table: without a mesh there is nothing to grow fur from",
             ));
+        }
+        if !self.hair.growth.regions.is_empty() {
+            let other = if self.groom.is_some() {
+                Some("[groom]")
+            } else if self.dynamics.is_some() {
+                Some("[dynamics]")
+            } else {
+                None
+            };
+            if let Some(other) = other {
+                return Err(crate::ParamError::new(
+                    "growth.regions",
+                    format!("{} regions with {other}", self.hair.growth.regions.len()),
+                    "regions are grown from the mesh by the stateless growth pass only: \
+                     leave out the regions or the other table",
+                ));
+            }
         }
         if let Some(dynamics) = &self.dynamics {
             dynamics.validate()?;

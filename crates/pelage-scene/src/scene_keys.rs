@@ -110,6 +110,11 @@ const TAGGED: &[TaggedTable] = &[
         default: || variant_name(HairType::default(), "kind"),
     },
     TaggedTable {
+        path: &["hair", "growth", "regions", "*", "hair_type"],
+        tag: "kind",
+        default: || variant_name(HairType::default(), "kind"),
+    },
+    TaggedTable {
         path: &["shadow"],
         tag: "method",
         default: || variant_name(ShadowParams::default(), "method"),

@@ -217,6 +217,7 @@ fn one_triangle() -> Mesh {
         positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y],
         normals: vec![Vec3::Z; 3],
         indices: vec![0, 1, 2],
+        uvs: Vec::new(),
     }
 }
 
@@ -348,6 +349,7 @@ fn validate_all_degenerate() {
         positions: vec![Vec3::ZERO, Vec3::X, Vec3::X * 2.0],
         normals: vec![Vec3::Z; 3],
         indices: vec![0, 1, 2, 0, 0, 1],
+        uvs: Vec::new(),
     };
     assert_eq!(
         m.validate(),

@@ -168,6 +168,7 @@ fn upload(gpu: &Gpu, strands: &[RibbonStrand], opacity: f32) -> Fixture {
             tilt: 0.0,
             azimuth: 0.0,
             color: s.color.into(),
+            region: 0,
         });
     }
     let usage = wgpu::BufferUsages::STORAGE;

@@ -23,6 +23,7 @@ fn single_strand(width: f32) -> (Mesh, HairParams) {
         ],
         normals: vec![Vec3::Y; 3],
         indices: vec![0, 1, 2],
+        uvs: Vec::new(),
     };
     let mut hair = HairParams {
         roots: RootParams {

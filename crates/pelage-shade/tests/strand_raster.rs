@@ -300,6 +300,7 @@ fn by_hand(gpu: &Gpu, lines: &[(Vec<glam::Vec3>, f32)], opacity: f32) -> Hand {
             tilt: 0.0,
             azimuth: 0.0,
             color: Vec3::new(0.8, 0.5, 0.3),
+            region: 0,
         });
     }
     let usage = wgpu::BufferUsages::STORAGE;

@@ -110,6 +110,7 @@ impl GroomStrands {
                 tilt: 0.0,
                 azimuth: 0.0,
                 color: color * brightness,
+                region: 0,
             });
         }
         let file_colors = groom.colors.as_ref().map(|_| {

@@ -46,12 +46,6 @@ pub struct GrowUniforms {
     pub lod_s_min: f32,
     /// 0 = flat, 1 = PN triangle.
     pub surface: u32,
-    /// 0 = straight, 1 = wavy, 2 = curly.
-    pub hair_type: u32,
-    /// Wavy: amplitude. Curly: radius.
-    pub shape_a: f32,
-    /// Wavy: frequency. Curly: pitch.
-    pub shape_b: f32,
     /// Seed 001's force weight.
     pub force_weight: f32,
     /// Time in seconds.
@@ -88,14 +82,6 @@ impl GrowUniforms {
     pub fn at_level(params: &HairParams, time: f32, level: &LodLevel) -> Self {
         let g = &params.growth;
         let w = &params.wind;
-        let (hair_type, shape_a, shape_b) = match g.hair_type {
-            HairType::Straight => (0, 0.0, 0.0),
-            HairType::Wavy {
-                amplitude,
-                frequency,
-            } => (1, amplitude, frequency),
-            HairType::Curly { radius, pitch } => (2, radius, pitch),
-        };
         let step = if level.segments > 0 && g.segments.is_multiple_of(level.segments) {
             g.segments / level.segments
         } else {
@@ -114,9 +100,6 @@ impl GrowUniforms {
                 SurfaceInterpolation::Flat => 0,
                 SurfaceInterpolation::PnTriangle => 1,
             },
-            hair_type,
-            shape_a,
-            shape_b,
             force_weight: g.force_weight,
             time,
             gravity: g.gravity,
@@ -130,6 +113,50 @@ impl GrowUniforms {
             seed: params.roots.seed,
             phase_spread: w.phase_spread,
         }
+    }
+}
+
+/// One region's strand shape as `grow.wgsl` reads it (`RegionShape` there): the
+/// storage buffer of a [`GrowStrands`] holds one per region, region 0 first, and each
+/// strand reads the one of its [`StrandRoot::region`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, ShaderType)]
+pub struct RegionShape {
+    /// 0 = straight, 1 = wavy, 2 = curly.
+    pub kind: u32,
+    /// Wavy: amplitude. Curly: radius.
+    pub a: f32,
+    /// Wavy: frequency. Curly: pitch.
+    pub b: f32,
+}
+
+impl RegionShape {
+    /// The shape of `hair_type`.
+    pub fn of(hair_type: HairType) -> Self {
+        match hair_type {
+            HairType::Straight => Self::default(),
+            HairType::Wavy {
+                amplitude,
+                frequency,
+            } => Self {
+                kind: 1,
+                a: amplitude,
+                b: frequency,
+            },
+            HairType::Curly { radius, pitch } => Self {
+                kind: 2,
+                a: radius,
+                b: pitch,
+            },
+        }
+    }
+
+    /// One shape per region of `growth`, region 0 (`growth.hair_type`) first.
+    pub fn all(growth: &GrowthParams) -> Vec<Self> {
+        growth
+            .resolved_regions()
+            .iter()
+            .map(|g| Self::of(g.hair_type))
+            .collect()
     }
 }
 
@@ -290,6 +317,10 @@ pub struct GrowStrands {
     pass: StrandPass,
     /// The rest roots the pass reads (rewritten by [`StrandStage::set_color`]).
     rest_roots: wgpu::Buffer,
+    /// Every region's shape, as the pass's storage buffer holds them.
+    shapes: Vec<RegionShape>,
+    /// Each strand's colour texture factor ([`crate::root_tint`]); empty without one.
+    tints: Vec<Vec3>,
 }
 
 impl GrowStrands {
@@ -306,8 +337,26 @@ impl GrowStrands {
         // Refuse a groom the device cannot hold before spending time on its roots.
         StrandPass::vertex_bytes(gpu, params)?;
         let roots = sample_roots(mesh, &params.roots, &params.growth)?;
+        let tints = if params.roots.textures.color.is_some() {
+            roots
+                .iter()
+                .map(|r| {
+                    let (u, v) = (r.bary.x, r.bary.y);
+                    crate::root_tint(
+                        mesh,
+                        &params.roots,
+                        r.triangle as usize,
+                        [u, v, 1.0 - u - v],
+                    )
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
+        let shapes = RegionShape::all(&params.growth);
         let storage = wgpu::BufferUsages::STORAGE;
         let rest_roots = storage_buffer(gpu, "pelage strand rest roots", &roots, storage)?;
+        let shapes_buffer = storage_buffer(gpu, "pelage strand region shapes", &shapes, storage)?;
         let pass = StrandPass::new(
             gpu,
             "strands: grow",
@@ -320,6 +369,7 @@ impl GrowStrands {
                 &mesh_buffers.normals,
                 &mesh_buffers.indices,
                 &rest_roots,
+                &shapes_buffer,
             ],
         )?;
         let mut pass = pass;
@@ -329,21 +379,34 @@ impl GrowStrands {
             roots,
             pass,
             rest_roots,
+            shapes,
+            tints,
         })
     }
 
+    /// Every region's shape, region 0 first (what the CPU mirror grows each strand's
+    /// [`StrandRoot::region`] with).
+    pub fn region_shapes(&self) -> &[RegionShape] {
+        &self.shapes
+    }
+
     /// A world box holding every point fur grown on `mesh` with `params` can reach: the
-    /// mesh's bounds grown by the longest strand (length, jitter and length map) and its
-    /// width. (A strand is a polyline of its length from its root, whatever the wind.)
+    /// mesh's bounds grown by the longest strand of any region (length, jitter and
+    /// length map) and the widest. (A strand is a polyline of its length from its root,
+    /// whatever the wind; a length texture scales by at most 1.)
     pub fn reach_of(mesh: &Mesh, params: &HairParams) -> (Vec3, Vec3) {
         let (lo, hi) = mesh.bounds();
-        let g = &params.growth;
         let map_max = params
             .roots
             .length_scale
             .as_ref()
             .map_or(1.0, |m| m.iter().copied().fold(0.0f32, f32::max));
-        let reach = g.length * (1.0 + g.length_jitter) * map_max + g.width;
+        let reach = params
+            .growth
+            .resolved_regions()
+            .iter()
+            .map(|g| g.length * (1.0 + g.length_jitter) * map_max + g.width)
+            .fold(0.0f32, f32::max);
         (lo - Vec3::splat(reach), hi + Vec3::splat(reach))
     }
 }
@@ -367,13 +430,22 @@ impl StrandStage for GrowStrands {
         color: Vec3,
         color_jitter: f32,
     ) -> crate::Result<()> {
-        recolor(
+        // Each strand keeps its region's colour (the new one for region 0) and tint.
+        let mut growth = self.pass.params.growth.clone();
+        growth.color = color;
+        let regions = growth.resolved_regions();
+        let tints = &self.tints;
+        recolor_with(
             &mut self.pass,
             &mut self.roots,
             &self.rest_roots,
             crate::roots::GROWN_BRIGHTNESS_DRAW,
             queue,
             (color, color_jitter),
+            &|i, root| {
+                let base = regions.get(root.region as usize).map_or(color, |g| g.color);
+                base * tints.get(i).copied().unwrap_or(Vec3::ONE)
+            },
         )
     }
 
@@ -764,12 +836,28 @@ pub(crate) fn recolor(
     queue: &wgpu::Queue,
     (color, jitter): (Vec3, f32),
 ) -> crate::Result<()> {
+    recolor_with(pass, roots, rest, draw, queue, (color, jitter), &|_, _| {
+        color
+    })
+}
+
+/// [`recolor`] with each strand's colour before its brightness given by `base` (of the
+/// strand's index and root), called after `(color, jitter)` is validated.
+pub(crate) fn recolor_with(
+    pass: &mut StrandPass,
+    roots: &mut [StrandRoot],
+    rest: &wgpu::Buffer,
+    draw: u32,
+    queue: &wgpu::Queue,
+    (color, jitter): (Vec3, f32),
+    base: &dyn Fn(usize, &StrandRoot) -> Vec3,
+) -> crate::Result<()> {
     let mut growth = pass.params.growth.clone();
     growth.color = color;
     growth.color_jitter = jitter;
     growth.validate()?;
-    for root in roots.iter_mut() {
-        root.color = color * crate::strand_brightness(root.seed, draw, jitter);
+    for (i, root) in roots.iter_mut().enumerate() {
+        root.color = base(i, root) * crate::strand_brightness(root.seed, draw, jitter);
     }
     pelage_gpu::write_storage(queue, "pelage strand rest roots", rest, &*roots)?;
     pelage_gpu::write_storage(queue, "pelage strand roots", &pass.buffers.roots, &*roots)?;

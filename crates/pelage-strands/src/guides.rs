@@ -955,6 +955,7 @@ mod tests {
             positions: vec![Vec3::ZERO, Vec3::X, Vec3::Z],
             normals: vec![Vec3::Y; 3],
             indices: vec![0, 1, 2],
+            uvs: Vec::new(),
         };
         let d = |p: Vec3| distance_to_triangle(&mesh, 0, p);
         assert!((d(Vec3::new(0.2, 0.5, 0.2)) - 0.5).abs() < 1e-6);

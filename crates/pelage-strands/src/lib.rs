@@ -36,8 +36,8 @@ mod simulate;
 
 pub use groom::GroomStrands;
 pub use grow::{
-    GrowStrands, GrowUniforms, MESH, STRAND_ROOTS, STRAND_VERTICES, StrandBuffers, StrandPass,
-    StrandStage, StrandStyle,
+    GrowStrands, GrowUniforms, MESH, RegionShape, STRAND_ROOTS, STRAND_VERTICES, StrandBuffers,
+    StrandPass, StrandStage, StrandStyle,
 };
 pub use guides::{GUIDE_VERTICES, GuideMemory, GuideRecord, GuideStrands, GuideUniforms};
 pub use lod::{
@@ -45,7 +45,9 @@ pub use lod::{
     bend_per_segment, fewest_segments, reduced_segments,
 };
 pub use mesh_buffers::MeshBuffers;
-pub use roots::{StrandRoot, hash_to_unit, pcg_hash, sample_roots, strand_brightness};
+pub use roots::{
+    StrandRoot, hash_to_unit, pcg_hash, root_region, root_tint, sample_roots, strand_brightness,
+};
 pub use simulate::{ColliderUniform, STATE_HEADER, SimUniforms, SimulateStrands};
 
 use pelage_gpu::{GpuError, ShaderSources};

@@ -283,7 +283,8 @@ impl ScreenBox {
 /// The fewest segments (a divisor of `growth.segments`) whose polyline stays within
 /// `max_error_pixels` of the full strand, by a curvature bound: a chord spanning arc
 /// length `L` of a curve of curvature `κ` is at most `κL²/8` from it. The curvature is
-/// that of the hair type plus the bend the force field puts in every segment. Returns
+/// that of the hair type plus the bend the force field puts in every segment, the
+/// worst over every region of `growth` (its own length and hair type). Returns
 /// the count and its predicted error in pixels.
 pub fn reduced_segments(
     growth: &GrowthParams,
@@ -293,9 +294,30 @@ pub fn reduced_segments(
     length_scale: f32,
 ) -> (u32, f32) {
     let full = growth.segments;
-    // The longest segment any strand has.
-    let seg = growth.length * (1.0 + growth.length_jitter) * length_scale.max(0.0) / full as f32;
-    let shape_curvature = match growth.hair_type {
+    let turn = bend_per_segment(growth, wind);
+    // Each region's longest segment and the curvature of its hair type.
+    let regions: Vec<(f32, f32)> = growth
+        .resolved_regions()
+        .iter()
+        .map(|g| {
+            let seg = g.length * (1.0 + g.length_jitter) * length_scale.max(0.0) / full as f32;
+            (seg, shape_curvature(g.hair_type))
+        })
+        .collect();
+    fewest_segments(full, max_error_pixels, pixels_per_unit, |k| {
+        regions
+            .iter()
+            .map(|&(seg, curvature)| {
+                let span = k as f32 * seg;
+                curvature * span * span / 8.0 + bend_error(k, seg, turn)
+            })
+            .fold(0.0f32, f32::max)
+    })
+}
+
+/// The largest curvature of a strand of `hair_type`, per scene unit (0 when straight).
+fn shape_curvature(hair_type: HairType) -> f32 {
+    match hair_type {
         HairType::Straight => 0.0,
         HairType::Wavy {
             amplitude,
@@ -308,12 +330,7 @@ pub fn reduced_segments(
             let rise = pitch / std::f32::consts::TAU;
             radius.abs() / (radius * radius + rise * rise).max(1e-12)
         }
-    };
-    let turn = bend_per_segment(growth, wind);
-    fewest_segments(full, max_error_pixels, pixels_per_unit, |k| {
-        let span = k as f32 * seg;
-        shape_curvature * span * span / 8.0 + bend_error(k, seg, turn)
-    })
+    }
 }
 
 /// The angle, radians, by which the force field can turn a strand from one segment to

@@ -40,6 +40,9 @@ pub struct StrandRoot {
     pub azimuth: f32,
     /// Linear RGB colour.
     pub color: Vec3,
+    /// The strand's region: 0 for `[hair.growth]`, `k` for its `k`-th region
+    /// ([`GrowthParams::regions`]); the growth pass reads its shape by it.
+    pub region: u32,
 }
 
 /// A strand's brightness factor `1 + jitter·(2u − 1)`, `u` being the `draw`-th hash draw
@@ -57,9 +60,67 @@ pub fn strand_brightness(seed: u32, draw: u32, jitter: f32) -> f32 {
 /// The hash draw [`sample_roots`] takes a grown strand's brightness from.
 pub(crate) const GROWN_BRIGHTNESS_DRAW: u32 = 8;
 
+/// Barycentrics of the four points a triangle's density texture is averaged over: its
+/// centroid and the midpoints from the centroid to each corner (exact for a map linear
+/// over the triangle).
+const DENSITY_SAMPLES: [[f32; 3]; 4] = [
+    [1.0 / 3.0; 3],
+    [2.0 / 3.0, 1.0 / 6.0, 1.0 / 6.0],
+    [1.0 / 6.0, 2.0 / 3.0, 1.0 / 6.0],
+    [1.0 / 6.0, 1.0 / 6.0, 2.0 / 3.0],
+];
+
+/// The region of a root at barycentrics `bary` of triangle `tri`: the per-vertex map's
+/// value at the nearest corner, or the region texture's texel there (nearest), or 0.
+pub fn root_region(mesh: &Mesh, roots: &RootParams, tri: usize, bary: [f32; 3]) -> u32 {
+    if let Some(map) = &roots.region {
+        let corner = (0..3)
+            .max_by(|&a, &b| bary[a].total_cmp(&bary[b]))
+            .unwrap_or(0);
+        let idx = mesh.indices.get(tri * 3 + corner).copied().unwrap_or(0) as usize;
+        return map.get(idx).copied().unwrap_or(0);
+    }
+    match (roots.textures.region.as_ref(), mesh.uv_at(tri, bary)) {
+        (Some(map), Some(uv)) => map
+            .image
+            .as_deref()
+            .map_or(0, |image| u32::from(image.nearest(uv)[0])),
+        _ => 0,
+    }
+}
+
+/// The colour texture's linear RGB at a root (what its colour is multiplied by), or 1
+/// without a colour texture.
+pub fn root_tint(mesh: &Mesh, roots: &RootParams, tri: usize, bary: [f32; 3]) -> Vec3 {
+    let image = roots
+        .textures
+        .color
+        .as_ref()
+        .and_then(|m| m.image.as_deref());
+    match (image, mesh.uv_at(tri, bary)) {
+        (Some(image), Some(uv)) => image.color(uv),
+        _ => Vec3::ONE,
+    }
+}
+
+/// A scalar texture's value (red / 255, bilinear) at a root, or 1 without the texture.
+fn texture_scalar(
+    mesh: &Mesh,
+    map: Option<&pelage_scene::TextureMap>,
+    tri: usize,
+    bary: [f32; 3],
+) -> f32 {
+    match (map.and_then(|m| m.image.as_deref()), mesh.uv_at(tri, bary)) {
+        (Some(image), Some(uv)) => image.scalar(uv),
+        _ => 1.0,
+    }
+}
+
 /// Places `roots.count` strands over `mesh`, each triangle getting a share proportional
-/// to its area (times its corners' mean density, if a density map is given).
-/// Zero-area triangles get no strands.
+/// to its area (times its corners' mean density and its density texture's mean, if
+/// given). Zero-area triangles get no strands. Each root takes its region from the
+/// region map ([`root_region`]) and grows with that region's length, jitters, width and
+/// colour (times the colour texture, [`root_tint`]); the length maps scale its length.
 pub fn sample_roots(
     mesh: &Mesh,
     roots: &RootParams,
@@ -68,6 +129,8 @@ pub fn sample_roots(
     let report = mesh.validate()?;
     roots.validate(mesh.positions.len())?;
     growth.validate()?;
+    roots.validate_maps(growth.regions.len() + 1, Some(mesh))?;
+    let regions = growth.resolved_regions();
 
     let areas = mesh.triangle_areas();
     let mut degenerate = vec![false; areas.len()];
@@ -93,7 +156,16 @@ pub fn sample_roots(
         let w = if degenerate[t] {
             0.0
         } else {
-            f64::from(area) * f64::from(corner_mean(&roots.density, t, [1.0 / 3.0; 3]))
+            let texture = roots.textures.density.as_ref().map_or(1.0, |_| {
+                DENSITY_SAMPLES
+                    .iter()
+                    .map(|&b| texture_scalar(mesh, roots.textures.density.as_ref(), t, b))
+                    .sum::<f32>()
+                    / DENSITY_SAMPLES.len() as f32
+            });
+            f64::from(area)
+                * f64::from(corner_mean(&roots.density, t, [1.0 / 3.0; 3]))
+                * f64::from(texture)
         };
         total += w.max(0.0);
         cdf.push(total);
@@ -122,24 +194,28 @@ pub fn sample_roots(
             let bu = 1.0 - su;
             let bv = next() * su;
             let bw = (1.0 - bu - bv).max(0.0);
-            let length_scale = corner_mean(&roots.length_scale, tri, [bu, bv, bw]);
-            let length =
-                growth.length * (1.0 + growth.length_jitter * (2.0 * next() - 1.0)) * length_scale;
+            let bary = [bu, bv, bw];
+            let region = root_region(mesh, roots, tri, bary);
+            let g = regions.get(region as usize).unwrap_or(growth);
+            let length_scale = corner_mean(&roots.length_scale, tri, bary)
+                * texture_scalar(mesh, roots.textures.length_scale.as_ref(), tri, bary);
+            let length = g.length * (1.0 + g.length_jitter * (2.0 * next() - 1.0)) * length_scale;
             let phase = next();
-            let tilt = growth.direction_jitter * next();
+            let tilt = g.direction_jitter * next();
             let azimuth = std::f32::consts::TAU * next();
-            let brightness = 1.0 + growth.color_jitter * (2.0 * next() - 1.0);
+            let brightness = 1.0 + g.color_jitter * (2.0 * next() - 1.0);
             StrandRoot {
                 triangle: tri as u32,
                 seed: h0,
                 bary: Vec2::new(bu, bv),
                 // A zero length-map value makes a zero-length strand, which is legal and invisible.
                 length: length.max(0.0),
-                width: growth.width,
+                width: g.width,
                 phase,
                 tilt,
                 azimuth,
-                color: growth.color * brightness,
+                color: g.color * root_tint(mesh, roots, tri, bary) * brightness,
+                region,
             }
         })
         .collect();
@@ -149,6 +225,40 @@ pub fn sample_roots(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_region_fits_in_the_padding_of_a_64_byte_root() {
+        assert_eq!(StrandRoot::min_size().get(), 64);
+        assert_eq!(<StrandRoot as encase::ShaderSize>::SHADER_SIZE.get(), 64);
+    }
+
+    #[test]
+    fn per_vertex_regions_take_the_nearest_corner() {
+        let mesh = Mesh::plane(1.0, 1.0, 1, 1).unwrap();
+        let roots = RootParams {
+            count: 2000,
+            region: Some(vec![1, 0, 0, 0]),
+            ..Default::default()
+        };
+        let growth = GrowthParams {
+            regions: vec![pelage_scene::RegionParams {
+                width: Some(0.01),
+                ..Default::default()
+            }],
+            ..Default::default()
+        };
+        let sampled = sample_roots(&mesh, &roots, &growth).unwrap();
+        for r in &sampled {
+            let bary = [r.bary.x, r.bary.y, 1.0 - r.bary.x - r.bary.y];
+            let nearest = (0..3).max_by(|&a, &b| bary[a].total_cmp(&bary[b])).unwrap();
+            let vertex = mesh.indices[r.triangle as usize * 3 + nearest];
+            assert_eq!(r.region, u32::from(vertex == 0));
+            assert_eq!(r.width, if r.region == 1 { 0.01 } else { growth.width });
+        }
+        // Only the roots nearest vertex 0 are in region 1: some, not all.
+        let ones = sampled.iter().filter(|r| r.region == 1).count();
+        assert!(ones > 0 && ones < sampled.len(), "{ones}");
+    }
 
     #[test]
     fn brightness_reproduces_sampled_colours_exactly() {
@@ -208,6 +318,7 @@ mod tests {
             ],
             normals: vec![Vec3::Y; 6],
             indices: vec![0, 2, 1, 3, 5, 4],
+            uvs: Vec::new(),
         };
         let roots = sample_roots(
             &mesh,
@@ -240,6 +351,7 @@ mod tests {
             ],
             normals: vec![Vec3::Y; 6],
             indices: vec![0, 2, 1, 3, 5, 4],
+            uvs: Vec::new(),
         };
         let params = RootParams {
             count: 1000,

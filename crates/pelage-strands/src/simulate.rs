@@ -691,6 +691,7 @@ mod tests {
             tilt: 0.0,
             azimuth: 0.0,
             color: Vec3::ONE,
+            region: 0,
         };
         let straight = HairParams {
             growth: pelage_scene::GrowthParams {

@@ -49,7 +49,12 @@ fn gpu_matches_cpu_mirror_for_every_hair_type_and_time() {
             let mut strands = GrowStrands::new(&gpu, &mesh, &buffers, &p).unwrap();
             for t in [0.0, 0.37, 5.0, 1234.5] {
                 let gpu_vertices = grow_on_gpu(&gpu, &mut strands, t);
-                let cpu_vertices = grow_strands(&mesh, strands.roots(), &strands.uniforms_at(t));
+                let cpu_vertices = grow_strands(
+                    &mesh,
+                    strands.roots(),
+                    &strands.uniforms_at(t),
+                    strands.region_shapes(),
+                );
                 assert_eq!(gpu_vertices.len(), cpu_vertices.len());
                 let worst = gpu_vertices
                     .iter()

@@ -41,7 +41,7 @@ fn simplified_strands_match_the_cpu_mirror_and_seed_002_widths() {
         strands.set_lod(level).unwrap();
         let gpu_vertices = grow_on_gpu(&gpu, &mut strands, 0.7);
         let u = strands.uniforms_at(0.7);
-        let cpu = grow_strands(&mesh, strands.roots(), &u);
+        let cpu = grow_strands(&mesh, strands.roots(), &u, strands.region_shapes());
         let layout = strands.frame().unwrap().layout;
         assert_eq!(
             layout,

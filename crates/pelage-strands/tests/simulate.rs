@@ -84,6 +84,7 @@ fn posed(mesh: &Mesh, rotation: Quat, offset: Vec3) -> Mesh {
             .collect(),
         normals: mesh.normals.iter().map(|&n| rotation * n).collect(),
         indices: mesh.indices.clone(),
+        uvs: Vec::new(),
     }
 }
 

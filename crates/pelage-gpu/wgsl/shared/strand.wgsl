@@ -13,4 +13,6 @@ struct StrandRoot {
     tilt: f32,
     azimuth: f32,
     color: vec3<f32>,
+    // The strand's region (0 = the base growth parameters); grow.wgsl reads its shape.
+    region: u32,
 }

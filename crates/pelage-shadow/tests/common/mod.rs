@@ -47,6 +47,7 @@ pub fn strand_buffers(gpu: &Gpu, strands: &[Vec<Vec3>], width: f32) -> StrandBuf
             tilt: 0.0,
             azimuth: 0.0,
             color: Vec3::ONE,
+            region: 0,
         })
         .collect();
     let usage = wgpu::BufferUsages::STORAGE;
@@ -93,6 +94,7 @@ pub fn dummy_mesh(gpu: &Gpu) -> MeshBuffers {
         ],
         normals: vec![Vec3::Y; 3],
         indices: vec![0, 2, 1],
+        uvs: Vec::new(),
     };
     MeshBuffers::upload(gpu, &mesh).unwrap()
 }

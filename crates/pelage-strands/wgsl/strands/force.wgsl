@@ -24,11 +24,6 @@ struct GrowUniforms {
     lod_s_min: f32,
     // 0 = flat, 1 = PN triangle.
     surface: u32,
-    // 0 = straight, 1 = wavy, 2 = curly.
-    hair_type: u32,
-    // wavy: amplitude, frequency; curly: radius, pitch.
-    shape_a: f32,
-    shape_b: f32,
     force_weight: f32,
     time: f32,
     gravity: vec3<f32>,

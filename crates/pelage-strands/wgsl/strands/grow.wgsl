@@ -1,8 +1,9 @@
 // Stage 1: grow strands from a triangle mesh.
 //
 // Reads:  the mesh (positions and normals as tightly packed f32 x3, a u32 triangle
-//         list) and one StrandRoot per strand (triangle, barycentrics, seed, length,
-//         jitter), plus the frame's GrowUniforms (growth shape, gravity, wind, time).
+//         list), one StrandRoot per strand (triangle, barycentrics, seed, length,
+//         jitter, region), one RegionShape per region (the hair type each strand's
+//         region grows with), plus the frame's GrowUniforms (gravity, wind, time).
 // Writes: `vertices`, (segments / step + 1) vec4 per strand, one strand after the other:
 //         xyz = position, w = strand parameter in [0, 1] (0 at the root, 1 at the tip);
 //         and `drawn[strand].width`, the rest width times the level of detail's width
@@ -27,8 +28,18 @@
 @group(0) @binding(2) var<storage, read> normals: array<f32>;
 @group(0) @binding(3) var<storage, read> indices: array<u32>;
 @group(0) @binding(4) var<storage, read> roots: array<StrandRoot>;
-@group(0) @binding(5) var<storage, read_write> vertices: array<vec4<f32>>;
-@group(0) @binding(6) var<storage, read_write> drawn: array<StrandRoot>;
+@group(0) @binding(5) var<storage, read> regions: array<RegionShape>;
+@group(0) @binding(6) var<storage, read_write> vertices: array<vec4<f32>>;
+@group(0) @binding(7) var<storage, read_write> drawn: array<StrandRoot>;
+
+// A region's strand shape (RegionShape in pelage-strands/src/grow.rs).
+struct RegionShape {
+    // 0 = straight, 1 = wavy, 2 = curly.
+    kind: u32,
+    // wavy: amplitude, frequency; curly: radius, pitch.
+    a: f32,
+    b: f32,
+}
 
 fn load_position(i: u32) -> vec3<f32> {
     return vec3<f32>(positions[3u * i], positions[3u * i + 1u], positions[3u * i + 2u]);
@@ -110,17 +121,17 @@ fn eval_surface(tri: u32, bary: vec2<f32>) -> Surface {
 }
 
 // The unit tangent of the segment whose midpoint lies at arc length s, for a strand
-// whose growth direction is d with transported frame (e1, e2).
-fn shaped_tangent(d: vec3<f32>, e1: vec3<f32>, e2: vec3<f32>, s: f32) -> vec3<f32> {
-    if u.hair_type == 1u {
-        let k = 2.0 * PI * u.shape_b;
-        let theta = atan(k * u.shape_a * cos(k * s));
+// of shape `shape` whose growth direction is d with transported frame (e1, e2).
+fn shaped_tangent(shape: RegionShape, d: vec3<f32>, e1: vec3<f32>, e2: vec3<f32>, s: f32) -> vec3<f32> {
+    if shape.kind == 1u {
+        let k = 2.0 * PI * shape.b;
+        let theta = atan(k * shape.a * cos(k * s));
         return d * cos(theta) + e1 * sin(theta);
     }
-    if u.hair_type == 2u {
-        let circumference = 2.0 * PI * u.shape_a;
-        let turn_length = sqrt(circumference * circumference + u.shape_b * u.shape_b);
-        let theta = atan2(circumference, u.shape_b);
+    if shape.kind == 2u {
+        let circumference = 2.0 * PI * shape.a;
+        let turn_length = sqrt(circumference * circumference + shape.b * shape.b);
+        let theta = atan2(circumference, shape.b);
         let phi = 2.0 * PI * s / turn_length;
         return d * cos(theta) + (e1 * cos(phi) + e2 * sin(phi)) * sin(theta);
     }
@@ -134,6 +145,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
         return;
     }
     let root = roots[strand];
+    // A region beyond the buffer (never written by the CPU) reads the last one.
+    let shape = regions[min(root.region, arrayLength(&regions) - 1u)];
     let x = (f32(strand) + 0.5) / f32(u.strand_total);
     drawn[strand].width = root.width * lod_scale(x, u.lod_lambda, u.lod_t_e, u.lod_s_max, u.lod_s_min);
     let surf = eval_surface(root.triangle, root.bary);
@@ -155,7 +168,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     vertices[base] = vec4<f32>(p, 0.0);
     for (var i = 0u; i < segments; i++) {
         let s = (f32(i) + 0.5) * seg_len;
-        let tangent = shaped_tangent(d, e1, e2, s);
+        let tangent = shaped_tangent(shape, d, e1, e2, s);
         p = p + tangent * seg_len;
         if (i + 1u) % step == 0u {
             vertices[base + (i + 1u) / step] = vec4<f32>(p, f32(i + 1u) / f32(segments));

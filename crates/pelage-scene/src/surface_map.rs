@@ -1,0 +1,308 @@
+//! Texture maps over a mesh's UVs ([`Mesh::uvs`](crate::Mesh::uvs)): PNG images that
+//! the root sampler reads at each root (regions, density, length, colour; see
+//! [`RootTextures`](crate::RootTextures)).
+//!
+//! The roots are placed on the CPU, so a map is only ever sampled on the CPU: no GPU
+//! texture is made. `(u, v) = (0, 0)` is the image's bottom-left corner and `(1, 1)` its
+//! top-right (OBJ's convention; the image's first row is its top); coordinates outside
+//! [0, 1] clamp to the edge. [`MapImage::nearest`] reads the texel that holds `(u, v)`
+//! (for region indices, which must not be blended), [`MapImage::bilinear`] blends the
+//! four texels around it, texel centres at `((x + ½) / width, 1 − (y + ½) / height)`.
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use glam::{Vec2, Vec3};
+use serde::{Deserialize, Serialize};
+
+/// The most bytes a texture map file may have: 64 MiB.
+pub const MAX_MAP_FILE_BYTES: u64 = 64 << 20;
+
+/// The widest and tallest texture map accepted, texels.
+pub const MAX_MAP_SIZE: u32 = 8192;
+
+/// Why a texture map could not be read.
+#[derive(Debug, thiserror::Error)]
+pub enum MapError {
+    /// The file could not be read (or is larger than [`MAX_MAP_FILE_BYTES`]).
+    #[error("could not read texture map {}: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The file is not an image `image` can decode (pelage reads PNG), or it is larger
+    /// than [`MAX_MAP_SIZE`] on a side.
+    #[error(
+        "could not decode texture map {}: {message} (a PNG of at most {MAX_MAP_SIZE} x {MAX_MAP_SIZE} texels is expected)",
+        path.display()
+    )]
+    Decode {
+        /// The file.
+        path: PathBuf,
+        /// The decoder's report.
+        message: String,
+    },
+}
+
+/// An RGBA8 image held for sampling: `texels[y * width + x]`, row 0 at the top.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MapImage {
+    width: u32,
+    height: u32,
+    texels: Vec<[u8; 4]>,
+}
+
+impl MapImage {
+    /// An image of `width` x `height` texels (row 0 at the top). `None` when a side is
+    /// 0 or above [`MAX_MAP_SIZE`], or `texels` does not hold `width * height` texels.
+    pub fn new(width: u32, height: u32, texels: Vec<[u8; 4]>) -> Option<Self> {
+        let sides_ok = (1..=MAX_MAP_SIZE).contains(&width) && (1..=MAX_MAP_SIZE).contains(&height);
+        (sides_ok && texels.len() == width as usize * height as usize).then_some(Self {
+            width,
+            height,
+            texels,
+        })
+    }
+
+    /// Decodes an image file's bytes (PNG), at most [`MAX_MAP_SIZE`] texels on a side.
+    /// `path` only names the file in errors.
+    pub fn decode(bytes: &[u8], path: &Path) -> Result<Self, MapError> {
+        let decode_error = |message: String| MapError::Decode {
+            path: path.to_path_buf(),
+            message,
+        };
+        let mut reader = image::ImageReader::new(std::io::Cursor::new(bytes))
+            .with_guessed_format()
+            .map_err(|e| decode_error(e.to_string()))?;
+        let mut limits = image::Limits::default();
+        limits.max_image_width = Some(MAX_MAP_SIZE);
+        limits.max_image_height = Some(MAX_MAP_SIZE);
+        reader.limits(limits);
+        let rgba = reader
+            .decode()
+            .map_err(|e| decode_error(e.to_string()))?
+            .into_rgba8();
+        let (width, height) = rgba.dimensions();
+        let texels = rgba.pixels().map(|p| p.0).collect();
+        Self::new(width, height, texels)
+            .ok_or_else(|| decode_error(format!("{width} x {height} texels")))
+    }
+
+    /// Reads and decodes the file at `path` (at most [`MAX_MAP_FILE_BYTES`]).
+    pub fn load(path: &Path) -> Result<Self, MapError> {
+        let bytes = crate::limits::read_capped(path, MAX_MAP_FILE_BYTES, "texture maps").map_err(
+            |source| MapError::Io {
+                path: path.to_path_buf(),
+                source,
+            },
+        )?;
+        Self::decode(&bytes, path)
+    }
+
+    /// Width in texels.
+    pub fn width(&self) -> u32 {
+        self.width
+    }
+
+    /// Height in texels.
+    pub fn height(&self) -> u32 {
+        self.height
+    }
+
+    /// Every texel, row 0 (the top) first.
+    pub fn texels(&self) -> &[[u8; 4]] {
+        &self.texels
+    }
+
+    /// Texel `(x, y)`, both clamped into the image.
+    pub fn texel(&self, x: i64, y: i64) -> [u8; 4] {
+        let x = x.clamp(0, i64::from(self.width) - 1) as usize;
+        let y = y.clamp(0, i64::from(self.height) - 1) as usize;
+        self.texels
+            .get(y * self.width as usize + x)
+            .copied()
+            .unwrap_or_default()
+    }
+
+    /// `uv` in texel units, the image's top-left corner at (0, 0) (non-finite reads as 0).
+    fn texel_space(&self, uv: Vec2) -> Vec2 {
+        let uv = if uv.is_finite() { uv } else { Vec2::ZERO };
+        Vec2::new(uv.x * self.width as f32, (1.0 - uv.y) * self.height as f32)
+    }
+
+    /// The texel holding `uv` (nearest lookup, clamped to the edge).
+    pub fn nearest(&self, uv: Vec2) -> [u8; 4] {
+        let t = self.texel_space(uv).floor();
+        self.texel(t.x as i64, t.y as i64)
+    }
+
+    /// The bilinear blend at `uv` of the four texels around it, each read through
+    /// `decode` (the red channel / 255 for a scalar map, sRGB to linear for colour).
+    pub fn bilinear(&self, uv: Vec2, decode: impl Fn([u8; 4]) -> Vec3) -> Vec3 {
+        let t = self.texel_space(uv) - Vec2::splat(0.5);
+        let base = t.floor();
+        let f = t - base;
+        let (x, y) = (base.x as i64, base.y as i64);
+        let row = |y: i64| decode(self.texel(x, y)).lerp(decode(self.texel(x + 1, y)), f.x);
+        row(y).lerp(row(y + 1), f.y)
+    }
+
+    /// The red channel / 255 at `uv`, blended bilinearly (a scalar map's value, in [0, 1]).
+    pub fn scalar(&self, uv: Vec2) -> f32 {
+        self.bilinear(uv, |t| Vec3::splat(f32::from(t[0]) / 255.0))
+            .x
+    }
+
+    /// The linear RGB colour at `uv`: each texel's sRGB colour made linear, then blended
+    /// bilinearly.
+    pub fn color(&self, uv: Vec2) -> Vec3 {
+        self.bilinear(uv, |t| {
+            Vec3::new(
+                srgb_to_linear(t[0]),
+                srgb_to_linear(t[1]),
+                srgb_to_linear(t[2]),
+            )
+        })
+    }
+}
+
+/// The sRGB transfer function inverted: an 8-bit sRGB channel as linear [0, 1].
+pub fn srgb_to_linear(c: u8) -> f32 {
+    let c = f32::from(c) / 255.0;
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// A texture map named by its path in a scene file (written as a plain string), and
+/// the image once [`TextureMap::load`] has read it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(from = "PathBuf", into = "PathBuf")]
+pub struct TextureMap {
+    /// The PNG file (a scene file's relative path is made relative to its folder).
+    pub path: PathBuf,
+    /// The decoded image; `None` until loaded (root sampling refuses an unloaded map).
+    pub image: Option<Arc<MapImage>>,
+}
+
+impl From<PathBuf> for TextureMap {
+    fn from(path: PathBuf) -> Self {
+        Self { path, image: None }
+    }
+}
+
+impl From<TextureMap> for PathBuf {
+    fn from(map: TextureMap) -> Self {
+        map.path
+    }
+}
+
+impl TextureMap {
+    /// A map already in memory; `path` only names it in messages.
+    pub fn from_image(path: impl Into<PathBuf>, image: MapImage) -> Self {
+        Self {
+            path: path.into(),
+            image: Some(Arc::new(image)),
+        }
+    }
+
+    /// Reads the image at [`TextureMap::path`] (again, if it was loaded).
+    pub fn load(&mut self) -> Result<(), MapError> {
+        self.image = Some(Arc::new(MapImage::load(&self.path)?));
+        Ok(())
+    }
+
+    /// The image, or an error naming the key `name` when it was never loaded.
+    pub fn loaded(&self, name: &str) -> Result<&MapImage, crate::ParamError> {
+        self.image.as_deref().ok_or_else(|| {
+            crate::ParamError::new(
+                name,
+                &self.path,
+                "the texture map was not loaded (SceneFile::load loads it; otherwise call TextureMap::load)",
+            )
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn gradient() -> MapImage {
+        // 2 x 2: top row red 0 and 255, bottom row 100 and 200.
+        MapImage::new(
+            2,
+            2,
+            vec![
+                [0, 0, 0, 255],
+                [255, 0, 0, 255],
+                [100, 0, 0, 255],
+                [200, 0, 0, 255],
+            ],
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn nearest_reads_the_texel_holding_uv_with_v_up() {
+        let m = gradient();
+        assert_eq!(m.nearest(Vec2::new(0.25, 0.75))[0], 0);
+        assert_eq!(m.nearest(Vec2::new(0.75, 0.75))[0], 255);
+        assert_eq!(m.nearest(Vec2::new(0.25, 0.25))[0], 100);
+        assert_eq!(m.nearest(Vec2::new(0.75, 0.25))[0], 200);
+        // Clamped outside [0, 1], and at exactly 1.
+        assert_eq!(m.nearest(Vec2::new(1.0, 0.0))[0], 200);
+        assert_eq!(m.nearest(Vec2::new(-3.0, 7.0))[0], 0);
+        assert_eq!(m.nearest(Vec2::NAN)[0], 100);
+    }
+
+    #[test]
+    fn bilinear_is_exact_at_texel_centres_and_blends_between() {
+        let m = gradient();
+        assert_eq!(m.scalar(Vec2::new(0.25, 0.75)), 0.0);
+        assert_eq!(m.scalar(Vec2::new(0.75, 0.25)), 200.0 / 255.0);
+        let centre = m.scalar(Vec2::splat(0.5));
+        assert!((centre - (0.0 + 255.0 + 100.0 + 200.0) / 4.0 / 255.0).abs() < 1e-6);
+        // Halfway along the top row.
+        let top = m.scalar(Vec2::new(0.5, 0.75));
+        assert!((top - 0.5).abs() < 1e-6, "{top}");
+    }
+
+    #[test]
+    fn srgb_decoding_matches_the_standard() {
+        assert_eq!(srgb_to_linear(0), 0.0);
+        assert_eq!(srgb_to_linear(255), 1.0);
+        assert!((srgb_to_linear(188) - 0.5029).abs() < 1e-3);
+    }
+
+    #[test]
+    fn bad_files_are_errors_naming_the_file() {
+        let e = MapImage::decode(b"not a png", Path::new("x.png")).unwrap_err();
+        assert!(e.to_string().contains("x.png"), "{e}");
+        let e = MapImage::load(Path::new("/no/such/map.png")).unwrap_err();
+        assert!(matches!(e, MapError::Io { .. }), "{e}");
+        assert!(MapImage::new(0, 1, vec![]).is_none());
+        assert!(MapImage::new(2, 2, vec![[0; 4]; 3]).is_none());
+        assert!(
+            MapImage::new(MAX_MAP_SIZE + 1, 1, vec![[0; 4]; MAX_MAP_SIZE as usize + 1]).is_none()
+        );
+    }
+
+    #[test]
+    fn an_oversized_png_is_refused() {
+        let mut bytes = Vec::new();
+        image::RgbaImage::new(MAX_MAP_SIZE + 1, 1)
+            .write_to(
+                &mut std::io::Cursor::new(&mut bytes),
+                image::ImageFormat::Png,
+            )
+            .unwrap();
+        let e = MapImage::decode(&bytes, Path::new("big.png")).unwrap_err();
+        assert!(matches!(e, MapError::Decode { .. }), "{e}");
+    }
+}
