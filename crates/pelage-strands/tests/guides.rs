@@ -449,6 +449,7 @@ fn turned(mesh: &Mesh, rotation: Quat) -> Mesh {
     Mesh {
         positions: mesh.positions.iter().map(|&p| rotation * p).collect(),
         normals: mesh.normals.iter().map(|&n| rotation * n).collect(),
+        uvs: mesh.uvs.clone(),
         indices: mesh.indices.clone(),
     }
 }
