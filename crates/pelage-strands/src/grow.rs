@@ -509,23 +509,6 @@ impl StrandPass {
         Self::with_inputs(gpu, label, shader, params, reach, roots, &inputs, None)
     }
 
-    /// [`StrandPass::new`] with a uniform buffer of the method's own constants bound
-    /// after the drawn roots (`guides.wgsl`'s clump and noise, say).
-    #[allow(clippy::too_many_arguments)]
-    pub(crate) fn with_constants(
-        gpu: &Gpu,
-        label: &'static str,
-        shader: &str,
-        params: &HairParams,
-        reach: (Vec3, Vec3),
-        roots: &[StrandRoot],
-        inputs: &[&wgpu::Buffer],
-        constants: Option<&wgpu::Buffer>,
-    ) -> crate::Result<Self> {
-        let inputs: Vec<Input> = inputs.iter().copied().map(Input::Read).collect();
-        Self::with_inputs(gpu, label, shader, params, reach, roots, &inputs, constants)
-    }
-
     /// [`StrandPass::new`] with inputs of any [`Input`] kind, and optionally a uniform
     /// buffer of the method's own constants bound after the drawn roots.
     #[allow(clippy::too_many_arguments)]

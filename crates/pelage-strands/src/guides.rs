@@ -10,9 +10,10 @@ use pelage_scene::{
     SurfaceInterpolation, WindParams,
 };
 
-use crate::grow::{StrandPass, StrandStage};
+use crate::grow::{Input, StrandPass, StrandStage};
 use crate::lod::{bend_error, bend_per_segment, fewest_segments};
 use crate::roots::GROWN_BRIGHTNESS_DRAW;
+use crate::simulate::closest_on_triangle;
 use crate::{
     GroomStrands, LodLevel, MESH, MeshBuffers, STRAND_ROOTS, STRAND_VERTICES, SimulateStrands,
     StrandFrame, StrandRoot, StrandsError, sample_roots,
@@ -284,7 +285,7 @@ impl GuideStrands {
             &render,
             params.noise,
         );
-        let pass = StrandPass::with_constants(
+        let pass = StrandPass::with_inputs(
             gpu,
             "strands: guides",
             "strands/guides.wgsl",
@@ -292,11 +293,11 @@ impl GuideStrands {
             reach,
             &roots,
             &[
-                &mesh_buffers.positions,
-                &mesh_buffers.indices,
-                &rest_roots,
-                &records_buffer,
-                &guide_stage.buffers().vertices,
+                Input::Read(&mesh_buffers.positions),
+                Input::Read(&mesh_buffers.indices),
+                Input::Read(&rest_roots),
+                Input::Read(&records_buffer),
+                Input::Read(&guide_stage.buffers().vertices),
             ],
             Some(&constants_buffer.buffer),
         )?;
@@ -700,44 +701,13 @@ fn check_guides_on_mesh(mesh: &Mesh, guides: &Resampled, limit: f32) -> crate::R
     Ok(())
 }
 
-/// Distance from `p` to triangle `t` of `mesh` (Ericson, Real-Time Collision Detection
-/// 5.1.5: the closest point by Voronoi region).
+/// Distance from `p` to triangle `t` of `mesh` (its closest point,
+/// [`closest_on_triangle`]).
 fn distance_to_triangle(mesh: &Mesh, t: usize, p: Vec3) -> f32 {
     let corner = |k: usize| mesh.positions[mesh.indices[t * 3 + k] as usize];
     let (a, b, c) = (corner(0), corner(1), corner(2));
-    let (ab, ac, ap) = (b - a, c - a, p - a);
-    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
-    if d1 <= 0.0 && d2 <= 0.0 {
-        return p.distance(a);
-    }
-    let bp = p - b;
-    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
-    if d3 >= 0.0 && d4 <= d3 {
-        return p.distance(b);
-    }
-    let vc = d1 * d4 - d3 * d2;
-    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-        return p.distance(a + ab * (d1 / (d1 - d3)));
-    }
-    let cp = p - c;
-    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
-    if d6 >= 0.0 && d5 <= d6 {
-        return p.distance(c);
-    }
-    let vb = d5 * d2 - d1 * d6;
-    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-        return p.distance(a + ac * (d2 / (d2 - d6)));
-    }
-    let va = d3 * d6 - d5 * d4;
-    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
-        return p.distance(b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6))));
-    }
-    let denom = va + vb + vc;
-    if denom.abs() <= f32::MIN_POSITIVE {
-        // A degenerate triangle: its nearest corner.
-        return p.distance(a).min(p.distance(b)).min(p.distance(c));
-    }
-    p.distance(a + ab * (vb / denom) + ac * (vc / denom))
+    let (u, v, w) = closest_on_triangle(p, a, b, c);
+    p.distance(a * u + b * v + c * w)
 }
 
 /// A uniform grid of cubic cells over a box, cells numbered x fastest.

@@ -479,22 +479,7 @@ impl StrandStage for SimulateStrands {
 /// Refuses mesh buffers that do not hold `mesh`.
 fn check_mesh(mesh: &Mesh, buffers: &MeshBuffers) -> crate::Result<()> {
     mesh.validate()?;
-    if buffers.vertex_count as usize != mesh.positions.len()
-        || buffers.triangle_count as usize != mesh.indices.len() / 3
-    {
-        return Err(StrandsError::MeshMismatch {
-            buffers: format!(
-                "{} vertices, {} triangles",
-                buffers.vertex_count, buffers.triangle_count
-            ),
-            mesh: format!(
-                "{} vertices, {} triangles",
-                mesh.positions.len(),
-                mesh.indices.len() / 3
-            ),
-        });
-    }
-    Ok(())
+    buffers.check_matches(mesh)
 }
 
 /// A root's frame on the mesh at rest, as `root_pose` in WGSL computes it.
@@ -614,8 +599,8 @@ fn nearest_triangle(mesh: &Mesh, triangles: &[u32], p: Vec3) -> (u32, Vec2) {
 }
 
 /// Barycentrics `(u, v, w)` of the point of triangle `abc` nearest to `p` (Ericson,
-/// Real-Time Collision Detection, 5.1.5).
-fn closest_on_triangle(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> (f32, f32, f32) {
+/// Real-Time Collision Detection, 5.1.5); a degenerate triangle's nearest corner.
+pub(crate) fn closest_on_triangle(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> (f32, f32, f32) {
     let ab = b - a;
     let ac = c - a;
     let ap = p - a;
@@ -651,9 +636,20 @@ fn closest_on_triangle(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> (f32, f32, f32) {
         let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
         return (0.0, 1.0 - w, w);
     }
-    let denom = 1.0 / (va + vb + vc);
-    let v = vb * denom;
-    let w = vc * denom;
+    let denom = va + vb + vc;
+    if denom.abs() <= f32::MIN_POSITIVE {
+        // A degenerate triangle: its nearest corner.
+        let (da, db, dc) = (p.distance(a), p.distance(b), p.distance(c));
+        return if da <= db && da <= dc {
+            (1.0, 0.0, 0.0)
+        } else if db <= dc {
+            (0.0, 1.0, 0.0)
+        } else {
+            (0.0, 0.0, 1.0)
+        };
+    }
+    let v = vb / denom;
+    let w = vc / denom;
     (1.0 - v - w, v, w)
 }
 
