@@ -42,7 +42,10 @@ struct GuideUniforms {
 @group(0) @binding(2) var<storage, read> indices: array<u32>;
 @group(0) @binding(3) var<storage, read> roots: array<StrandRoot>;
 @group(0) @binding(4) var<storage, read> records: array<u32>;
-@group(0) @binding(5) var<storage, read> guides: array<vec4<f32>>;
+// Declared vec3 (stride 16, the buffer's vec4 layout): a load reads the three used
+// components, not four. On lavapipe every component of a load at a per-lane address
+// is a gathered load of its own, and the guides' points are most of this pass's loads.
+@group(0) @binding(5) var<storage, read> guides: array<vec3<f32>>;
 @group(0) @binding(6) var<storage, read_write> vertices: array<vec4<f32>>;
 @group(0) @binding(7) var<storage, read_write> drawn: array<StrandRoot>;
 @group(0) @binding(8) var<uniform> g: GuideUniforms;
@@ -93,10 +96,10 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     let w2 = select(q2, rest, k == 3u);
     let w3 = select(0.0, rest, k == 4u);
     // The guides' roots, read once.
-    let o0 = guides[a0].xyz;
-    let o1 = guides[a1].xyz;
-    let o2 = guides[a2].xyz;
-    let o3 = guides[a3].xyz;
+    let o0 = guides[a0];
+    let o1 = guides[a1];
+    let o2 = guides[a2];
+    let o3 = guides[a3];
 
     // The noise direction, from the strand's seed.
     var h = pcg_hash(root.seed ^ NOISE_SALT);
@@ -113,11 +116,11 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     for (var v = 0u; v <= segments / step; v++) {
         let i = v * step;
         let s = f32(i) / f32(segments);
-        let nearest = guides[a0 + i].xyz;
+        let nearest = guides[a0 + i];
         var blend = r + (nearest - o0) * w0;
-        blend = blend + (guides[a1 + i].xyz - o1) * w1;
-        blend = blend + (guides[a2 + i].xyz - o2) * w2;
-        blend = blend + (guides[a3 + i].xyz - o3) * w3;
+        blend = blend + (guides[a1 + i] - o1) * w1;
+        blend = blend + (guides[a2 + i] - o2) * w2;
+        blend = blend + (guides[a3 + i] - o3) * w3;
         blend = blend + drift * (s * s);
         let p = blend + (nearest - blend) * (g.clump * s);
         vertices[base + v] = vec4<f32>(p, s);
