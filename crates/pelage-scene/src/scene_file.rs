@@ -353,22 +353,13 @@ impl SceneFile {
                 "needs a [groom] table: without a mesh there is nothing to grow fur from",
             ));
         }
-        if !self.hair.growth.regions.is_empty() {
-            let other = if self.groom.is_some() {
-                Some("[groom]")
-            } else if self.dynamics.is_some() {
-                Some("[dynamics]")
-            } else {
-                None
-            };
-            if let Some(other) = other {
-                return Err(crate::ParamError::new(
-                    "growth.regions",
-                    format!("{} regions with {other}", self.hair.growth.regions.len()),
-                    "regions are grown from the mesh by the stateless growth pass only: \
-                     leave out the regions or the other table",
-                ));
-            }
+        if !self.hair.growth.regions.is_empty() && self.groom.is_some() {
+            return Err(crate::ParamError::new(
+                "growth.regions",
+                format!("{} regions with [groom]", self.hair.growth.regions.len()),
+                "a groom's strands take their shape from its file (or its guides), not from \
+                 growth regions: leave out the regions or the [groom] table",
+            ));
         }
         if let Some(dynamics) = &self.dynamics {
             dynamics.validate()?;

@@ -289,9 +289,13 @@ width = 0.006
     // A bad value is named.
     let e = SceneFile::parse("[[hair.growth.regions]]\nlength = -0.4\n").unwrap_err();
     assert!(e.to_string().contains("growth.regions[0].length"), "{e}");
-    // Regions with dynamics are refused.
-    let e = SceneFile::parse("[[hair.growth.regions]]\nlength = 0.4\n[dynamics]\n").unwrap_err();
+    // Regions with dynamics are simulated fur grown per region; with a groom, refused.
+    let simulated = SceneFile::parse("[[hair.growth.regions]]\nlength = 0.4\n[dynamics]\n");
+    assert!(simulated.is_ok(), "{simulated:?}");
+    let e = SceneFile::parse("[[hair.growth.regions]]\nlength = 0.4\n[groom]\npath = \"x.hair\"\n")
+        .unwrap_err();
     assert!(e.to_string().contains("growth.regions"), "{e}");
+    assert!(e.to_string().contains("[groom]"), "{e}");
 
     // Loading reads the maps relative to the scene file; a missing one is named.
     let dir = std::env::temp_dir().join(format!("pelage-regions-{}", std::process::id()));

@@ -192,9 +192,23 @@ impl SimulateStrands {
         StrandPass::vertex_bytes(gpu, hair)?;
         let roots = crate::sample_roots(mesh, &hair.roots, &hair.growth)?;
         let segments = hair.growth.segments;
+        // Each strand keeps its region's shape (region 0 is `growth.hair_type`); the
+        // roots already carry their region's length, tilt, width and colour.
+        let shapes: Vec<HairType> = hair
+            .growth
+            .resolved_regions()
+            .iter()
+            .map(|g| g.hair_type)
+            .collect();
         let rest_local: Vec<Vec3> = roots
             .iter()
-            .flat_map(|root| grown_rest(root, hair, segments))
+            .flat_map(|root| {
+                let shape = shapes
+                    .get(root.region as usize)
+                    .copied()
+                    .unwrap_or(hair.growth.hair_type);
+                grown_rest(root, shape, segments)
+            })
             .collect();
         let mut params = hair.clone();
         params.growth.gravity = Vec3::ZERO;
@@ -530,8 +544,9 @@ fn perpendicular(n: Vec3, hint: Vec3) -> Vec3 {
 }
 
 /// The rest shape of a grown strand in its root's frame: `grow.wgsl`'s strand without
-/// force (the root direction tilted from the normal, the growth's wave or curl).
-fn grown_rest(root: &StrandRoot, hair: &HairParams, segments: u32) -> Vec<Vec3> {
+/// force (the root direction tilted from the normal, the wave or curl of `shape`, its
+/// region's hair type).
+fn grown_rest(root: &StrandRoot, shape: HairType, segments: u32) -> Vec<Vec3> {
     // Root frame: tangent = x, normal = y, tangent × normal = z, so normal × tangent = -z.
     let (st, ct) = root.tilt.sin_cos();
     let (sa, ca) = root.azimuth.sin_cos();
@@ -544,7 +559,7 @@ fn grown_rest(root: &StrandRoot, hair: &HairParams, segments: u32) -> Vec<Vec3> 
     out.push(p);
     for i in 0..segments {
         let s = (i as f32 + 0.5) * seg_len;
-        let tangent = match hair.growth.hair_type {
+        let tangent = match shape {
             HairType::Straight => d,
             HairType::Wavy {
                 amplitude,
@@ -676,7 +691,6 @@ mod tests {
 
     #[test]
     fn grown_rest_shape_has_the_strand_length_along_the_normal() {
-        let hair = HairParams::default();
         let root = StrandRoot {
             triangle: 0,
             seed: 0,
@@ -689,14 +703,7 @@ mod tests {
             color: Vec3::ONE,
             region: 0,
         };
-        let straight = HairParams {
-            growth: pelage_scene::GrowthParams {
-                hair_type: HairType::Straight,
-                ..hair.growth.clone()
-            },
-            ..hair
-        };
-        let rest = grown_rest(&root, &straight, 8);
+        let rest = grown_rest(&root, HairType::Straight, 8);
         assert_eq!(rest.len(), 9);
         assert!(
             (rest[8] - Vec3::new(0.0, 2.0, 0.0)).length() < 1e-5,

@@ -201,3 +201,59 @@ fn creature_mane_roots_follow_the_region_map() {
         assert_eq!(r.region, u32::from(image.nearest(uv)[0]));
     }
 }
+
+/// Each strand's tip-to-root distance over its length, per region (1 for straight hair).
+fn chord_ratios(
+    vertices: &[glam::Vec4],
+    roots: &[pelage_strands::StrandRoot],
+    per_strand: usize,
+) -> Vec<f32> {
+    let mut sums = [(0.0f32, 0usize); 3];
+    for (root, strand) in roots.iter().zip(vertices.chunks(per_strand)) {
+        let chord = (strand[per_strand - 1] - strand[0]).truncate().length() / root.length;
+        let slot = &mut sums[root.region as usize];
+        *slot = (slot.0 + chord, slot.1 + 1);
+    }
+    sums.iter().map(|(sum, n)| sum / *n as f32).collect()
+}
+
+/// Simulated fur grown with regions starts in each region's shape: with no force, its
+/// strands' mean chord over length per region is the growth pass's (wavy and curly
+/// strands are shorter from tip to root than they are long; straight ones are not).
+#[test]
+fn simulated_strands_rest_in_their_regions_shapes() {
+    let gpu = gpu();
+    let mesh = Mesh::creature();
+    let buffers = MeshBuffers::upload(&gpu, &mesh).unwrap();
+    let mut params = three_regions(600);
+    params.growth.gravity = Vec3::ZERO;
+    params.growth.direction_jitter = 0.0;
+    params.wind = pelage_scene::WindParams::calm();
+    let per_strand = params.growth.segments as usize + 1;
+    let mut grown = GrowStrands::new(&gpu, &mesh, &buffers, &params).unwrap();
+    let grown_ratios = chord_ratios(
+        &grow_on_gpu(&gpu, &mut grown, 0.0),
+        grown.roots(),
+        per_strand,
+    );
+    let still = pelage_scene::DynamicsParams {
+        gravity: Vec3::ZERO,
+        ..Default::default()
+    };
+    let mut sim =
+        pelage_strands::SimulateStrands::grown(&gpu, &mesh, &buffers, &params, &still).unwrap();
+    let rest = grow_on_gpu(&gpu, &mut sim, 0.0);
+    let sim_ratios = chord_ratios(&rest, sim.roots(), per_strand);
+    println!("chord / length per region: grown {grown_ratios:?}, simulated {sim_ratios:?}");
+    assert!(grown_ratios[0] > 0.999, "{grown_ratios:?}");
+    assert!(
+        grown_ratios[1] < 0.98 && grown_ratios[2] < 0.9,
+        "{grown_ratios:?}"
+    );
+    for (g, s) in grown_ratios.iter().zip(&sim_ratios) {
+        assert!(
+            (g - s).abs() < 1e-3,
+            "grown {grown_ratios:?}, simulated {sim_ratios:?}"
+        );
+    }
+}
