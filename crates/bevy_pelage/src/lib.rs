@@ -142,7 +142,10 @@ impl Plugin for PelagePlugin {
     }
 }
 
-/// Reads a Bevy triangle-list mesh (positions, normals, indices) as pelage's mesh.
+/// Reads a Bevy triangle-list mesh (positions, normals, indices, and `ATTRIBUTE_UV_0`
+/// where it has one, so that a scene's texture maps over UVs follow the mesh's) as
+/// pelage's mesh. Bevy's UVs (glTF's: `v` grows downwards from the texture's top) become
+/// pelage's (OBJ's: `v` grows upwards from its bottom) as `(u, 1 - v)`.
 pub fn pelage_mesh(mesh: &Mesh) -> Result<pelage::scene::Mesh, FurError> {
     if mesh.primitive_topology() != PrimitiveTopology::TriangleList {
         return Err(FurError::Mesh(format!(
@@ -166,27 +169,41 @@ pub fn pelage_mesh(mesh: &Mesh) -> Result<pelage::scene::Mesh, FurError> {
         Ok(Indices::U32(i)) => i.clone(),
         Err(e) => return Err(FurError::Mesh(format!("no indices: {e}"))),
     };
+    let uvs = match mesh.try_attribute(Mesh::ATTRIBUTE_UV_0) {
+        Ok(VertexAttributeValues::Float32x2(v)) => v
+            .iter()
+            .map(|&[u, v]| ::glam::Vec2::new(u, 1.0 - v))
+            .collect(),
+        Ok(_) => return Err(FurError::Mesh("UV_0 is not Float32x2".into())),
+        Err(_) => Vec::new(),
+    };
     let mesh = pelage::scene::Mesh {
         positions,
         normals,
         indices,
-        uvs: Vec::new(),
+        uvs,
     };
     mesh.validate().map_err(|e| FurError::Mesh(e.to_string()))?;
     Ok(mesh)
 }
 
-/// pelage's mesh as a Bevy mesh (triangle list, positions, normals, `u32` indices):
-/// pelage's built-in creature as a Bevy asset, say.
+/// pelage's mesh as a Bevy mesh (triangle list, positions, normals, `u32` indices, and
+/// `ATTRIBUTE_UV_0` as `(u, 1 - v)` where it has UVs): pelage's built-in creature as a
+/// Bevy asset, say. [`pelage_mesh`] reads it back as it was.
 pub fn bevy_mesh(mesh: &pelage::scene::Mesh) -> Mesh {
     let vectors = |v: &[::glam::Vec3]| v.iter().map(|p| p.to_array()).collect::<Vec<_>>();
-    Mesh::new(
+    let bevy_mesh = Mesh::new(
         PrimitiveTopology::TriangleList,
         bevy::asset::RenderAssetUsages::default(),
     )
     .with_inserted_attribute(Mesh::ATTRIBUTE_POSITION, vectors(&mesh.positions))
     .with_inserted_attribute(Mesh::ATTRIBUTE_NORMAL, vectors(&mesh.normals))
-    .with_inserted_indices(Indices::U32(mesh.indices.clone()))
+    .with_inserted_indices(Indices::U32(mesh.indices.clone()));
+    if !mesh.has_uvs() {
+        return bevy_mesh;
+    }
+    let uvs: Vec<[f32; 2]> = mesh.uvs.iter().map(|uv| [uv.x, 1.0 - uv.y]).collect();
+    bevy_mesh.with_inserted_attribute(Mesh::ATTRIBUTE_UV_0, uvs)
 }
 
 /// What the render world builds an entity's fur from, made when [`Fur`] or the mesh
