@@ -30,7 +30,9 @@
 #import strands/force.wgsl
 #import strands/lod.wgsl
 
-@group(0) @binding(1) var<storage, read> rest: array<vec4<f32>>;
+// Declared vec3 (the buffer's vec4 stride, w unused): a load fetches the three used
+// components (on lavapipe each component at a per-lane address is a load of its own).
+@group(0) @binding(1) var<storage, read> rest: array<vec3<f32>>;
 @group(0) @binding(2) var<storage, read> roots: array<StrandRoot>;
 @group(0) @binding(3) var<storage, read_write> vertices: array<vec4<f32>>;
 @group(0) @binding(4) var<storage, read_write> drawn: array<StrandRoot>;
@@ -53,17 +55,21 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     // Evaluated once per strand: it does not depend on the position.
     let base_force = uniform_force(t);
     var q = vec4<f32>(0.0, 0.0, 0.0, 1.0);
-    var p = rest[first].xyz;
+    var p = rest[first];
+    // The rest point at the start of segment i, carried so each point is read once.
+    var rest_start = p;
     var d = vec3<f32>(0.0, 1.0, 0.0);
     // No force has turned the strand yet: its vertices are the rest points.
     var at_rest = true;
     vertices[base] = vec4<f32>(p, 0.0);
     for (var i = 0u; i < segments; i++) {
-        let offset = rest[first + i + 1u].xyz - rest[first + i].xyz;
+        let rest_end = rest[first + i + 1u];
+        let offset = rest_end - rest_start;
+        rest_start = rest_end;
         // A zero-length rest segment (points repeated in the file) keeps the last direction.
         d = quat_rotate(q, safe_normalize(offset, quat_rotate(vec4<f32>(-q.xyz, q.w), d)));
         if at_rest {
-            p = rest[first + i + 1u].xyz;
+            p = rest_end;
         } else {
             p = p + d * length(offset);
         }
