@@ -3,7 +3,7 @@
 
 use glam::{Vec3, Vec4};
 use pelage_scene::Mesh;
-use pelage_strands::{GrowUniforms, STATE_HEADER, SimUniforms, StrandRoot};
+use pelage_strands::{ColliderUniform, GrowUniforms, STATE_HEADER, SimUniforms, StrandRoot};
 
 use crate::strands::{force, perpendicular, quat_between, quat_mul, quat_rotate, safe_normalize};
 
@@ -53,6 +53,18 @@ fn to_world(pose: &Pose, local: Vec3) -> Vec3 {
         + pose.tangent.cross(pose.normal) * local.z
 }
 
+/// `axis_point` in WGSL: the point of `col`'s axis nearest `p`.
+fn axis_point(col: &ColliderUniform, p: Vec3) -> Vec3 {
+    let axis = col.b - col.a;
+    let len2 = axis.dot(axis);
+    let s = if len2 > 0.0 {
+        ((p - col.a).dot(axis) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    col.a + axis * s
+}
+
 /// `collide` in WGSL: `(p, prev)` pushed out of every collider of `sim`, `prev` moved
 /// by `friction` of the tangential motion.
 fn collide(
@@ -65,14 +77,7 @@ fn collide(
 ) -> (Vec3, Vec3) {
     let (mut p, mut prev) = (p_in, prev_in);
     for col in sim.colliders.iter().take(sim.collider_count as usize) {
-        let axis = col.b - col.a;
-        let len2 = axis.dot(axis);
-        let s = if len2 > 0.0 {
-            ((p - col.a).dot(axis) / len2).clamp(0.0, 1.0)
-        } else {
-            0.0
-        };
-        let nearest = col.a + axis * s;
+        let nearest = axis_point(col, p);
         let r = col.radius + margin;
         let d = p - nearest;
         if d.dot(d) < r * r {
@@ -83,6 +88,26 @@ fn collide(
         }
     }
     (p, prev)
+}
+
+/// `onto_length_outside` in WGSL: `p` (at `len` from `parent`) moved along that sphere onto
+/// the circle where it meets each collider it is inside.
+fn onto_length_outside(sim: &SimUniforms, p_in: Vec3, parent: Vec3, len: f32, margin: f32) -> Vec3 {
+    let mut p = p_in;
+    for col in sim.colliders.iter().take(sim.collider_count as usize) {
+        let center = axis_point(col, p);
+        let r = col.radius + margin;
+        let off = p - center;
+        let w = center - parent;
+        let d = w.length();
+        if off.dot(off) < r * r && d > (r - len).abs() && d < r + len {
+            let toward = w / d;
+            let along = (d * d + len * len - r * r) / (2.0 * d);
+            let o = parent + toward * along;
+            p = o + perpendicular(toward, p - o) * (len * len - along * along).max(0.0).sqrt();
+        }
+    }
+    p
 }
 
 /// One frame of `simulate.wgsl` for every strand: steps `state` (the layout of
@@ -173,6 +198,8 @@ pub fn simulate_frame(
                         p = fixed;
                         prev = mprev;
                     }
+                    p = onto_length_outside(sim, p, parent, len, margin);
+                    dir = safe_normalize(p - parent, dir);
                     if k > 1 {
                         parent_prev += correction * sim.length_damping;
                         state[prv + k - 1] = parent_prev.extend(0.0);

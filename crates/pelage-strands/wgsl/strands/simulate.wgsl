@@ -29,9 +29,10 @@
 //     so they shape the strand without giving it speed; then COLLISION_PASSES rounds of
 //     collisions (out of every sphere and capsule; friction, in the first round only,
 //     taking tangential velocity off) and follow-the-leader (the vertex put at its rest
-//     length from its parent), and the parent's velocity is corrected by -length_damping
-//     times the follow-the-leader corrections (Mueller et al. 2012, "DFTL"). The root is
-//     pinned.
+//     length from its parent), then onto_length_outside (at its length and out of the
+//     colliders at once, where the rounds left it inside), and the parent's velocity is
+//     corrected by -length_damping times the follow-the-leader corrections (Mueller et
+//     al. 2012, "DFTL"). The root is pinned.
 // Every segment thus leaves each substep at its rest length (to float rounding).
 // A root that moved more than teleport_distance, a first frame, a reset or a non-finite
 // vertex put the strand at rest in its new pose.
@@ -148,17 +149,22 @@ struct Moved {
 // the contact's tangent plane by `friction` of the tangential motion (the first round of
 // a substep only: a later round's contact is the same one, and its friction applied again
 // would hinge on whether rounding left the vertex a hair inside).
+// The point of collider `col`'s axis nearest `p` (its centre for a sphere).
+fn axis_point(col: Collider, p: vec3<f32>) -> vec3<f32> {
+    let axis = col.b - col.a;
+    let len2 = dot(axis, axis);
+    var s = 0.0;
+    if len2 > 0.0 {
+        s = clamp(dot(p - col.a, axis) / len2, 0.0, 1.0);
+    }
+    return col.a + axis * s;
+}
+
 fn collide(p_in: vec3<f32>, prev_in: vec3<f32>, margin: f32, fallback: vec3<f32>, friction: f32) -> Moved {
     var m = Moved(p_in, prev_in);
     for (var c = 0u; c < min(sim.collider_count, MAX_COLLIDERS); c++) {
         let col = sim.colliders[c];
-        let axis = col.b - col.a;
-        let len2 = dot(axis, axis);
-        var s = 0.0;
-        if len2 > 0.0 {
-            s = clamp(dot(m.p - col.a, axis) / len2, 0.0, 1.0);
-        }
-        let nearest = col.a + axis * s;
+        let nearest = axis_point(col, m.p);
         let r = col.radius + margin;
         let d = m.p - nearest;
         if dot(d, d) < r * r {
@@ -169,6 +175,31 @@ fn collide(p_in: vec3<f32>, prev_in: vec3<f32>, margin: f32, fallback: vec3<f32>
         }
     }
     return m;
+}
+
+// `p` (at distance `len` from `parent`) moved along that sphere to the nearest point
+// outside every collider (+ margin) it is inside: onto the circle where the two spheres
+// meet (for a capsule, the sphere around the axis point nearest `p`). The rounds of
+// collision and follow-the-leader alternate two projections that need not meet in
+// COLLISION_PASSES rounds where a strand folds against a body; this lands on both. A
+// vertex whose sphere of reach does not cross the collider's surface stays where it is.
+fn onto_length_outside(p_in: vec3<f32>, parent: vec3<f32>, len: f32, margin: f32) -> vec3<f32> {
+    var p = p_in;
+    for (var c = 0u; c < min(sim.collider_count, MAX_COLLIDERS); c++) {
+        let col = sim.colliders[c];
+        let center = axis_point(col, p);
+        let r = col.radius + margin;
+        let off = p - center;
+        let w = center - parent;
+        let d = length(w);
+        if dot(off, off) < r * r && d > abs(r - len) && d < r + len {
+            let toward = w / d;
+            let along = (d * d + len * len - r * r) / (2.0 * d);
+            let o = parent + toward * along;
+            p = o + perpendicular(toward, p - o) * sqrt(max(len * len - along * along, 0.0));
+        }
+    }
+    return p;
 }
 
 // Index of strand `strand`'s first state vec4 (its root position); its rest shape follows
@@ -259,6 +290,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
                     correction = correction + (on_length - m.p);
                     m.p = on_length;
                 }
+                m.p = onto_length_outside(m.p, parent, len, margin);
+                dir = safe_normalize(m.p - parent, dir);
                 p = m.p;
                 prev = m.prev;
                 // DFTL: the parent's velocity loses length_damping of this correction.
