@@ -37,8 +37,9 @@ pub use obj::{ObjError, load_obj, parse_obj};
 pub use params::{
     AdsmParams, Collider, DeepOpacityParams, DynamicsParams, GrowthParams, HairParams, HairType,
     LayerSpacing, MAX_ACCELERATION, MAX_COLLIDERS, MAX_FORCE, MAX_REGIONS, MAX_SEGMENTS, MapParams,
-    MeshMotion, OpacityFormat, ParamError, RegionParams, RootParams, RootTextures, ShadeParams,
-    ShadowMapParams, ShadowParams, Splat, SurfaceInterpolation, VoxelParams, WindParams,
+    MeshMotion, OpacityFormat, ParamError, RegionParams, RootParams, RootTextures,
+    STIFFNESS_INTERVAL, ShadeParams, ShadowMapParams, ShadowParams, Splat, SurfaceInterpolation,
+    VoxelParams, WindParams,
 };
 pub use scene_file::{MeshSource, SceneFile, SceneFileError};
 pub use shading::{

@@ -647,8 +647,13 @@ impl WindParams {
 /// strand vertex, integrated by Verlet in fixed substeps, then projected root to tip onto
 /// the global shape, local shape, collision and length constraints.
 ///
-/// The stiffnesses are fractions of the way to the target taken per substep (as in
-/// TressFX), so with the default substep they behave the same at any frame rate.
+/// The stiffnesses are fractions of the way to the target taken per
+/// [`STIFFNESS_INTERVAL`] (1/120 s, the default substep); a substep of `h` seconds takes
+/// [`DynamicsParams::stiffness_per_substep`] of it, so the pull does not depend on how
+/// many substeps a frame is cut into, on the frame rate or on `max_substep`. (TressFX
+/// applies its stiffnesses once per substep, which makes hair stiffer as substeps get
+/// shorter: at 50 fps a frame of three substeps pulled three times where 60 fps pulled
+/// twice.)
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct DynamicsParams {
@@ -661,10 +666,10 @@ pub struct DynamicsParams {
     /// substep of `h` seconds.
     pub damping: f32,
     /// Local shape stiffness in [0, 1]: how far each segment is turned back toward its
-    /// rest direction in its parent segment's frame, per substep.
+    /// rest direction in its parent segment's frame, per [`STIFFNESS_INTERVAL`].
     pub local_stiffness: f32,
     /// Global shape stiffness in [0, 1] at the root: how far each vertex is pulled
-    /// toward its rest position carried by the root's frame, per substep.
+    /// toward its rest position carried by the root's frame, per [`STIFFNESS_INTERVAL`].
     pub global_stiffness: f32,
     /// Fraction of the strand, from the root, over which the global stiffness falls
     /// linearly to zero, in (0, 1].
@@ -688,6 +693,10 @@ pub struct DynamicsParams {
     /// with a [`MeshMotion`]); at most [`MAX_COLLIDERS`].
     pub colliders: Vec<Collider>,
 }
+
+/// The time the shape stiffnesses of [`DynamicsParams`] are given for, seconds: 1/120 s,
+/// the default substep.
+pub const STIFFNESS_INTERVAL: f32 = 1.0 / 120.0;
 
 /// The most colliders a simulation takes.
 pub const MAX_COLLIDERS: usize = 16;
@@ -947,11 +956,62 @@ impl DynamicsParams {
             (count, dt / count as f32)
         }
     }
+
+    /// The fraction of the way to its target a substep of `h` seconds takes for a
+    /// `stiffness` given per [`STIFFNESS_INTERVAL`]: `1 - (1 - stiffness)^(h / interval)`,
+    /// so that the substeps covering one interval together leave `1 - stiffness` of the
+    /// way, as one substep of the interval does. `stiffness` is clamped to [0, 1]; a
+    /// substep of 0 s (or not finite) takes `stiffness` itself.
+    pub fn stiffness_per_substep(stiffness: f32, h: f32) -> f32 {
+        let s = if stiffness.is_finite() {
+            stiffness.clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        if !(h.is_finite() && h > 0.0) || s == 1.0 {
+            return s;
+        }
+        let ratio = f64::from(h) / f64::from(STIFFNESS_INTERVAL);
+        // 1 - (1 - s)^ratio, exact to f32 at ratio 1 (the default substep).
+        (-(ratio * (-f64::from(s)).ln_1p()).exp_m1()) as f32
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn stiffness_per_substep_composes_to_the_interval() {
+        for s in [0.0f32, 0.05, 0.2, 0.3, 0.77, 0.999, 1.0] {
+            // One substep of the interval takes the stiffness itself, exactly.
+            assert_eq!(
+                DynamicsParams::stiffness_per_substep(s, STIFFNESS_INTERVAL),
+                s
+            );
+            assert_eq!(
+                DynamicsParams::stiffness_per_substep(s, (1.0f32 / 60.0) / 2.0),
+                s
+            );
+            // n substeps of interval / n leave what one substep of the interval leaves.
+            for n in [2u32, 3, 4, 8, 40] {
+                let h = STIFFNESS_INTERVAL / n as f32;
+                let per = DynamicsParams::stiffness_per_substep(s, h);
+                assert!((0.0..=s).contains(&per), "{s} {n}: {per}");
+                let left = (1.0 - f64::from(per)).powi(n as i32);
+                assert!(
+                    (left - (1.0 - f64::from(s))).abs() < 1e-6,
+                    "{s} in {n} substeps leaves {left}"
+                );
+            }
+            // A longer substep pulls farther, never past the target.
+            let long = DynamicsParams::stiffness_per_substep(s, 0.05);
+            assert!((s..=1.0).contains(&long), "{s}: {long}");
+        }
+        assert_eq!(DynamicsParams::stiffness_per_substep(0.3, 0.0), 0.3);
+        assert_eq!(DynamicsParams::stiffness_per_substep(f32::NAN, 0.01), 0.0);
+        assert_eq!(DynamicsParams::stiffness_per_substep(0.3, f32::NAN), 0.3);
+    }
 
     #[test]
     fn defaults_are_valid() {

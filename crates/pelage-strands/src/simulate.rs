@@ -59,9 +59,10 @@ pub struct SimUniforms {
     pub reset: u32,
     /// Velocity kept per substep, `exp(-damping · h)`.
     pub keep: f32,
-    /// [`DynamicsParams::local_stiffness`].
+    /// [`DynamicsParams::local_stiffness`] for a substep of `h`
+    /// ([`DynamicsParams::stiffness_per_substep`]).
     pub local_stiffness: f32,
-    /// [`DynamicsParams::global_stiffness`].
+    /// [`DynamicsParams::global_stiffness`] for a substep of `h`.
     pub global_stiffness: f32,
     /// [`DynamicsParams::global_range`].
     pub global_range: f32,
@@ -99,8 +100,9 @@ impl SimUniforms {
             time0: time - h * substeps as f32,
             reset: u32::from(dt.is_none()),
             keep: (-dynamics.damping * h).exp(),
-            local_stiffness: dynamics.local_stiffness,
-            global_stiffness: dynamics.global_stiffness,
+            // Given per STIFFNESS_INTERVAL; each substep takes its share.
+            local_stiffness: DynamicsParams::stiffness_per_substep(dynamics.local_stiffness, h),
+            global_stiffness: DynamicsParams::stiffness_per_substep(dynamics.global_stiffness, h),
             global_range: dynamics.global_range,
             length_damping: dynamics.length_damping,
             friction: dynamics.friction,
