@@ -144,11 +144,6 @@ struct Moved {
     prev: vec3<f32>,
 }
 
-// `p` pushed out of every collider to `margin` beyond its surface (along the direction
-// from the nearest point of its axis; `fallback` when on the axis), and `prev` moved along
-// the contact's tangent plane by `friction` of the tangential motion (the first round of
-// a substep only: a later round's contact is the same one, and its friction applied again
-// would hinge on whether rounding left the vertex a hair inside).
 // The point of collider `col`'s axis nearest `p` (its centre for a sphere).
 fn axis_point(col: Collider, p: vec3<f32>) -> vec3<f32> {
     let axis = col.b - col.a;
@@ -160,6 +155,11 @@ fn axis_point(col: Collider, p: vec3<f32>) -> vec3<f32> {
     return col.a + axis * s;
 }
 
+// `p` pushed out of every collider to `margin` beyond its surface (along the direction
+// from the nearest point of its axis; `fallback` when on the axis), and `prev` moved along
+// the contact's tangent plane by `friction` of the tangential motion (the first round of
+// a substep only: a later round's contact is the same one, and its friction applied again
+// would hinge on whether rounding left the vertex a hair inside).
 fn collide(p_in: vec3<f32>, prev_in: vec3<f32>, margin: f32, fallback: vec3<f32>, friction: f32) -> Moved {
     var m = Moved(p_in, prev_in);
     for (var c = 0u; c < min(sim.collider_count, MAX_COLLIDERS); c++) {
