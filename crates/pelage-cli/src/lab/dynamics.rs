@@ -52,7 +52,9 @@ use crate::progress;
 type LabResult<T> = Result<T, Box<dyn std::error::Error>>;
 
 /// `scenes/head_turn.toml` with the hair grown on the head instead of read from
-/// `long_hair.hair` (same head, motion, wind, dynamics, shading, camera and light).
+/// `long_hair.hair` (same head, motion, wind, dynamics, shading, camera and light). A copy,
+/// since a packaged crate cannot read the repository's `scenes/`; the test
+/// `the_built_in_scene_is_head_turn_with_grown_hair` keeps the two the same.
 pub const SCENE: &str = r#"
 [mesh]
 kind = "icosphere"
@@ -432,4 +434,26 @@ pub fn run(opts: &LabOpts, scene: Option<&Path>) -> LabResult<()> {
         started.elapsed().as_secs_f64()
     );
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// [`SCENE`] is `scenes/head_turn.toml` but for the hair grown instead of the groom.
+    #[test]
+    fn the_built_in_scene_is_head_turn_with_grown_hair() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/head_turn.toml");
+        let mut head_turn = SceneFile::load(&path).unwrap();
+        let lab = SceneFile::parse(SCENE).unwrap();
+        head_turn.groom = None;
+        let (roots, growth) = (&lab.hair.roots, &lab.hair.growth);
+        head_turn.hair.roots.count = roots.count;
+        let ours = &mut head_turn.hair.growth;
+        ours.segments = growth.segments;
+        ours.length = growth.length;
+        ours.force_weight = growth.force_weight;
+        ours.direction_jitter = growth.direction_jitter;
+        assert_eq!(lab, head_turn);
+    }
 }
