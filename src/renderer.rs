@@ -249,6 +249,16 @@ impl Renderer {
                 return Err(refuse("guides", "to root the render strands on").into());
             }
         }
+        // A simulation sizes itself from the mesh buffers' box: the mesh's, grown to
+        // wherever the motion takes it (the simulated hair follows the mesh).
+        let moving_mesh = || -> crate::Result<MeshBuffers> {
+            let mut mesh = MeshBuffers::upload(gpu, &scene.mesh)?;
+            if let Some(motion) = &scene.motion {
+                motion.validate()?;
+                mesh.bounds = motion.reach(mesh.bounds);
+            }
+            Ok(mesh)
+        };
         let (mut mesh_buffers, strands): (MeshBuffers, Box<dyn StrandStage>) =
             match (&scene.groom, &scene.guides, &scene.dynamics, draw_mesh) {
                 (Some(groom), Some(guides), None, _) => {
@@ -259,11 +269,7 @@ impl Renderer {
                 }
                 // The guides simulated, the render strands interpolated from them.
                 (Some(groom), Some(guides), Some(dynamics), _) => {
-                    let mut mesh = MeshBuffers::upload(gpu, &scene.mesh)?;
-                    if let Some(motion) = &scene.motion {
-                        motion.validate()?;
-                        mesh.bounds = motion.reach(mesh.bounds);
-                    }
+                    let mesh = moving_mesh()?;
                     let strands = GuideStrands::simulated(
                         gpu,
                         &scene.mesh,
@@ -290,12 +296,7 @@ impl Renderer {
                     (mesh, Box::new(strands))
                 }
                 (groom, _, Some(dynamics), _) => {
-                    let mut mesh = MeshBuffers::upload(gpu, &scene.mesh)?;
-                    // The simulated hair reaches wherever the motion takes the mesh.
-                    if let Some(motion) = &scene.motion {
-                        motion.validate()?;
-                        mesh.bounds = motion.reach(mesh.bounds);
-                    }
+                    let mesh = moving_mesh()?;
                     let strands = match groom {
                         Some(groom) => SimulateStrands::groom(
                             gpu,
