@@ -117,8 +117,8 @@ pub enum Lab {
                       strand stage alone. --scene FILE compares a scene file's [dynamics] with \
                       its stateless wind instead (a groom has no floor of other roots).\n\n\
                       Writes DIR/dynamics.csv (a row per frame), DIR/dynamics_summary.csv and \
-                      DIR/dynamics_sheet.png (stateless over simulated at six times). About 3 \
-                      minutes on 2 CPU cores; --quick: 1 s of frames, smaller."
+                      DIR/dynamics_sheet.png (stateless over simulated at six times). About 1.5 \
+                      minutes in a release build on 2 CPU cores; --quick: 1 s of frames, smaller."
     )]
     Dynamics(DynamicsOpts),
 }
