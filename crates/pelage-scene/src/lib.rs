@@ -38,8 +38,8 @@ pub use params::{
     AdsmParams, Collider, DeepOpacityParams, DynamicsParams, GrowthParams, HairParams, HairType,
     LayerSpacing, MAX_ACCELERATION, MAX_COLLIDERS, MAX_FORCE, MAX_REGIONS, MAX_SEGMENTS, MapParams,
     MeshMotion, OpacityFormat, ParamError, RegionParams, RootParams, RootTextures,
-    STIFFNESS_INTERVAL, ShadeParams, ShadowMapParams, ShadowParams, Splat, SurfaceInterpolation,
-    VoxelParams, WindParams,
+    STIFFNESS_INTERVAL, SUBSTEP_SLACK, ShadeParams, ShadowMapParams, ShadowParams, Splat,
+    SurfaceInterpolation, VoxelParams, WindParams,
 };
 pub use scene_file::{MeshSource, SceneFile, SceneFileError};
 pub use shading::{

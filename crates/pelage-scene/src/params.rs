@@ -681,7 +681,7 @@ pub struct DynamicsParams {
     /// vertex loses on contact.
     pub friction: f32,
     /// The longest substep, seconds, in (0, 0.05]: a frame of `dt` takes
-    /// `ceil(dt / max_substep)` equal substeps.
+    /// `ceil(dt / max_substep)` equal substeps, give or take [`SUBSTEP_SLACK`].
     pub max_substep: f32,
     /// The longest frame simulated, seconds, in (0, 1]: a longer frame (a hitch, a
     /// breakpoint) is simulated as this long.
@@ -697,6 +697,12 @@ pub struct DynamicsParams {
 /// The time the shape stiffnesses of [`DynamicsParams`] are given for, seconds: 1/120 s,
 /// the default substep.
 pub const STIFFNESS_INTERVAL: f32 = 1.0 / 120.0;
+
+/// How much longer than [`DynamicsParams::max_substep`] a substep may be, a fraction:
+/// frame times are `f32` seconds, so a frame of 1/60 s measured as a difference of two
+/// times is up to 0.5% longer or shorter (at 600 s), and without slack one frame in
+/// seven of 1/60 s took three substeps of 1/120 s instead of two.
+pub const SUBSTEP_SLACK: f32 = 0.01;
 
 /// The most colliders a simulation takes.
 pub const MAX_COLLIDERS: usize = 16;
@@ -942,14 +948,16 @@ impl DynamicsParams {
     }
 
     /// The substeps a frame of `dt` seconds takes, and their length: `dt` clamped to
-    /// [0, `max_frame`], cut into `ceil(dt / max_substep)` equal substeps (none for 0).
+    /// [0, `max_frame`], cut into `ceil(dt / (max_substep · (1 + SUBSTEP_SLACK)))` equal
+    /// substeps (none for 0): a substep is at most 1% longer than `max_substep`.
     pub fn substeps(&self, dt: f32) -> (u32, f32) {
         let dt = if dt.is_finite() {
             dt.clamp(0.0, self.max_frame)
         } else {
             0.0
         };
-        let count = (dt / self.max_substep).ceil().max(0.0) as u32;
+        let longest = self.max_substep * (1.0 + SUBSTEP_SLACK);
+        let count = (dt / longest).ceil().max(0.0) as u32;
         if count == 0 {
             (0, 0.0)
         } else {
@@ -1035,6 +1043,26 @@ mod tests {
         assert_eq!(n, 12);
         assert!(h <= d.max_substep + 1e-9);
         assert_eq!(d.substeps(5.0), d.substeps(d.max_frame));
+    }
+
+    #[test]
+    fn frames_of_a_steady_rate_take_the_same_substeps_for_ten_minutes() {
+        let d = DynamicsParams::default();
+        // Frame times as a caller computes them: f32 seconds from a frame counter.
+        for (fps, want) in [(60.0, 2), (120.0, 1), (50.0, 3), (30.0, 4), (144.0, 1)] {
+            let mut counts = std::collections::BTreeMap::new();
+            for frame in 1..=(600.0 * fps) as u32 {
+                let t = |f: u32| (f64::from(f) / fps) as f32;
+                let (n, h) = d.substeps(t(frame) - t(frame - 1));
+                assert!(h <= d.max_substep * (1.0 + SUBSTEP_SLACK), "{fps} fps: {h}");
+                *counts.entry(n).or_insert(0u32) += 1;
+            }
+            assert_eq!(
+                counts.keys().copied().collect::<Vec<_>>(),
+                [want],
+                "{fps} fps: {counts:?}"
+            );
+        }
     }
 
     #[test]

@@ -137,7 +137,9 @@ impl SimUniforms {
 /// **Time.** [`StrandStage::prepare`] takes the frame's time: the method steps by
 /// `dt = time - last time`, clamped to `max_frame` (0.1 s by default: a longer hitch is
 /// simulated as 0.1 s) and cut into `ceil(dt / max_substep)` equal substeps (1/120 s by
-/// default, so 1 ms takes one substep and 100 ms twelve); the root is interpolated
+/// default, so 1 ms takes one substep, 1/60 s two and 100 ms twelve; a substep may be
+/// [`SUBSTEP_SLACK`](pelage_scene::SUBSTEP_SLACK) longer, for rounded frame times,
+/// [`DynamicsParams::substeps`]); the root is interpolated
 /// across the substeps. The first frame, time going backwards and
 /// [`SimulateStrands::reset`] put every strand at rest in the current pose. Every
 /// `prepare` must be followed by its `encode` and a submit: a prepared frame that is
