@@ -43,42 +43,41 @@ use crate::{LodLevel, StrandRoot, hash_to_unit, pcg_hash};
 /// ```
 #[derive(Debug)]
 pub struct GroomStrands {
-    roots: Vec<StrandRoot>,
+    shape: GroomShape,
+    pass: StrandPass,
+    /// The rest roots the pass reads (rewritten by [`StrandStage::set_color`]).
+    rest_roots: wgpu::Buffer,
+}
+
+/// A groom's strands as [`GroomStrands`] holds them on the CPU: shuffled from
+/// `roots.seed`, coloured and sized. [`SimulateStrands::groom`](crate::SimulateStrands::groom)
+/// and simulated [`GuideStrands`](crate::GuideStrands) start from this, without the
+/// groom pass's buffers.
+#[derive(Debug)]
+pub(crate) struct GroomShape {
+    /// What the groom amounts to ([`GroomStrands::params_for`]).
+    pub(crate) params: HairParams,
+    pub(crate) roots: Vec<StrandRoot>,
     /// Rest points in buffer order, `segments + 1` per strand.
-    rest: Vec<Vec3>,
+    pub(crate) rest: Vec<Vec3>,
     /// The groom's index of every strand in the buffer.
-    source_strands: Vec<u32>,
+    pub(crate) source_strands: Vec<u32>,
     /// `chord_error[k]`: the farthest any rest point is from the chord that skips it when
     /// every `k`-th vertex is kept, world units (0 where `k` does not divide the segments).
     pub(crate) chord_error: Vec<f32>,
     /// The longest rest segment, world units.
     pub(crate) longest_segment: f32,
-    pass: StrandPass,
-    /// The rest roots the pass reads (rewritten by [`StrandStage::set_color`]).
-    rest_roots: wgpu::Buffer,
     /// The groom's colour of every strand in buffer order, if it has colours.
-    file_colors: Option<Vec<Vec3>>,
+    pub(crate) file_colors: Option<Vec<Vec3>>,
 }
 
-impl GroomStrands {
-    /// Shuffles the groom's strands, uploads their rest shape and builds the pipeline.
+impl GroomShape {
+    /// Shuffles, colours and sizes the strands of `groom` drawn with `hair`.
     ///
-    /// Errors: bad parameters (naming them), a [`Resampled`] whose arrays do not agree
-    /// or hold a non-finite point (its fields are public), and a groom the device
-    /// cannot bind.
-    pub fn new(gpu: &Gpu, groom: &Resampled, hair: &HairParams) -> crate::Result<Self> {
-        Self::labelled(gpu, groom, hair, "strands: groom")
-    }
-
-    /// [`GroomStrands::new`] with the pass timed as `label` (the guides of
-    /// [`GuideStrands`](crate::GuideStrands) are bent by this pass).
-    pub(crate) fn labelled(
-        gpu: &Gpu,
-        groom: &Resampled,
-        hair: &HairParams,
-        label: &'static str,
-    ) -> crate::Result<Self> {
-        let params = Self::params_for(groom, hair)?;
+    /// Errors: as [`GroomStrands::new`] (bad parameters, a groom whose arrays do not
+    /// agree, one the device cannot bind).
+    pub(crate) fn new(gpu: &Gpu, groom: &Resampled, hair: &HairParams) -> crate::Result<Self> {
+        let params = GroomStrands::params_for(groom, hair)?;
         // Refuse a groom the device cannot hold before shuffling it.
         StrandPass::vertex_bytes(gpu, &params)?;
         let per_strand = groom.segments as usize + 1;
@@ -128,29 +127,54 @@ impl GroomStrands {
             .chunks(per_strand)
             .flat_map(|s| s.windows(2).map(|w| w[0].distance(w[1])))
             .fold(0.0f32, f32::max);
-
-        let storage = wgpu::BufferUsages::STORAGE;
-        let rest_gpu: Vec<glam::Vec4> = rest.iter().map(|p| p.extend(0.0)).collect();
-        let rest_buffer = storage_buffer(gpu, "pelage groom rest points", &rest_gpu, storage)?;
-        let rest_roots = storage_buffer(gpu, "pelage groom rest roots", &roots, storage)?;
-        let pass = StrandPass::new(
-            gpu,
-            label,
-            "strands/groom.wgsl",
-            &params,
-            Self::reach_of(groom, hair)?,
-            &roots,
-            &[&rest_buffer, &rest_roots],
-        )?;
         Ok(Self {
+            params,
             roots,
             rest,
             source_strands,
             chord_error,
             longest_segment,
+            file_colors,
+        })
+    }
+}
+
+impl GroomStrands {
+    /// Shuffles the groom's strands, uploads their rest shape and builds the pipeline.
+    ///
+    /// Errors: bad parameters (naming them), a [`Resampled`] whose arrays do not agree
+    /// or hold a non-finite point (its fields are public), and a groom the device
+    /// cannot bind.
+    pub fn new(gpu: &Gpu, groom: &Resampled, hair: &HairParams) -> crate::Result<Self> {
+        Self::labelled(gpu, groom, hair, "strands: groom")
+    }
+
+    /// [`GroomStrands::new`] with the pass timed as `label` (the guides of
+    /// [`GuideStrands`](crate::GuideStrands) are bent by this pass).
+    pub(crate) fn labelled(
+        gpu: &Gpu,
+        groom: &Resampled,
+        hair: &HairParams,
+        label: &'static str,
+    ) -> crate::Result<Self> {
+        let shape = GroomShape::new(gpu, groom, hair)?;
+        let storage = wgpu::BufferUsages::STORAGE;
+        let rest_gpu: Vec<glam::Vec4> = shape.rest.iter().map(|p| p.extend(0.0)).collect();
+        let rest_buffer = storage_buffer(gpu, "pelage groom rest points", &rest_gpu, storage)?;
+        let rest_roots = storage_buffer(gpu, "pelage groom rest roots", &shape.roots, storage)?;
+        let pass = StrandPass::new(
+            gpu,
+            label,
+            "strands/groom.wgsl",
+            &shape.params,
+            Self::reach_of(groom, hair)?,
+            &shape.roots,
+            &[&rest_buffer, &rest_roots],
+        )?;
+        Ok(Self {
+            shape,
             pass,
             rest_roots,
-            file_colors,
         })
     }
 
@@ -201,19 +225,24 @@ impl GroomStrands {
     /// The rest points of every strand in buffer order, `segments + 1` per strand (input
     /// of the CPU mirror `pelage_reference::strands::deform_groom`).
     pub fn rest_points(&self) -> &[Vec3] {
-        &self.rest
+        &self.shape.rest
     }
 
     /// The groom's own colour of every strand in buffer order (`displayColor`, a .hair
     /// file's colours), before the per-strand brightness jitter; `None` without colours.
     pub fn file_colors(&self) -> Option<&[Vec3]> {
-        self.file_colors.as_deref()
+        self.shape.file_colors.as_deref()
     }
 
     /// The groom's index of every strand in the buffer (the file's strand, counting the
     /// degenerate ones `Resampled` skipped).
     pub fn source_strands(&self) -> &[u32] {
-        &self.source_strands
+        &self.shape.source_strands
+    }
+
+    /// The strands' shape, roots and colours on the CPU.
+    pub(crate) fn shape(&self) -> &GroomShape {
+        &self.shape
     }
 }
 
@@ -246,13 +275,14 @@ impl StrandStage for GroomStrands {
     }
 
     fn roots(&self) -> &[StrandRoot] {
-        &self.roots
+        &self.shape.roots
     }
 
     fn reach_with_wind(&self, wind: &pelage_scene::WindParams) -> crate::Result<(Vec3, Vec3)> {
         wind.validate()?;
-        let first = self.rest.first().copied().unwrap_or(Vec3::ZERO);
-        let bounds = (self.rest.iter()).fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+        let rest = &self.shape.rest;
+        let first = rest.first().copied().unwrap_or(Vec3::ZERO);
+        let bounds = (rest.iter()).fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p)));
         let mut params = self.params().clone();
         params.wind = wind.clone();
         Ok(reach_around(bounds, &params))
@@ -266,7 +296,7 @@ impl StrandStage for GroomStrands {
     ) -> crate::Result<()> {
         crate::grow::recolor(
             &mut self.pass,
-            &mut self.roots,
+            &mut self.shape.roots,
             &self.rest_roots,
             GROOM_BRIGHTNESS_DRAW,
             queue,
@@ -275,9 +305,9 @@ impl StrandStage for GroomStrands {
         // A groom's own colours stay; only their jitter changes.
         let drawn = StrandStage::buffers(self).roots.clone();
         keep_file_colors(
-            &mut self.roots,
+            &mut self.shape.roots,
             (&self.rest_roots, &drawn),
-            self.file_colors.as_deref(),
+            self.shape.file_colors.as_deref(),
             (GROOM_BRIGHTNESS_DRAW, color_jitter),
             queue,
         )
@@ -298,12 +328,11 @@ impl StrandStage for GroomStrands {
         let max_error = params.lod.segment_error_pixels;
         LodLevel::for_view_with(params, bounds, camera, width, height, |pixels_per_unit| {
             fewest_segments(full, max_error, pixels_per_unit, |k| {
-                let rest = self
-                    .chord_error
+                let rest = (self.shape.chord_error)
                     .get(k as usize)
                     .copied()
                     .unwrap_or(f32::MAX);
-                rest + bend_error(k, self.longest_segment, turn)
+                rest + bend_error(k, self.shape.longest_segment, turn)
             })
         })
     }

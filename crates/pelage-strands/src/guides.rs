@@ -10,6 +10,7 @@ use pelage_scene::{
     SurfaceInterpolation, WindParams,
 };
 
+use crate::groom::GroomShape;
 use crate::grow::{Input, StrandPass, StrandStage};
 use crate::lod::{bend_error, bend_per_segment, fewest_segments};
 use crate::roots::GROWN_BRIGHTNESS_DRAW;
@@ -65,8 +66,9 @@ const WEIGHT_ONE: u32 = 1023;
 ///
 /// **Memory.** Per render strand: a [`GuideRecord`] (12 bytes) besides the
 /// [`StrandRoot`] every method keeps; the rest shape of render strands is never stored.
-/// Per guide: its rest and bent points (`segments + 1` `vec4` each) and two roots.
-/// See [`GuideStrands::memory`].
+/// Per guide: its rest and bent points (`segments + 1` `vec4` each) and two roots; with
+/// simulated guides, the simulation's state instead of the rest points. See
+/// [`GuideStrands::memory`].
 ///
 /// Of [`HairParams`] it uses `roots.seed` and `roots.density` (where render strands
 /// grow; [`GuideParams::strands`] is their count; without a density map they grow near
@@ -87,12 +89,8 @@ const WEIGHT_ONE: u32 = 1023;
 /// shape has no bend bound for segment reduction).
 #[derive(Debug)]
 pub struct GuideStrands {
-    /// The guides' rest shape and roots, and the first pass when they are not simulated:
-    /// the guides bent by the wind.
-    guides: GroomStrands,
-    /// The first pass when the guides are simulated (its strands in the order of
-    /// `guides`'s).
-    simulation: Option<SimulateStrands>,
+    /// The first pass: the guides bent by the wind, or simulated.
+    first: GuidePass,
     /// The frame the guide pass was last prepared for.
     guide_frame: Option<StrandFrame>,
     roots: Vec<StrandRoot>,
@@ -109,11 +107,46 @@ pub struct GuideStrands {
     mesh_bounds: (Vec3, Vec3),
 }
 
+/// The first pass of [`GuideStrands`], which holds the guides' rest shape, roots and
+/// colours (in the order the records index).
+#[derive(Debug)]
+enum GuidePass {
+    /// The guides bent by the wind (the groom pass).
+    Bent(Box<GroomStrands>),
+    /// The guides simulated (no groom pass is built).
+    Simulated(Box<SimulatedGuides>),
+}
+
+/// Simulated guides: the simulation, and the guides' shape on the CPU (the simulation
+/// holds it on the GPU).
+#[derive(Debug)]
+struct SimulatedGuides {
+    sim: SimulateStrands,
+    shape: GroomShape,
+}
+
+impl GuidePass {
+    fn stage(&self) -> &dyn StrandStage {
+        match self {
+            Self::Bent(bend) => bend.as_ref(),
+            Self::Simulated(guides) => &guides.sim,
+        }
+    }
+
+    fn shape(&self) -> &GroomShape {
+        match self {
+            Self::Bent(bend) => bend.shape(),
+            Self::Simulated(guides) => &guides.shape,
+        }
+    }
+}
+
 /// Bytes [`GuideStrands`] keeps beyond what every stage 1 method keeps (the output
 /// vertices and the render strands' rest and drawn [`StrandRoot`]s), from its buffers.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct GuideMemory {
-    /// The guides' rest points (`vec4` each).
+    /// The guides' rest points (`vec4` each) the bend pass reads; 0 when the guides are
+    /// simulated (their rest shape is then part of `guide_state`).
     pub guide_rest: u64,
     /// The bent guides the first pass writes (`vec4` each).
     pub guide_vertices: u64,
@@ -214,23 +247,24 @@ impl GuideStrands {
         let diagonal = (hi - lo).length();
         check_guides_on_mesh(mesh, guides, params.max_root_distance * diagonal)?;
 
-        let bend = GroomStrands::labelled(gpu, guides, hair, "strands: guides bend")?;
-        // The simulation shuffles, colours and sizes the guides as `bend` does: the same
+        // Both first passes shuffle, colour and size the guides as a groom: the same
         // guide at the same index.
-        let simulation = dynamics
-            .map(|d| SimulateStrands::groom(gpu, guides, mesh, mesh_buffers, hair, d))
-            .transpose()?;
-        let guide_stage: &dyn StrandStage = match &simulation {
-            Some(sim) => sim,
-            None => &bend,
+        let first = match dynamics {
+            None => GuidePass::Bent(Box::new(GroomStrands::labelled(
+                gpu,
+                guides,
+                hair,
+                "strands: guides bend",
+            )?)),
+            Some(dynamics) => {
+                let shape = GroomShape::new(gpu, guides, hair)?;
+                let sim = SimulateStrands::from_shape(gpu, &shape, mesh, mesh_buffers, dynamics)?;
+                GuidePass::Simulated(Box::new(SimulatedGuides { sim, shape }))
+            }
         };
+        let (guide_stage, shape) = (first.stage(), first.shape());
         let per_guide = guides.segments as usize + 1;
-        let guide_roots: Vec<Vec3> = bend
-            .rest_points()
-            .iter()
-            .step_by(per_guide)
-            .copied()
-            .collect();
+        let guide_roots: Vec<Vec3> = shape.rest.iter().step_by(per_guide).copied().collect();
         let grid = PointGrid::new(&guide_roots);
         let mut render = render;
         if render.roots.density.is_none() {
@@ -240,7 +274,7 @@ impl GuideStrands {
         let epsilon = 1e-7 * diagonal.max(f32::MIN_POSITIVE);
         let mut roots = sample_roots(mesh, &render.roots, &render.growth)?;
         let mut records = Vec::with_capacity(roots.len());
-        let guide_colors = bend.file_colors();
+        let guide_colors = shape.file_colors.as_deref();
         let mut file_colors = guide_colors.map(|_| Vec::with_capacity(roots.len()));
         let jitter = render.growth.color_jitter;
         for root in &mut roots {
@@ -249,7 +283,7 @@ impl GuideStrands {
             let (record, weights) = encode_record(&nearest, k, epsilon);
             let blend = |f: &dyn Fn(&StrandRoot) -> f32| -> f32 {
                 (nearest.iter().zip(&weights))
-                    .map(|(&(guide, _), w)| f(&bend.roots()[guide as usize]) * w)
+                    .map(|(&(guide, _), w)| f(&shape.roots[guide as usize]) * w)
                     .sum()
             };
             root.length = blend(&|g| g.length);
@@ -302,8 +336,7 @@ impl GuideStrands {
             Some(&constants_buffer.buffer),
         )?;
         Ok(Self {
-            guides: bend,
-            simulation,
+            first,
             guide_frame: None,
             roots,
             records,
@@ -372,24 +405,34 @@ impl GuideStrands {
         ))
     }
 
-    /// The guide pass: the guides' rest points, roots and per-frame uniforms (inputs of
-    /// the CPU mirror), and their bent points ([`StrandStage::buffers`]).
-    pub fn guides(&self) -> &GroomStrands {
-        &self.guides
+    /// The guide pass when the guides are bent by the wind ([`GuideStrands::new`]): the
+    /// guides' rest points, roots and per-frame uniforms (inputs of the CPU mirror), and
+    /// their bent points ([`StrandStage::buffers`]). `None` when they are simulated.
+    pub fn guides(&self) -> Option<&GroomStrands> {
+        match &self.first {
+            GuidePass::Bent(bend) => Some(bend.as_ref()),
+            GuidePass::Simulated(_) => None,
+        }
     }
 
     /// The guides' simulation, when they are simulated ([`GuideStrands::simulated`]):
     /// its vertices are the guides the interpolation reads.
     pub fn simulation(&self) -> Option<&SimulateStrands> {
-        self.simulation.as_ref()
+        match &self.first {
+            GuidePass::Bent(_) => None,
+            GuidePass::Simulated(guides) => Some(&guides.sim),
+        }
+    }
+
+    /// The guides' rest roots (length, width, colour, seed), in the order the
+    /// [`GuideRecord`]s index, whichever the first pass.
+    pub fn guide_roots(&self) -> &[StrandRoot] {
+        &self.first.shape().roots
     }
 
     /// The first pass: the simulation, or the guides bent by the wind.
     fn guide_stage(&self) -> &dyn StrandStage {
-        match &self.simulation {
-            Some(sim) => sim,
-            None => &self.guides,
-        }
+        self.first.stage()
     }
 
     /// One [`GuideRecord`] per render strand, in buffer order.
@@ -405,13 +448,16 @@ impl GuideStrands {
     /// The bytes this method keeps beyond the buffers every stage 1 method keeps.
     pub fn memory(&self) -> GuideMemory {
         let guides = self.guide_stage().buffers();
-        let points = self.guides.rest_points().len() as u64 * 16;
+        let (guide_rest, guide_state) = match &self.first {
+            GuidePass::Bent(bend) => (bend.rest_points().len() as u64 * 16, 0),
+            GuidePass::Simulated(guides) => (0, guides.sim.state().size()),
+        };
         GuideMemory {
-            guide_rest: points,
+            guide_rest,
             guide_vertices: guides.vertices.size(),
             guide_roots: 2 * guides.roots.size(),
             records: self.record_bytes,
-            guide_state: self.simulation.as_ref().map_or(0, |s| s.state().size()),
+            guide_state,
         }
     }
 }
@@ -457,9 +503,9 @@ impl StrandStage for GuideStrands {
     /// Prepares both passes: the guides bent for `time` (or simulated up to it), then the
     /// interpolation.
     fn prepare(&mut self, queue: &wgpu::Queue, time: f32) -> crate::Result<StrandFrame> {
-        let guide_frame = match &mut self.simulation {
-            Some(sim) => sim.prepare(queue, time)?,
-            None => self.guides.prepare(queue, time)?,
+        let guide_frame = match &mut self.first {
+            GuidePass::Bent(bend) => bend.prepare(queue, time)?,
+            GuidePass::Simulated(guides) => guides.sim.prepare(queue, time)?,
         };
         self.guide_frame = Some(guide_frame);
         let uniforms = self.uniforms_at(time);
@@ -491,9 +537,9 @@ impl StrandStage for GuideStrands {
 
     fn passes(&self) -> Vec<PassInfo> {
         let guides = PassInfo::new(self.guide_stage().pass().label());
-        let guides = match &self.simulation {
-            Some(_) => guides.reads([MESH]),
-            None => guides,
+        let guides = match &self.first {
+            GuidePass::Bent(_) => guides,
+            GuidePass::Simulated(_) => guides.reads([MESH]),
         };
         vec![
             guides.writes([GUIDE_VERTICES]),
@@ -504,9 +550,9 @@ impl StrandStage for GuideStrands {
     }
 
     fn set_wind(&mut self, wind: WindParams) -> crate::Result<()> {
-        self.guides.set_wind(wind.clone())?;
-        if let Some(sim) = &mut self.simulation {
-            sim.set_wind(wind.clone())?;
+        match &mut self.first {
+            GuidePass::Bent(bend) => bend.set_wind(wind.clone())?,
+            GuidePass::Simulated(guides) => guides.sim.set_wind(wind.clone())?,
         }
         self.pass.params.wind = wind;
         Ok(())
@@ -550,7 +596,10 @@ impl StrandStage for GuideStrands {
     /// The guides' simulation, when they are simulated: the colliders a caller moves
     /// with the body act on the guides.
     fn as_simulation_mut(&mut self) -> Option<&mut SimulateStrands> {
-        self.simulation.as_mut()
+        match &mut self.first {
+            GuidePass::Bent(_) => None,
+            GuidePass::Simulated(guides) => Some(&mut guides.sim),
+        }
     }
 
     /// Segment reduction bounded by the guides' rest shape and the wind's bend (as for
@@ -569,17 +618,18 @@ impl StrandStage for GuideStrands {
         let max_error = params.lod.segment_error_pixels;
         let longest = params.growth.length;
         let GuideUniforms { clump, noise, .. } = self.constants;
-        let simulated = self.simulation.is_some();
+        let simulated = matches!(self.first, GuidePass::Simulated(_));
+        let shape = self.first.shape();
         LodLevel::for_view_with(params, bounds, camera, width, height, |pixels_per_unit| {
             if simulated {
                 return (full, 0.0);
             }
             fewest_segments(full, max_error, pixels_per_unit, |k| {
-                let rest = (self.guides.chord_error)
+                let rest = (shape.chord_error)
                     .get(k as usize)
                     .copied()
                     .unwrap_or(f32::MAX);
-                let guides = rest + bend_error(k, self.guides.longest_segment, turn);
+                let guides = rest + bend_error(k, shape.longest_segment, turn);
                 interpolation_error(guides, k as f32 / full as f32, longest, clump, noise)
             })
         })

@@ -10,8 +10,9 @@ use pelage_scene::{
     Resampled,
 };
 
+use crate::groom::GroomShape;
 use crate::grow::{Input, MESH, StrandPass, StrandStage};
-use crate::{GroomStrands, LodLevel, MeshBuffers, StrandFrame, StrandRoot, StrandsError};
+use crate::{LodLevel, MeshBuffers, StrandFrame, StrandRoot, StrandsError};
 
 /// `vec4`s of simulation state per strand before its vertices (`STATE_HEADER` in WGSL):
 /// the root's position (w = 1 once posed), normal and tangent in the last frame.
@@ -228,7 +229,7 @@ impl SimulateStrands {
     }
 
     /// The strands of a groom file (shuffled, coloured and sized as
-    /// [`GroomStrands`] does), each root bound to the triangle of `mesh` nearest to it,
+    /// [`GroomStrands`](crate::GroomStrands) does), each root bound to the triangle of `mesh` nearest to it,
     /// simulated with `dynamics`. `mesh_buffers` must hold `mesh` (in any later pose).
     pub fn groom(
         gpu: &Gpu,
@@ -239,22 +240,32 @@ impl SimulateStrands {
         dynamics: &DynamicsParams,
     ) -> crate::Result<Self> {
         check_mesh(mesh, mesh_buffers)?;
-        // The groom method shuffles, colours and sizes the strands; its pass is dropped.
-        let stateless = GroomStrands::new(gpu, groom, hair)?;
-        let params = stateless.params().clone();
-        let per_strand = groom.segments as usize + 1;
+        // Shuffled, coloured and sized as the groom method does.
+        let shape = GroomShape::new(gpu, groom, hair)?;
+        Self::from_shape(gpu, &shape, mesh, mesh_buffers, dynamics)
+    }
+
+    /// [`SimulateStrands::groom`] from the groom's strands as [`GroomStrands`](crate::GroomStrands) holds
+    /// them (its strands in that order).
+    pub(crate) fn from_shape(
+        gpu: &Gpu,
+        shape: &GroomShape,
+        mesh: &Mesh,
+        mesh_buffers: &MeshBuffers,
+        dynamics: &DynamicsParams,
+    ) -> crate::Result<Self> {
+        check_mesh(mesh, mesh_buffers)?;
+        let params = shape.params.clone();
+        let per_strand = params.growth.segments as usize + 1;
         let triangles = usable_triangles(mesh);
         if triangles.is_empty() {
             return Err(StrandsError::NoSurface(
                 "every triangle has zero area: roots cannot be bound".into(),
             ));
         }
-        let mut roots = stateless.roots().to_vec();
-        let mut rest_local = Vec::with_capacity(stateless.rest_points().len());
-        for (root, points) in roots
-            .iter_mut()
-            .zip(stateless.rest_points().chunks(per_strand))
-        {
+        let mut roots = shape.roots.clone();
+        let mut rest_local = Vec::with_capacity(shape.rest.len());
+        for (root, points) in roots.iter_mut().zip(shape.rest.chunks(per_strand)) {
             let (triangle, bary) = nearest_triangle(mesh, &triangles, points[0]);
             root.triangle = triangle;
             root.bary = bary;

@@ -15,7 +15,8 @@ use pelage_scene::{
     WindParams,
 };
 use pelage_strands::{
-    GuideMemory, GuideStrands, LodLevel, MeshBuffers, StrandRoot, StrandStage, StrandsError,
+    GroomStrands, GuideMemory, GuideStrands, LodLevel, MeshBuffers, StrandRoot, StrandStage,
+    StrandsError,
 };
 
 mod common;
@@ -89,7 +90,7 @@ fn worst(a: &[Vec4], b: &[Vec4]) -> f32 {
 
 /// The CPU mirror of a frame at `t`: the guides bent by `deform_groom`, then interpolated.
 fn mirror(strands: &GuideStrands, mesh: &Mesh, t: f32) -> Vec<Vec4> {
-    let g = strands.guides();
+    let g = strands.guides().expect("the guides are bent");
     let bent = deform_groom(g.rest_points(), g.roots(), &g.uniforms_at(t));
     interpolate(
         mesh,
@@ -243,7 +244,7 @@ fn with_full_clumping_the_tips_meet_the_nearest_guide() {
     };
     let mut strands = built.strands(&gpu, &windy(), &params);
     let out = grow_on_gpu(&gpu, &mut strands, 1.3);
-    let bent = read_vertices(&gpu, &strands.guides().buffers().vertices);
+    let bent = read_vertices(&gpu, &strands.guides().unwrap().buffers().vertices);
     let k = strands.constants().k;
     let mut err = 0.0f32;
     let mut spread = 0.0f32;
@@ -479,10 +480,17 @@ fn simulated_guides_drive_the_render_strands_as_the_two_mirrors_composed() {
     // The simulation holds the guides in the order the records index.
     let sim = strands.simulation().unwrap();
     let seeds = |roots: &[StrandRoot]| roots.iter().map(|r| r.seed).collect::<Vec<_>>();
-    assert_eq!(seeds(sim.roots()), seeds(strands.guides().roots()));
+    let bend_order = GroomStrands::new(&gpu, &built.guides, &windy()).unwrap();
+    assert_eq!(seeds(sim.roots()), seeds(bend_order.roots()));
+    assert_eq!(seeds(strands.guide_roots()), seeds(bend_order.roots()));
     let labels: Vec<String> = strands.passes().into_iter().map(|p| p.label).collect();
     assert_eq!(labels, ["strands: simulate", "strands: guides"]);
-    assert!(strands.memory().guide_state > 0);
+    // No bend pass is built: the rest shape is counted once, in the simulation's state.
+    assert!(strands.guides().is_none());
+    let memory = strands.memory();
+    assert_eq!(memory.guide_rest, 0);
+    assert_eq!(memory.guide_state, sim.state().size());
+    assert_eq!(memory.guide_vertices, sim.buffers().vertices.size());
 
     // Frame 0 puts the guides at rest; frame 1 is one substep of a turning head: the GPU
     // against the simulation's mirror followed by the interpolation's.
@@ -581,7 +589,7 @@ fn render_strands_take_the_weighted_blend_of_their_guides_colours() {
         ..GuideParams::default()
     };
     let mut strands = built.strands(&gpu, &hair, &params);
-    let guide_colors = strands.guides().file_colors().unwrap().to_vec();
+    let guide_colors = strands.guides().unwrap().file_colors().unwrap().to_vec();
     let k = strands.constants().k;
     // The blend of each render strand's guides' colours with its record's weights, and
     // the colour the GPU's drawn roots hold, per strand.
