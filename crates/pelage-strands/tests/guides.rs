@@ -443,6 +443,32 @@ fn memory_of_1000_guides_for_50000_strands_against_storing_every_strand() {
     );
     assert_eq!(memory.records, 50_000 * 12);
     assert!(ratio <= 0.1, "{ratio}");
+
+    // Simulated guides keep the simulation's state (root pose, rest shape, positions,
+    // previous positions) instead of the rest points, and no bend pass.
+    let simulated = GuideStrands::simulated(
+        &gpu,
+        &mesh,
+        &buffers,
+        &guides,
+        &windy(),
+        &params,
+        &DynamicsParams::default(),
+    )
+    .unwrap();
+    let sim = simulated.memory();
+    println!(
+        "simulated: guide state {} + simulated guides {} + guide roots {} + records {} = {} bytes: {:.3}x",
+        sim.guide_state,
+        sim.guide_vertices,
+        sim.guide_roots,
+        sim.records,
+        sim.total(),
+        sim.total() as f64 / groom as f64
+    );
+    assert_eq!(sim.guide_rest, 0);
+    assert_eq!(sim.records, memory.records);
+    assert_eq!(sim.guide_vertices, memory.guide_vertices);
 }
 
 /// `mesh` turned by `rotation` about the origin.
