@@ -700,8 +700,10 @@ pub const STIFFNESS_INTERVAL: f32 = 1.0 / 120.0;
 
 /// How much longer than [`DynamicsParams::max_substep`] a substep may be, a fraction:
 /// frame times are `f32` seconds, so a frame of 1/60 s measured as a difference of two
-/// times is up to 0.5% longer or shorter (at 600 s), and without slack one frame in
-/// seven of 1/60 s took three substeps of 1/120 s instead of two.
+/// times is up to 0.4% longer or shorter at 600 s, and without slack about one frame in
+/// five of 1/60 s took three substeps of 1/120 s instead of two. The slack covers
+/// `f32` times up to 2 048 s (34 minutes); past that a time's rounding alone is over 1%
+/// of a 1/60 s frame, and callers should restart their clock.
 pub const SUBSTEP_SLACK: f32 = 0.01;
 
 /// The most colliders a simulation takes.

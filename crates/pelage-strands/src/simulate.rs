@@ -229,8 +229,9 @@ impl SimulateStrands {
     }
 
     /// The strands of a groom file (shuffled, coloured and sized as
-    /// [`GroomStrands`](crate::GroomStrands) does), each root bound to the triangle of `mesh` nearest to it,
-    /// simulated with `dynamics`. `mesh_buffers` must hold `mesh` (in any later pose).
+    /// [`GroomStrands`](crate::GroomStrands) does), each root bound to the triangle of
+    /// `mesh` nearest to it, simulated with `dynamics`. `mesh_buffers` must hold `mesh`
+    /// (in any later pose).
     pub fn groom(
         gpu: &Gpu,
         groom: &Resampled,
@@ -239,14 +240,13 @@ impl SimulateStrands {
         hair: &HairParams,
         dynamics: &DynamicsParams,
     ) -> crate::Result<Self> {
-        check_mesh(mesh, mesh_buffers)?;
         // Shuffled, coloured and sized as the groom method does.
         let shape = GroomShape::new(gpu, groom, hair)?;
         Self::from_shape(gpu, &shape, mesh, mesh_buffers, dynamics)
     }
 
-    /// [`SimulateStrands::groom`] from the groom's strands as [`GroomStrands`](crate::GroomStrands) holds
-    /// them (its strands in that order).
+    /// [`SimulateStrands::groom`] from the groom's strands as
+    /// [`GroomStrands`](crate::GroomStrands) holds them (its strands in that order).
     pub(crate) fn from_shape(
         gpu: &Gpu,
         shape: &GroomShape,
