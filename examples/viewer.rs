@@ -38,7 +38,8 @@ use glam::Vec3;
 use pelage::gpu::{Gpu, ShaderSources, wgpu};
 use pelage::scene::sigma_a_from_color;
 use pelage::scene::{
-    Absorption, ChiangParams, DynamicsParams, MAX_MELANIN, ShadowParams, Transparency, WindParams,
+    Absorption, ChiangParams, DEFAULT_MELANIN_REDNESS, DynamicsParams, MAX_MELANIN, ShadowParams,
+    Transparency, WindParams,
 };
 use pelage::scene::{Camera, HairParams, HairType, Light, ShadeParams, ShadingModel};
 use pelage::{FrameStats, Renderer, Scene, Update};
@@ -1102,9 +1103,15 @@ fn chiang_ui(ui: &mut egui::Ui, p: &mut ChiangParams, hair_color: Vec3) {
     slider(ui, &mut p.beta_n, 0.02..=1.0, "β_n azimuthal roughness");
     slider(ui, &mut p.alpha_deg, -10.0..=10.0, "α cuticle tilt (°)");
     slider(ui, &mut p.eta, 1.01..=2.5, "η index");
-    let pigments = ["from the hair colour", "melanin", "σ_a"];
+    let pigments = [
+        "from the hair colour",
+        "melanin (pbrt)",
+        "σ_a",
+        "melanin (Blender, Unreal)",
+    ];
     let pigment = |p: &ChiangParams| match p.absorption() {
         _ if p.sigma_a.is_some() => 2,
+        _ if p.melanin.is_some() => 3,
         Absorption::Fixed(_) => 1,
         Absorption::FromColor => 0,
     };
@@ -1114,12 +1121,20 @@ fn chiang_ui(ui: &mut egui::Ui, p: &mut ChiangParams, hair_color: Vec3) {
         p.sigma_a = None;
         p.eumelanin = None;
         p.pheomelanin = None;
+        p.melanin = None;
+        p.melanin_redness = None;
+        p.tint = None;
         match i {
             1 => {
                 p.eumelanin = Some(1.3);
                 p.pheomelanin = Some(0.0);
             }
             2 => p.sigma_a = Some(now),
+            3 => {
+                p.melanin = Some(0.5);
+                p.melanin_redness = Some(0.0);
+                p.tint = Some(Vec3::ONE);
+            }
             _ => {}
         }
     }
@@ -1146,6 +1161,25 @@ fn chiang_ui(ui: &mut egui::Ui, p: &mut ChiangParams, hair_color: Vec3) {
             log_slider(ui, &mut pheomelanin, MAX_MELANIN, "pheomelanin (red)");
             p.eumelanin = Some(eumelanin);
             p.pheomelanin = Some(pheomelanin);
+        }
+        3 => {
+            let mut melanin = p.melanin.unwrap_or(0.0);
+            let mut redness = p.melanin_redness.unwrap_or(DEFAULT_MELANIN_REDNESS);
+            let mut tint = p.tint.unwrap_or(Vec3::ONE).to_array();
+            slider(
+                ui,
+                &mut melanin,
+                0.0..=1.0,
+                "melanin (0.25 blond, 0.9 black)",
+            );
+            slider(ui, &mut redness, 0.0..=1.0, "melanin redness");
+            ui.horizontal(|ui| {
+                ui.color_edit_button_rgb(&mut tint);
+                ui.label("tint (linear)");
+            });
+            p.melanin = Some(melanin);
+            p.melanin_redness = Some(redness);
+            p.tint = Some(Vec3::from_array(tint));
         }
         _ => {
             ui.label("absorption from each strand's colour (hair panel)");

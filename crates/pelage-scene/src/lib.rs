@@ -43,9 +43,11 @@ pub use params::{
 };
 pub use scene_file::{MeshSource, SceneFile, SceneFileError};
 pub use shading::{
-    Absorption, ChiangParams, EUMELANIN_SIGMA_A, KajiyaKayParams, MAX_MELANIN, MarschnerParams,
-    PHEOMELANIN_SIGMA_A, SadeghiParams, ShadingModel, chiang_color_scale, sigma_a_from_color,
-    sigma_a_from_melanin, sigma_a_from_reflectance,
+    ARTIST_EUMELANIN_SIGMA_A, ARTIST_PHEOMELANIN_SIGMA_A, Absorption, ChiangParams,
+    DEFAULT_MELANIN_REDNESS, EUMELANIN_SIGMA_A, KajiyaKayParams, MAX_MELANIN, MarschnerParams,
+    PHEOMELANIN_SIGMA_A, SadeghiParams, ShadingModel, chiang_color_scale,
+    sigma_a_from_artist_melanin, sigma_a_from_color, sigma_a_from_melanin,
+    sigma_a_from_reflectance,
 };
 pub use surface_map::{MAX_MAP_FILE_BYTES, MAX_MAP_SIZE, MapError, MapImage, TextureMap};
 pub use tfx_file::{TfxFile, TfxFileError};

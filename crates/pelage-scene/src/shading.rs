@@ -311,6 +311,43 @@ pub const PHEOMELANIN_SIGMA_A: Vec3 = Vec3::new(0.187, 0.4, 1.05);
 /// black (the residual after one TT pass is below 1e-7).
 pub const MAX_MELANIN: f32 = 50.0;
 
+/// Eumelanin absorption per unit concentration as Blender's Principled Hair BSDF (Cycles and
+/// EEVEE) and Unreal's hair shading define it, per unit fibre radius (linear RGB). Not pbrt's
+/// [`EUMELANIN_SIGMA_A`]: the same concentration gives different hair in the two conventions.
+pub const ARTIST_EUMELANIN_SIGMA_A: Vec3 = Vec3::new(0.506, 0.841, 1.653);
+
+/// Pheomelanin absorption per unit concentration in Blender's and Unreal's convention (see
+/// [`ARTIST_EUMELANIN_SIGMA_A`]); pbrt's is [`PHEOMELANIN_SIGMA_A`].
+pub const ARTIST_PHEOMELANIN_SIGMA_A: Vec3 = Vec3::new(0.343, 0.733, 1.924);
+
+/// The `melanin_redness` a [`ChiangParams`] with `melanin` and no redness takes: 1, Blender's
+/// default for the Principled Hair BSDF's "Melanin Redness" input.
+pub const DEFAULT_MELANIN_REDNESS: f32 = 1.0;
+
+/// Absorption σ_a (per unit fibre radius) of hair given as Blender's Principled Hair BSDF
+/// ("Melanin concentration" parametrization) and Unreal's hair material give it:
+///
+/// ```text
+/// quantity    = -ln(max(1 - melanin, 1e-4))          melanin in [0, 1]
+/// eumelanin   = quantity · (1 - redness)             redness in [0, 1]
+/// pheomelanin = quantity · redness
+/// σ_a = eumelanin · (0.506, 0.841, 1.653) + pheomelanin · (0.343, 0.733, 1.924)
+///     + (ln(tint) / s(β_n))²                         per channel; tint (1, 1, 1) adds nothing
+/// ```
+///
+/// `s(β_n)` is [`chiang_color_scale`] of the azimuthal roughness (Blender's "Radial
+/// Roughness"), as Blender's tint uses it. A tint channel of 0 (infinite absorption in
+/// Blender) is taken as the smallest normal f32, an absorption above 200 per unit radius:
+/// black. Blender's "Random Color" is not modelled (it is 0 by default).
+pub fn sigma_a_from_artist_melanin(melanin: f32, redness: f32, tint: Vec3, beta_n: f32) -> Vec3 {
+    let quantity = -(1.0 - melanin).max(1.0e-4).ln();
+    let eumelanin = quantity * (1.0 - redness);
+    let pheomelanin = quantity * redness;
+    ARTIST_EUMELANIN_SIGMA_A * eumelanin
+        + ARTIST_PHEOMELANIN_SIGMA_A * pheomelanin
+        + reflectance_sigma(tint, beta_n, f32::MIN_POSITIVE)
+}
+
 /// Absorption σ_a (per unit fibre radius) of a fibre with `eumelanin` and `pheomelanin`
 /// concentrations: `σ_a = eumelanin · (0.419, 0.697, 1.37) + pheomelanin · (0.187, 0.4, 1.05)`
 /// (Chiang et al. 2016 eq. 8, after d'Eon et al. 2011). About 8 eumelanin is black hair, 1.3
@@ -332,12 +369,17 @@ pub fn chiang_color_scale(beta_n: f32) -> f32 {
 /// multiple scattering. `c` is clamped to `[1e-4, 1]` (NaN counts as black). This is what a
 /// scene's hair `color` means to the physically based models.
 pub fn sigma_a_from_reflectance(color: Vec3, beta_n: f32) -> Vec3 {
+    reflectance_sigma(color, beta_n, 1.0e-4)
+}
+
+/// Chiang's eq. 9 per channel with `c` clamped to `[floor, 1]` (NaN counts as `floor`).
+fn reflectance_sigma(color: Vec3, beta_n: f32, floor: f32) -> Vec3 {
     let s = chiang_color_scale(beta_n);
     let f = |x: f32| {
         let c = if x.is_nan() {
-            1.0e-4
+            floor
         } else {
-            x.clamp(1.0e-4, 1.0)
+            x.clamp(floor, 1.0)
         };
         let y = c.ln() / s;
         y * y
@@ -351,13 +393,26 @@ pub fn sigma_a_from_reflectance(color: Vec3, beta_n: f32) -> Vec3 {
 /// azimuthal term of roughness `beta_n`; cuticle tilt `alpha_deg`; absorption from
 /// melanin, from a given σ_a, or (the default) from the hair's own colour.
 ///
-/// Absorption, first match wins:
-/// - `sigma_a` set: that σ_a, per unit fibre radius;
-/// - `eumelanin` or `pheomelanin` set: [`sigma_a_from_melanin`] (an unset one is 0);
-/// - neither: every strand's own colour through [`sigma_a_from_reflectance`], so the hair
+/// Absorption, one of (setting two is refused, naming the second key):
+/// - `sigma_a`: that σ_a, per unit fibre radius;
+/// - `eumelanin` and/or `pheomelanin`: concentrations with pbrt-v3's coefficients,
+///   [`sigma_a_from_melanin`] (an unset one is 0);
+/// - `melanin` (with `melanin_redness` and `tint`): Blender's Principled Hair and Unreal's
+///   definition, [`sigma_a_from_artist_melanin`]; `melanin_redness` and `tint` only go with
+///   `melanin`;
+/// - none: every strand's own colour through [`sigma_a_from_reflectance`], so the hair
 ///   appears the colour the scene asks for (`growth.color`, with its jitter).
 ///
-/// Setting both `sigma_a` and a melanin concentration is refused.
+/// # From a Blender Principled Hair BSDF
+///
+/// Copy the node's inputs: "Melanin" → `melanin`, "Melanin Redness" → `melanin_redness`,
+/// "Tint" → `tint`, "Roughness" → `beta_m`, "Radial Roughness" → `beta_n`, "IOR" → `eta`,
+/// and "Offset" → `alpha_deg` **with its sign flipped**: `alpha_deg` follows pbrt-v3 and
+/// Chiang et al. 2016, and Blender's Offset tilts the scales the other way, so Blender's
+/// default Offset of 2° is `alpha_deg = -2`. (With the sign matched, the path tracer's mean
+/// FLIP against Cycles over a long brown groom fell from 0.105 to 0.057.) "Coat", "Random
+/// Color", "Random Roughness" and "Random" have no counterpart; their defaults (0) are what
+/// pelage renders. The "Absorption coefficient" parametrization is `sigma_a` (same units).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct ChiangParams {
@@ -366,14 +421,27 @@ pub struct ChiangParams {
     /// Azimuthal roughness in (0, 1] (pbrt's `beta_n`; 0.3 by default). Below 0.15 the
     /// azimuthal lobes get narrower than the GPU tables resolve well.
     pub beta_n: f32,
-    /// Cuticle scale tilt in degrees, in [-10, 10] (pbrt's `alpha`; 2 by default).
+    /// Cuticle scale tilt in degrees, in [-10, 10] (pbrt's `alpha`; 2 by default). Blender's
+    /// Principled Hair "Offset" has the opposite sign: its +2° is -2 here.
     pub alpha_deg: f32,
     /// Index of refraction in (1, 4]; hair is about 1.55.
     pub eta: f32,
-    /// Eumelanin concentration in [0, 50] (black about 8, brown 1.3, blond 0.3).
+    /// Eumelanin concentration in [0, 50] with pbrt-v3's coefficients (black about 8, brown
+    /// 1.3, blond 0.3). For Blender's and Unreal's convention use `melanin`.
     pub eumelanin: Option<f32>,
-    /// Pheomelanin concentration in [0, 50] (red hair).
+    /// Pheomelanin concentration in [0, 50] with pbrt-v3's coefficients (red hair).
     pub pheomelanin: Option<f32>,
+    /// Melanin in [0, 1] as Blender's Principled Hair and Unreal's hair define it (a
+    /// perceptually even amount: 0 white, about 0.25 blond, 0.5 brown, 0.9 and above black);
+    /// see [`sigma_a_from_artist_melanin`].
+    pub melanin: Option<f32>,
+    /// Fraction of `melanin` that is pheomelanin, in [0, 1] (Blender's "Melanin Redness",
+    /// Unreal's "Redness"); [`DEFAULT_MELANIN_REDNESS`] (1, Blender's default) when unset.
+    /// Only with `melanin`.
+    pub melanin_redness: Option<f32>,
+    /// Dye colour in [0, 1] per channel, linear RGB (Blender's "Tint"); white when unset.
+    /// Only with `melanin`.
+    pub tint: Option<Vec3>,
     /// Absorption per unit fibre radius, linear RGB, each in [0, 1e4].
     pub sigma_a: Option<Vec3>,
     /// Light scattered between fibres (dual scattering, Zinke et al. 2008), estimated
@@ -392,6 +460,9 @@ impl Default for ChiangParams {
             eta: 1.55,
             eumelanin: None,
             pheomelanin: None,
+            melanin: None,
+            melanin_redness: None,
+            tint: None,
             sigma_a: None,
             dual_scattering: true,
         }
@@ -428,7 +499,26 @@ impl ChiangParams {
                 self.pheomelanin.unwrap_or(0.0),
             ));
         }
+        if let Some(melanin) = self.melanin {
+            return Absorption::Fixed(sigma_a_from_artist_melanin(
+                melanin,
+                self.melanin_redness.unwrap_or(DEFAULT_MELANIN_REDNESS),
+                self.tint.unwrap_or(Vec3::ONE),
+                self.beta_n,
+            ));
+        }
         Absorption::FromColor
+    }
+
+    /// Hair as Blender's Principled Hair BSDF gives it with "Melanin", "Melanin Redness" and
+    /// "Tint" (see [`sigma_a_from_artist_melanin`]), defaults otherwise.
+    pub fn artist_melanin(melanin: f32, redness: f32, tint: Vec3) -> Self {
+        Self {
+            melanin: Some(melanin),
+            melanin_redness: Some(redness),
+            tint: Some(tint),
+            ..Self::default()
+        }
     }
 
     /// σ_a of a strand of colour `color`.
@@ -452,13 +542,47 @@ impl ChiangParams {
         if let Some(e) = self.pheomelanin {
             in_range(&format!("{p}.pheomelanin"), e, 0.0, MAX_MELANIN)?;
         }
+        if let Some(m) = self.melanin {
+            in_range(&format!("{p}.melanin"), m, 0.0, 1.0)?;
+        }
+        if let Some(r) = self.melanin_redness {
+            in_range(&format!("{p}.melanin_redness"), r, 0.0, 1.0)?;
+            if self.melanin.is_none() {
+                return Err(error(
+                    &format!("{p}.melanin_redness"),
+                    r,
+                    "melanin_redness is the red fraction of `melanin`; set melanin too (Blender's \
+                     convention) or use eumelanin/pheomelanin (pbrt's)",
+                ));
+            }
+        }
+        if let Some(t) = self.tint {
+            vec_in_range(&format!("{p}.tint"), t, 0.0, 1.0)?;
+            if self.melanin.is_none() {
+                return Err(error(
+                    &format!("{p}.tint"),
+                    t,
+                    "tint dyes `melanin` hair (as Blender's Principled Hair does); set melanin \
+                     too, or give the hair's colour with growth.color",
+                ));
+            }
+        }
+        let pbrt = self.eumelanin.is_some() || self.pheomelanin.is_some();
+        if let (Some(m), true) = (self.melanin, pbrt) {
+            return Err(error(
+                &format!("{p}.melanin"),
+                m,
+                "give either melanin (Blender's and Unreal's convention) or eumelanin/pheomelanin \
+                 (pbrt's), not both",
+            ));
+        }
         if let Some(s) = self.sigma_a {
             vec_in_range(&format!("{p}.sigma_a"), s, 0.0, 1.0e4)?;
-            if self.eumelanin.is_some() || self.pheomelanin.is_some() {
+            if pbrt || self.melanin.is_some() {
                 return Err(error(
                     &format!("{p}.sigma_a"),
                     s,
-                    "give either sigma_a or melanin concentrations (eumelanin, pheomelanin), not both",
+                    "give either sigma_a or melanin (melanin, or eumelanin/pheomelanin), not both",
                 ));
             }
         }
@@ -841,6 +965,144 @@ mod tests {
         let dark = sigma_a_from_reflectance(Vec3::splat(0.2), 0.3);
         assert!(light.x < dark.x, "{light} {dark}");
         assert_eq!(sigma_a_from_reflectance(Vec3::ONE, 0.3), Vec3::ZERO);
+    }
+
+    /// Numbers computed outside this code (Python, f64) from Blender's definition: Cycles'
+    /// `NODE_PRINCIPLED_HAIR_PIGMENT_CONCENTRATION` branch (melanin quantity
+    /// `-ln(max(1 - m, 1e-4))`, split by redness, coefficients (0.506, 0.841, 1.653) and
+    /// (0.343, 0.733, 1.924), tint through Chiang's eq. 9 with the radial roughness).
+    #[test]
+    fn artist_melanin_matches_blenders_definition() {
+        let close = |got: Vec3, want: [f64; 3]| {
+            for (g, w) in got.to_array().iter().zip(want) {
+                assert!(
+                    ((*g as f64) - w).abs() <= 2e-6 * w.max(1.0),
+                    "{got} against {want:?}"
+                );
+            }
+        };
+        // Blender's defaults: Melanin 0.8, Melanin Redness 1, Tint white.
+        close(
+            sigma_a_from_artist_melanin(0.8, 1.0, Vec3::ONE, 0.3),
+            [0.5520372039648965, 1.1797179898141956, 3.0965585435232095],
+        );
+        let tint = Vec3::new(0.9, 0.5, 0.2);
+        close(
+            sigma_a_from_artist_melanin(0.5, 0.25, tint, 0.3),
+            [0.32280687979894734, 0.5780783238698722, 1.2674383551665216],
+        );
+        close(
+            sigma_a_from_artist_melanin(0.5, 0.25, tint, 0.6),
+            [0.32290119069962503, 0.5821601738541662, 1.2894450373970239],
+        );
+        // Melanin 1 is clamped as Blender clamps it (1 - m at least 1e-4).
+        close(
+            sigma_a_from_artist_melanin(1.0, 0.0, Vec3::ONE, 0.3),
+            [4.660432228219948, 7.745896252831969, 15.224692634876629],
+        );
+        // Not pbrt's coefficients: the same eumelanin quantity absorbs more here.
+        let q = -(0.5f32.ln());
+        assert!(
+            sigma_a_from_artist_melanin(0.5, 0.0, Vec3::ONE, 0.3).x
+                > sigma_a_from_melanin(q, 0.0).x * 1.2
+        );
+        // A tint channel of 0 is black, and finite.
+        let black = sigma_a_from_artist_melanin(0.0, 0.0, Vec3::new(1.0, 0.0, 1.0), 0.3);
+        assert!(black.y.is_finite() && black.y > 200.0, "{black}");
+        assert_eq!((black.x, black.z), (0.0, 0.0));
+        // Through the parameters: redness defaults to Blender's 1, tint to white.
+        let p = ChiangParams {
+            melanin: Some(0.8),
+            ..Default::default()
+        };
+        p.validate().unwrap();
+        let Absorption::Fixed(s) = p.absorption() else {
+            panic!("melanin does not fix the absorption");
+        };
+        close(
+            s,
+            [0.5520372039648965, 1.1797179898141956, 3.0965585435232095],
+        );
+        let p = ChiangParams {
+            beta_n: 0.6,
+            ..ChiangParams::artist_melanin(0.5, 0.25, tint)
+        };
+        close(
+            p.sigma_a_for(Vec3::ONE),
+            [0.32290119069962503, 0.5821601738541662, 1.2894450373970239],
+        );
+    }
+
+    #[test]
+    fn artist_melanin_keys_are_checked_and_not_mixed() {
+        let with = |f: fn(&mut ChiangParams)| {
+            let mut p = ChiangParams::default();
+            f(&mut p);
+            p.validate().map_err(|e| (e.name, e.reason))
+        };
+        type Spoil = fn(&mut ChiangParams);
+        let cases: [(Spoil, &str); 10] = [
+            (|p| p.melanin = Some(1.01), "melanin"),
+            (|p| p.melanin = Some(-0.01), "melanin"),
+            (|p| p.melanin = Some(f32::NAN), "melanin"),
+            (
+                |p| {
+                    p.melanin = Some(0.5);
+                    p.melanin_redness = Some(1.5);
+                },
+                "melanin_redness",
+            ),
+            (
+                |p| {
+                    p.melanin = Some(0.5);
+                    p.tint = Some(Vec3::new(0.5, 1.2, 0.5));
+                },
+                "tint",
+            ),
+            (
+                |p| {
+                    p.melanin = Some(0.5);
+                    p.tint = Some(Vec3::new(0.5, f32::NAN, 0.5));
+                },
+                "tint",
+            ),
+            // Nothing silently ignored: redness and tint without melanin.
+            (|p| p.melanin_redness = Some(0.5), "melanin_redness"),
+            (|p| p.tint = Some(Vec3::splat(0.5)), "tint"),
+            // One source of absorption.
+            (
+                |p| {
+                    p.melanin = Some(0.5);
+                    p.eumelanin = Some(1.0);
+                },
+                "melanin",
+            ),
+            (
+                |p| {
+                    p.melanin = Some(0.5);
+                    p.sigma_a = Some(Vec3::splat(0.1));
+                },
+                "sigma_a",
+            ),
+        ];
+        for (spoil, field) in cases {
+            let got = with(spoil);
+            assert_eq!(
+                got.as_ref().map_err(|e| e.0.as_str()),
+                Err(format!("shading.chiang.{field}").as_str()),
+                "{field}: {got:?}"
+            );
+        }
+        // The edges are accepted.
+        assert_eq!(with(|p| p.melanin = Some(0.0)), Ok(()));
+        assert_eq!(
+            with(|p| {
+                p.melanin = Some(1.0);
+                p.melanin_redness = Some(0.0);
+                p.tint = Some(Vec3::ZERO);
+            }),
+            Ok(())
+        );
     }
 
     #[test]
