@@ -6,7 +6,7 @@
 - The built book (`mdbook build docs` writes BOOK_DIR): every relative `href` and
   `src` of every page must name a file that exists, and every `#anchor` an `id` (or
   `name`) in the page it points to.
-- README.md, as GitHub shows it: every relative link and image target (outside code)
+- README.md and crates/*/README.md, as GitHub shows them: every relative link and image target (outside code)
   must exist in the repository, and every `#anchor` into a markdown file must be the
   GitHub id of one of that file's headings.
 
@@ -17,7 +17,6 @@ broken link, 0 when there is none.
 from __future__ import annotations
 
 import html.parser
-import os
 import re
 import sys
 import unicodedata
@@ -175,14 +174,16 @@ def check_markdown(path: Path) -> list[str]:
 
 def main() -> int:
     book = Path(sys.argv[1]) if len(sys.argv) > 1 else ROOT / "docs" / "book"
-    errors = check_book(book.resolve()) + check_markdown(ROOT / "README.md")
+    readmes = [ROOT / "README.md", *sorted(ROOT.glob("crates/*/README.md"))]
+    errors = check_book(book.resolve())
+    for readme in readmes:
+        errors += check_markdown(readme)
     for error in errors:
         print(f"broken link: {error}", file=sys.stderr)
     pages = sum(1 for _ in book.rglob("*.html")) if book.exists() else 0
-    print(f"links: {pages} book pages and README.md checked, {len(errors)} broken")
+    print(f"links: {pages} book pages and {len(readmes)} READMEs checked, {len(errors)} broken")
     return 1 if errors else 0
 
 
 if __name__ == "__main__":
-    os.chdir(ROOT)
     sys.exit(main())
