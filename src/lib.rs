@@ -103,7 +103,12 @@ pub enum Error {
 /// Result of the frame pipeline.
 pub type Result<T, E = Error> = std::result::Result<T, E>;
 
-/// The README's Rust examples, compiled as doc tests (the engine example among them).
+/// The README's Rust examples, compiled as doc tests.
 #[cfg(doctest)]
 #[doc = include_str!("../README.md")]
 mod readme {}
+
+/// The book's library page, compiled as doc tests (the engine example).
+#[cfg(doctest)]
+#[doc = include_str!("../docs/src/library.md")]
+mod book_library {}

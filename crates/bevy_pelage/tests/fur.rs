@@ -82,7 +82,7 @@ fn bevy_frames_hold_moving_fur_equal_to_pelages_own() {
         map.mean(),
         differing(&own, &bevy_frame)
     );
-    // PELAGE_BEVY_OUT=DIR keeps both pictures (docs/bevy.png is Bevy's frame).
+    // PELAGE_BEVY_OUT=DIR keeps both pictures (docs/src/images/bevy.png is Bevy's frame).
     if let Some(dir) = std::env::var_os("PELAGE_BEVY_OUT").map(std::path::PathBuf::from) {
         std::fs::create_dir_all(&dir).unwrap();
         bevy_frame.save(dir.join("bevy.png")).unwrap();
