@@ -430,9 +430,7 @@ impl Renderer {
         self.strands.set_lod(level)?;
         let frame = self.strands.prepare(&gpu.queue, t)?;
         self.frame = Some(frame);
-        for (i, ((shadow, hand_over), light)) in
-            self.shadows.iter().zip(&self.lights).enumerate()
-        {
+        for (i, ((shadow, hand_over), light)) in self.shadows.iter().zip(&self.lights).enumerate() {
             shadow.prepare(
                 &gpu.queue,
                 &frame,

@@ -36,11 +36,11 @@ pub use mesh::{Mesh, MeshError, MeshReport};
 pub use obj::{ObjError, load_obj, parse_obj};
 pub use params::{
     AdsmParams, Collider, DeepOpacityParams, DynamicsParams, GrowthParams, HairParams, HairType,
-    LayerSpacing, MAX_ACCELERATION, MAX_COLLIDERS, MAX_COLOR, MAX_FORCE, MAX_MAP_VALUE, MAX_REGIONS, MAX_WAVES,
-    MAX_SEGMENTS, MapParams,
-    MeshMotion, OpacityFormat, ParamError, RegionParams, RootParams, RootTextures,
-    STIFFNESS_INTERVAL, SUBSTEP_SLACK, SUBSTEP_ULPS, ShadeParams, ShadowMapParams, ShadowParams, Splat,
-    SurfaceInterpolation, VoxelParams, WindParams,
+    LayerSpacing, MAX_ACCELERATION, MAX_COLLIDERS, MAX_COLOR, MAX_FORCE, MAX_MAP_VALUE,
+    MAX_REGIONS, MAX_SEGMENTS, MAX_WAVES, MapParams, MeshMotion, OpacityFormat, ParamError,
+    RegionParams, RootParams, RootTextures, STIFFNESS_INTERVAL, SUBSTEP_SLACK, SUBSTEP_ULPS,
+    ShadeParams, ShadowMapParams, ShadowParams, Splat, SurfaceInterpolation, VoxelParams,
+    WindParams,
 };
 pub use scene_file::{MeshSource, SceneFile, SceneFileError};
 pub use shading::{

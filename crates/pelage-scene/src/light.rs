@@ -137,9 +137,7 @@ impl Light {
         match self {
             Self::Directional(d) => d.to_light().map(|_| ()).map_err(rename),
             Self::Point(p) => {
-                if !p.position.is_finite()
-                    || p.position.abs().max_element() > crate::MAX_EXTENT
-                {
+                if !p.position.is_finite() || p.position.abs().max_element() > crate::MAX_EXTENT {
                     return Err(crate::ParamError {
                         name: format!("lights[{index}].position"),
                         value: format!("{:?}", p.position),

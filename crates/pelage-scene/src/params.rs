@@ -389,7 +389,9 @@ impl RootParams {
             if product > f64::from(crate::MAX_EXTENT) {
                 return Err(ParamError::new(
                     "roots.length_scale",
-                    format!("largest {scale} times a strand length of up to {longest} = {product:e}"),
+                    format!(
+                        "largest {scale} times a strand length of up to {longest} = {product:e}"
+                    ),
                     &format!(
                         "the longest scaled strand must be at most {:e} scene units",
                         crate::MAX_EXTENT

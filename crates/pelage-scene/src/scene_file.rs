@@ -434,7 +434,10 @@ impl SceneFile {
                 (
                     "growth.segments",
                     growth.segments != growth_defaults.segments,
-                    format!("{} (the groom's segments are groom.segments)", growth.segments),
+                    format!(
+                        "{} (the groom's segments are groom.segments)",
+                        growth.segments
+                    ),
                 ),
                 (
                     "growth.length",
@@ -493,8 +496,7 @@ impl SceneFile {
             return ignored(key, "a region map".into(), "a [groom] has no regions");
         }
         if let ShadowParams::Voxel(v) = &self.shadow {
-            if v.voxel_size.is_some() && v.resolution != crate::VoxelParams::default().resolution
-            {
+            if v.voxel_size.is_some() && v.resolution != crate::VoxelParams::default().resolution {
                 return ignored(
                     "shadow.resolution",
                     format!("{:?}", v.resolution),

@@ -7,8 +7,8 @@ use std::path::Path;
 
 use glam::{Vec2, Vec3, Vec4};
 use pelage_scene::{
-    Camera, DirectionalLight, DynamicsParams, GuideParams, Light, MapImage, PointLight,
-    SceneFile, SceneFileError, Transparency, WindParams,
+    Camera, DirectionalLight, DynamicsParams, GuideParams, Light, MapImage, PointLight, SceneFile,
+    SceneFileError, Transparency, WindParams,
 };
 
 /// The key of a scene's parameter error, or a panic naming what came instead.
@@ -27,9 +27,8 @@ fn message_of(text: &str) -> String {
 fn a_light_whose_colour_times_intensity_overflows_is_refused_for_every_kind() {
     for kind in ["directional", "point"] {
         // Each factor is finite; the product is 1e40, past f32.
-        let text = format!(
-            "[[lights]]\nkind = \"{kind}\"\ncolor = [1e20, 1.0, 1.0]\nintensity = 1e20\n"
-        );
+        let text =
+            format!("[[lights]]\nkind = \"{kind}\"\ncolor = [1e20, 1.0, 1.0]\nintensity = 1e20\n");
         assert_eq!(key_of(&text), "lights[0].intensity", "{kind}");
         assert!(message_of(&text).contains("color x intensity"), "{kind}");
         // Below the bound, each channel's product, is fine.
@@ -104,8 +103,10 @@ fn camera_keys_are_checked_as_keys_with_their_ranges() {
         assert!(!message.contains("projection"), "{text}: {message}");
         assert!(!message.contains("(matrix)"), "{text}: {message}");
     }
-    assert!(message_of("[camera]\neye = [1.0, 2.0, 3.0]\ntarget = [1.0, 2.0, 3.0]\n")
-        .contains("camera.eye"));
+    assert!(
+        message_of("[camera]\neye = [1.0, 2.0, 3.0]\ntarget = [1.0, 2.0, 3.0]\n")
+            .contains("camera.eye")
+    );
     // The bounds themselves are accepted and give usable matrices.
     for text in [
         "[camera]\nnear = 1e-6\nfar = 1.0\n",
@@ -138,7 +139,10 @@ fn a_camera_straight_above_or_below_its_target_gives_a_usable_view() {
         assert!(camera.view().is_finite());
         // The target is straight ahead, `up` points up the picture.
         let ahead = m.view.transform_point3(target);
-        assert!(ahead.x.abs() < 1e-5 && ahead.y.abs() < 1e-5 && ahead.z < 0.0, "{ahead}");
+        assert!(
+            ahead.x.abs() < 1e-5 && ahead.y.abs() < 1e-5 && ahead.z < 0.0,
+            "{ahead}"
+        );
         let above = m.view.transform_point3(target + up);
         assert!(above.y > 0.99 && above.x.abs() < 1e-5, "{eye}: {above}");
         // Every point near the target lands on the picture, in front of the eye.
@@ -329,8 +333,7 @@ fn maps_of_every_png_bit_depth_and_colour_type_read_native_regions_and_unit_valu
             ((1u32 << depth as u8) - 1) as u16
         };
         // Regions: native integers, so region 1 is 1 at every depth.
-        let image =
-            MapImage::decode(&png_bytes(color, depth, [0, 1]), Path::new("r.png")).unwrap();
+        let image = MapImage::decode(&png_bytes(color, depth, [0, 1]), Path::new("r.png")).unwrap();
         assert_eq!(image.reds().collect::<Vec<_>>(), [0, 1], "{name}");
         assert_eq!(image.region(Vec2::new(0.75, 0.5)), 1, "{name}");
         assert_eq!(image.max_value(), max, "{name}");
@@ -341,11 +344,9 @@ fn maps_of_every_png_bit_depth_and_colour_type_read_native_regions_and_unit_valu
         assert_eq!(image.scalar(Vec2::new(0.75, 0.5)), 1.0, "{name}");
         assert_eq!(image.color(Vec2::new(0.75, 0.5)).x, 1.0, "{name}");
         if max > 1 {
-            let image = MapImage::decode(
-                &png_bytes(color, depth, [0, max / 3]),
-                Path::new("m.png"),
-            )
-            .unwrap();
+            let image =
+                MapImage::decode(&png_bytes(color, depth, [0, max / 3]), Path::new("m.png"))
+                    .unwrap();
             let v = image.scalar(Vec2::new(0.75, 0.5));
             let want = f32::from(max / 3) / f32::from(max);
             assert!((v - want).abs() < 1e-6, "{name}: {v} against {want}");
@@ -444,12 +445,20 @@ fn keys_without_effect_are_errors_naming_them() {
         ),
         (format!("{guided}[hair.roots]\ncount = 5\n"), "roots.count"),
         // The shape of a groom's strands is its file's.
-        (format!("{groom}[hair.growth]\nlength = 0.5\n"), "growth.length"),
         (
-            format!("{guided}[hair.growth]\nhair_type = {{ kind = \"curly\", radius = 0.1, pitch = 0.1 }}\n"),
+            format!("{groom}[hair.growth]\nlength = 0.5\n"),
+            "growth.length",
+        ),
+        (
+            format!(
+                "{guided}[hair.growth]\nhair_type = {{ kind = \"curly\", radius = 0.1, pitch = 0.1 }}\n"
+            ),
             "growth.hair_type",
         ),
-        (format!("{groom}[hair.growth]\nsegments = 4\n"), "growth.segments"),
+        (
+            format!("{groom}[hair.growth]\nsegments = 4\n"),
+            "growth.segments",
+        ),
         // Regions with no map, a map with no regions.
         (
             "[[hair.growth.regions]]\nlength = 0.3\n".to_string(),
@@ -500,8 +509,14 @@ fn keys_without_effect_are_errors_naming_them() {
 fn colours_and_scaled_lengths_stay_within_what_32_bit_shading_holds() {
     for (text, key) in [
         ("[hair.growth]\ncolor = [1e30, 0.0, 0.0]\n", "growth.color"),
-        ("[shade]\nmesh_color = [0.0, 1e30, 0.0]\n", "shade.mesh_color"),
-        ("[shade]\nbackground = [-1.0, 0.0, 0.0]\n", "shade.background"),
+        (
+            "[shade]\nmesh_color = [0.0, 1e30, 0.0]\n",
+            "shade.mesh_color",
+        ),
+        (
+            "[shade]\nbackground = [-1.0, 0.0, 0.0]\n",
+            "shade.background",
+        ),
         ("[shade]\nambient = 1e30\n", "shade.ambient"),
     ] {
         assert_eq!(key_of(text), key, "{text}");

@@ -186,7 +186,10 @@ pub fn sample_roots(
         let weighted = if maps.is_empty() || total.is_nan() || total > 0.0 {
             String::new()
         } else {
-            format!(", weighted by {}, which is 0 on every triangle", maps.join(" and "))
+            format!(
+                ", weighted by {}, which is 0 on every triangle",
+                maps.join(" and ")
+            )
         };
         return Err(crate::StrandsError::NoSurface(format!(
             "total weighted area is {total} over {} triangles ({} degenerate){weighted}",

@@ -614,6 +614,9 @@ fn a_substep_at_its_floor_moves_the_strands_and_one_below_it_is_refused() {
     );
     for below in [1e-4, floor * 0.9] {
         let e = SimulateStrands::grown(&gpu, &mesh, &buffers, &params, &with(below)).unwrap_err();
-        assert!(e.to_string().contains("dynamics.max_substep"), "{below}: {e}");
+        assert!(
+            e.to_string().contains("dynamics.max_substep"),
+            "{below}: {e}"
+        );
     }
 }
