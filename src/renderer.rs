@@ -379,6 +379,11 @@ impl Renderer {
         )?;
         let plan = frame_plan(strands.as_ref(), &shadows, hair.as_ref());
         plan.validate()?;
+        // A point light at the centre the shadows are fitted around has no direction.
+        let shadow_target = (reach.0 + reach.1) * 0.5;
+        for (i, light) in scene.lights.iter().enumerate() {
+            light.shadow_light(i, shadow_target)?;
+        }
         let timer = GpuTimer::new(gpu, 64)?;
         let views = targets.view_set();
         Ok(Self {
@@ -390,7 +395,7 @@ impl Renderer {
             targets,
             timer,
             lights: scene.lights.clone(),
-            shadow_target: (reach.0 + reach.1) * 0.5,
+            shadow_target,
             reach,
             visibility,
             stride,
@@ -425,11 +430,11 @@ impl Renderer {
         self.strands.set_lod(level)?;
         let frame = self.strands.prepare(&gpu.queue, t)?;
         self.frame = Some(frame);
-        for ((shadow, hand_over), light) in self.shadows.iter().zip(&self.lights) {
+        for (i, ((shadow, hand_over), light)) in self.shadows.iter().zip(&self.lights).enumerate() {
             shadow.prepare(
                 &gpu.queue,
                 &frame,
-                &light.as_directional(self.shadow_target),
+                &light.shadow_light(i, self.shadow_target)?,
             )?;
             hand_over.prepare(&frame);
         }

@@ -33,10 +33,44 @@ impl Default for Camera {
     }
 }
 
+/// The narrowest and widest `fov_y` accepted, radians: 1e-4 from 0 and from π (a
+/// narrower one scales clip coordinates past 32-bit floats, a wider one has no
+/// perspective left).
+pub const FOV_MARGIN: f32 = 1.0e-4;
+
+/// The nearest `near` plane accepted, scene units: depths of points closer than about
+/// 1e-7 of a unit to 1 cannot be told apart in 32-bit floats.
+pub const MIN_NEAR: f32 = 1.0e-6;
+
+/// The largest `far / near` accepted: beyond it the depth buffer (32-bit float) cannot
+/// tell apart surfaces 1% apart at the far plane.
+pub const MAX_DEPTH_RATIO: f32 = 1.0e6;
+
+/// How close to vertical a view may be, as the sine of its angle to the y axis, before
+/// [`Camera::up`] stops using y as the up vector.
+const PARALLEL: f32 = 1.0e-4;
+
 impl Camera {
-    /// World to view transform (right-handed, y up).
+    /// The up vector of the look-at: the y axis, unless the view is vertical (within an
+    /// angle whose sine is 1e-4 of the y axis: a top or bottom view, where y gives no
+    /// up), then -z when looking down and +z when looking up, which is where y's
+    /// projection on the picture points for a camera tilted over its target from the +z
+    /// side (the default camera's side): a top view has -z at the top of the picture.
+    pub fn up(&self) -> Vec3 {
+        let view = (self.target - self.eye).normalize_or_zero();
+        if view.cross(Vec3::Y).length() > PARALLEL {
+            Vec3::Y
+        } else if view.y < 0.0 {
+            Vec3::NEG_Z
+        } else {
+            Vec3::Z
+        }
+    }
+
+    /// World to view transform (right-handed), up being [`Camera::up`]: y, but for a
+    /// top or bottom view.
     pub fn view(&self) -> Mat4 {
-        glam::camera::rh::view::look_at_mat4(self.eye, self.target, Vec3::Y)
+        glam::camera::rh::view::look_at_mat4(self.eye, self.target, self.up())
     }
 
     /// View to clip transform for wgpu's [0, 1] depth range.
@@ -81,44 +115,94 @@ impl Camera {
         }
     }
 
-    /// Checks that the camera defines a usable projection.
+    /// Checks that the camera defines a usable view and projection; the error names
+    /// the key (`camera.eye`, `camera.target`, `camera.fov_y`, `camera.near`,
+    /// `camera.far`) and its allowed range.
     pub fn validate(&self) -> Result<(), crate::ParamError> {
-        let bad = |name: &str, value: String, reason: &str| crate::ParamError {
+        let bad = |name: &str, value: String, reason: String| crate::ParamError {
             name: name.into(),
             value,
-            reason: reason.into(),
+            reason,
         };
-        if !self.eye.is_finite() || !self.target.is_finite() {
-            return Err(bad(
-                "camera.eye",
-                format!("{:?}", self.eye),
-                "eye and target must be finite",
-            ));
+        for (name, p) in [("camera.eye", self.eye), ("camera.target", self.target)] {
+            if !p.is_finite() || p.abs().max_element() > crate::MAX_EXTENT {
+                return Err(bad(
+                    name,
+                    format!("{p:?}"),
+                    format!(
+                        "every component must be finite and at most {:e} in magnitude",
+                        crate::MAX_EXTENT
+                    ),
+                ));
+            }
         }
         if (self.eye - self.target).length_squared() < 1e-12 {
             return Err(bad(
                 "camera.target",
                 format!("{:?}", self.target),
-                "must differ from the eye",
+                format!(
+                    "must differ from camera.eye = {:?}: the camera looks from the eye at the \
+                     target",
+                    self.eye
+                ),
             ));
         }
-        if !(self.fov_y > 0.0 && self.fov_y < std::f32::consts::PI) {
+        let pi = std::f32::consts::PI;
+        if !(self.fov_y >= FOV_MARGIN && self.fov_y <= pi - FOV_MARGIN) {
             return Err(bad(
                 "camera.fov_y",
                 format!("{}", self.fov_y),
-                "must be in (0, π) radians",
+                format!(
+                    "must be in [{FOV_MARGIN:e}, π - {FOV_MARGIN:e}] radians (the vertical field \
+                     of view, about 0.006 to 179.994 degrees)"
+                ),
             ));
         }
-        if !(self.near > 0.0 && self.far > self.near && self.far.is_finite()) {
+        if !(self.near >= MIN_NEAR && self.near <= crate::MAX_EXTENT) {
             return Err(bad(
                 "camera.near",
-                format!("{} .. {}", self.near, self.far),
-                "needs 0 < near < far < inf",
+                format!("{}", self.near),
+                format!(
+                    "must be in [{MIN_NEAR:e}, {:e}] scene units (and below camera.far)",
+                    crate::MAX_EXTENT
+                ),
             ));
+        }
+        let far_max = (self.near * MAX_DEPTH_RATIO).min(crate::MAX_EXTENT);
+        if !(self.far > self.near && self.far <= far_max) {
+            return Err(bad(
+                "camera.far",
+                format!("{}", self.far),
+                format!(
+                    "must be in ({}, {far_max:e}]: beyond camera.near = {} and at most \
+                     {MAX_DEPTH_RATIO:e} times it (32-bit depth cannot resolve more) and \
+                     {:e} scene units",
+                    self.near,
+                    self.near,
+                    crate::MAX_EXTENT
+                ),
+            ));
+        }
+        // The ranges above keep the matrices usable; this is a safety net that names
+        // the camera's keys, not the matrices.
+        for (width, height) in [(1, 1), (MAX_ASPECT_SIDE, 1), (1, MAX_ASPECT_SIDE)] {
+            self.matrices(width, height).validate().map_err(|e| {
+                bad(
+                    "camera",
+                    format!(
+                        "eye {:?}, target {:?}, fov_y {}, near {}, far {}",
+                        self.eye, self.target, self.fov_y, self.near, self.far
+                    ),
+                    format!("gives no usable view: {}", e.reason),
+                )
+            })?;
         }
         Ok(())
     }
 }
+
+/// The most extreme aspect ratio [`Camera::validate`] tries the matrices at.
+const MAX_ASPECT_SIDE: u32 = 16384;
 
 /// The camera as every pass sees it: world to view and view to clip (wgpu's clip space,
 /// depth in [0, 1]). This is what an engine hands pelage each frame, as its own render

@@ -25,21 +25,22 @@ pub mod transparency;
 #[cfg(feature = "usd")]
 pub mod usd_file;
 
-pub use camera::{Camera, CameraMatrices};
+pub use camera::{Camera, CameraMatrices, FOV_MARGIN, MAX_DEPTH_RATIO, MIN_NEAR};
 pub use groom::{Groom, GroomError, GroomSource, Resampled};
 pub use guides::{GuideParams, MAX_GUIDE_NEIGHBOURS, MAX_GUIDES};
 pub use hair_file::{HairFile, HairFileError};
-pub use light::{DirectionalLight, Light, MAX_LIGHTS, PointLight};
+pub use light::{DirectionalLight, Light, MAX_LIGHTS, MAX_RADIANCE, PointLight, check_radiance};
 pub use limits::{MAX_EXTENT, MAX_GROOM_FILE_BYTES, MAX_OBJ_FILE_BYTES, MAX_SCENE_FILE_BYTES};
 pub use lod::{LodParams, Transition};
 pub use mesh::{Mesh, MeshError, MeshReport};
 pub use obj::{ObjError, load_obj, parse_obj};
 pub use params::{
     AdsmParams, Collider, DeepOpacityParams, DynamicsParams, GrowthParams, HairParams, HairType,
-    LayerSpacing, MAX_ACCELERATION, MAX_COLLIDERS, MAX_FORCE, MAX_REGIONS, MAX_SEGMENTS, MapParams,
-    MeshMotion, OpacityFormat, ParamError, RegionParams, RootParams, RootTextures,
-    STIFFNESS_INTERVAL, SUBSTEP_SLACK, ShadeParams, ShadowMapParams, ShadowParams, Splat,
-    SurfaceInterpolation, VoxelParams, WindParams,
+    LayerSpacing, MAX_ACCELERATION, MAX_COLLIDERS, MAX_COLOR, MAX_FORCE, MAX_MAP_VALUE,
+    MAX_REGIONS, MAX_SEGMENTS, MAX_WAVES, MapParams, MeshMotion, OpacityFormat, ParamError,
+    RegionParams, RootParams, RootTextures, STIFFNESS_INTERVAL, SUBSTEP_SLACK, SUBSTEP_ULPS,
+    ShadeParams, ShadowMapParams, ShadowParams, Splat, SurfaceInterpolation, VoxelParams,
+    WindParams,
 };
 pub use scene_file::{MeshSource, SceneFile, SceneFileError};
 pub use shading::{
@@ -51,6 +52,6 @@ pub use shading::{
 };
 pub use surface_map::{MAX_MAP_FILE_BYTES, MAX_MAP_SIZE, MapError, MapImage, TextureMap};
 pub use tfx_file::{TfxFile, TfxFileError};
-pub use transparency::{MAX_OIT_K, Transparency, WboitWeight};
+pub use transparency::{MAX_OIT_K, MIN_NODES_PER_PIXEL, MIN_POOL, Transparency, WboitWeight};
 #[cfg(feature = "usd")]
 pub use usd_file::UsdFileError;

@@ -26,7 +26,9 @@ impl Default for DirectionalLight {
 }
 
 impl DirectionalLight {
-    /// Unit vector pointing from the scene towards the light, or an error for a zero or non-finite direction.
+    /// Unit vector pointing from the scene towards the light, or an error for a zero or
+    /// non-finite direction, or a colour or intensity out of range (see
+    /// [`check_radiance`]).
     pub fn to_light(&self) -> Result<Vec3, crate::ParamError> {
         let d = -self.direction;
         if !d.is_finite() || d.length_squared() < 1e-12 {
@@ -36,15 +38,52 @@ impl DirectionalLight {
                 reason: "must be a finite, non-zero vector".into(),
             });
         }
-        if !self.color.is_finite() || !self.intensity.is_finite() || self.intensity < 0.0 {
-            return Err(crate::ParamError {
-                name: "light.intensity".into(),
-                value: format!("{:?} x {}", self.color, self.intensity),
-                reason: "colour and intensity must be finite and >= 0".into(),
-            });
-        }
+        check_radiance("light.", self.color, self.intensity)?;
         Ok(d.normalize())
     }
+}
+
+/// The largest colour x intensity a light may have, per channel: the shaders multiply it
+/// by the hair's scattering (and a point light's by `1 / max(distance², 1e-4)`) and sum
+/// up to [`MAX_LIGHTS`] of them in 32-bit floats, which stays finite from this bound.
+pub const MAX_RADIANCE: f32 = 1.0e6;
+
+/// Checks a light's `color` (every channel finite and >= 0), its `intensity` (finite
+/// and >= 0) and their product (every channel at most [`MAX_RADIANCE`]: each factor
+/// may be in range while their product overflows to infinity). Errors name
+/// `{prefix}color` or `{prefix}intensity`.
+pub fn check_radiance(prefix: &str, color: Vec3, intensity: f32) -> Result<(), crate::ParamError> {
+    let bad = |field: &str, value: String, reason: String| crate::ParamError {
+        name: format!("{prefix}{field}"),
+        value,
+        reason,
+    };
+    if !color.is_finite() || color.min_element() < 0.0 {
+        return Err(bad(
+            "color",
+            format!("{color:?}"),
+            "every channel must be finite and >= 0".into(),
+        ));
+    }
+    if !intensity.is_finite() || intensity < 0.0 {
+        return Err(bad(
+            "intensity",
+            intensity.to_string(),
+            "must be finite and >= 0".into(),
+        ));
+    }
+    let radiance = color.as_dvec3() * f64::from(intensity);
+    if radiance.max_element() > f64::from(MAX_RADIANCE) {
+        return Err(bad(
+            "intensity",
+            format!("{intensity} (times color {color:?}: {radiance:?})"),
+            format!(
+                "color x intensity must be at most {MAX_RADIANCE:e} in every channel \
+                 (larger values overflow 32-bit floats in the shaders)"
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// A point light: radiance falls off with the square of the distance.
@@ -98,33 +137,17 @@ impl Light {
         match self {
             Self::Directional(d) => d.to_light().map(|_| ()).map_err(rename),
             Self::Point(p) => {
-                let bad = |field: &str, value: String, reason: &str| crate::ParamError {
-                    name: format!("lights[{index}].{field}"),
-                    value,
-                    reason: reason.into(),
-                };
-                if !p.position.is_finite() {
-                    return Err(bad(
-                        "position",
-                        format!("{:?}", p.position),
-                        "must be finite",
-                    ));
+                if !p.position.is_finite() || p.position.abs().max_element() > crate::MAX_EXTENT {
+                    return Err(crate::ParamError {
+                        name: format!("lights[{index}].position"),
+                        value: format!("{:?}", p.position),
+                        reason: format!(
+                            "every component must be finite and at most {:e} in magnitude",
+                            crate::MAX_EXTENT
+                        ),
+                    });
                 }
-                if !p.color.is_finite() || p.color.min_element() < 0.0 {
-                    return Err(bad(
-                        "color",
-                        format!("{:?}", p.color),
-                        "must be finite and >= 0",
-                    ));
-                }
-                if !p.intensity.is_finite() || p.intensity < 0.0 {
-                    return Err(bad(
-                        "intensity",
-                        p.intensity.to_string(),
-                        "must be finite and >= 0",
-                    ));
-                }
-                Ok(())
+                check_radiance(&format!("lights[{index}]."), p.color, p.intensity)
             }
         }
     }
@@ -157,6 +180,34 @@ impl Light {
                 intensity: p.intensity,
             },
         }
+    }
+
+    /// [`Light::as_directional`], checked: a point light at `target` (the centre of the
+    /// hair's box, which its shadow is fitted around) has no direction to cast a shadow
+    /// along, and is refused naming `lights[index].position`. Other errors name the
+    /// light's keys as [`Light::validate`] does.
+    pub fn shadow_light(
+        &self,
+        index: usize,
+        target: Vec3,
+    ) -> Result<DirectionalLight, crate::ParamError> {
+        self.validate(index)?;
+        let light = self.as_directional(target);
+        if let Self::Point(p) = self {
+            let d = light.direction;
+            if !d.is_finite() || d.length_squared() < 1e-12 {
+                return Err(crate::ParamError {
+                    name: format!("lights[{index}].position"),
+                    value: format!("{:?}", p.position),
+                    reason: format!(
+                        "a point light's shadow is cast along the direction from the light \
+                         to the centre of the hair's box, {target:?}: the light must not sit \
+                         at that centre"
+                    ),
+                });
+            }
+        }
+        Ok(light)
     }
 
     /// Seed 003's Fig. 31 set-up: a white key light from above and beside the camera, and

@@ -84,6 +84,24 @@ pub(crate) fn finite_vec(name: &str, v: Vec3) -> Result<(), ParamError> {
     }
 }
 
+/// The largest value of a colour channel (hair, region, mesh, background) and of the
+/// ambient term: the shaders multiply colours by lights of up to
+/// [`MAX_RADIANCE`](crate::MAX_RADIANCE) and by the shading models' weights, and this
+/// keeps every product finite in 32-bit floats.
+pub const MAX_COLOR: f32 = 1.0e4;
+
+/// Errors unless every channel of `v` is finite and in [0, [`MAX_COLOR`]].
+pub(crate) fn color(name: &str, v: Vec3) -> Result<(), ParamError> {
+    if !v.is_finite() || v.min_element() < 0.0 || v.max_element() > MAX_COLOR {
+        return Err(ParamError::new(
+            name,
+            v,
+            &format!("every channel must be finite and in [0, {MAX_COLOR:e}]"),
+        ));
+    }
+    Ok(())
+}
+
 /// How the surface under a root is interpolated from the triangle's corners.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -118,25 +136,34 @@ pub struct RootParams {
     pub textures: RootTextures,
 }
 
+/// The largest value of a per-vertex density or length map ([`RootParams::density`],
+/// [`RootParams::length_scale`]): a length scale multiplies `growth.length`, which the
+/// product must keep within [`crate::MAX_EXTENT`] (see
+/// [`RootParams::validate_lengths`]).
+pub const MAX_MAP_VALUE: f32 = 1.0e6;
+
 /// Texture maps over the mesh's UVs (PNG; see [`crate::surface_map`]), each sampled at
 /// every root. They combine with the per-vertex maps of [`RootParams`] by multiplying
 /// (density, length); a region may come from one or the other, not both.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct RootTextures {
-    /// Region index per texel: the red channel (0..=255), read at the texel holding
-    /// the root (nearest: regions are not blended). 0 is `[hair.growth]`, `k` its
+    /// Region index per texel: the red channel's integer value at the file's bit depth
+    /// (0..=255 for 8-bit and palette PNGs, 0..=65535 for 16-bit, 0..=1 for 1-bit grey;
+    /// see [`MapImage`](crate::MapImage)), read at the texel holding the root (nearest:
+    /// regions are not blended). 0 is `[hair.growth]`, `k` its
     /// `k`-th `[[hair.growth.regions]]`; a texel naming a region that does not exist
     /// is an error.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub region: Option<crate::TextureMap>,
-    /// Density weight: red / 255 (bilinear). A triangle's share of the strands is its
+    /// Density weight: red over its largest value (255 for 8 bits, 65535 for 16: the
+    /// same [0, 1] at every bit depth), bilinear. A triangle's share of the strands is its
     /// area times the mean of the map at four points (its centroid and the midpoints
     /// from the centroid to each corner), so features smaller than a triangle are
     /// averaged away.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub density: Option<crate::TextureMap>,
-    /// Length scale: red / 255 (bilinear) at the root, in [0, 1].
+    /// Length scale: red over its largest value (bilinear) at the root, in [0, 1].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub length_scale: Option<crate::TextureMap>,
     /// Colour: the texel's sRGB colour made linear (bilinear), multiplying the strand's
@@ -213,14 +240,24 @@ impl RootParams {
                 if let Some((i, v)) = map
                     .iter()
                     .enumerate()
-                    .find(|(_, v)| !v.is_finite() || **v < 0.0)
+                    .find(|(_, v)| !v.is_finite() || **v < 0.0 || **v > MAX_MAP_VALUE)
                 {
                     return Err(ParamError::new(
                         &format!("{name}[{i}]"),
                         v,
-                        "must be finite and >= 0",
+                        &format!("must be finite and in [0, {MAX_MAP_VALUE:e}]"),
                     ));
                 }
+            }
+        }
+        if let Some(map) = &self.density {
+            if map.iter().all(|v| *v == 0.0) {
+                return Err(ParamError::new(
+                    "roots.density",
+                    format!("{} values, all 0", map.len()),
+                    "no triangle can carry strands when every density weight is 0: give \
+                     some vertex a weight above 0",
+                ));
             }
         }
         if let Some(map) = &self.region {
@@ -275,21 +312,33 @@ impl RootParams {
             if let Some(image) = map.image.as_deref() {
                 let width = image.width() as usize;
                 if let Some((i, t)) = image
-                    .texels()
-                    .iter()
+                    .reds()
                     .enumerate()
-                    .find(|(_, t)| t[0] as usize >= region_count)
+                    .find(|(_, t)| *t as usize >= region_count)
                 {
-                    let mut e = reason(t[0] as usize);
+                    let mut e = reason(t as usize);
                     e.name = "roots.textures.region".into();
                     e.value = format!(
-                        "{} at texel ({}, {}) of {}",
-                        t[0],
+                        "{} at texel ({}, {}) of {} ({}-bit)",
+                        t,
                         i % width,
                         i / width,
-                        map.path.display()
+                        map.path.display(),
+                        image.bits()
                     );
                     return Err(e);
+                }
+            }
+        }
+        if let Some(map) = &self.textures.density {
+            if let Some(image) = map.image.as_deref() {
+                if image.reds().all(|v| v == 0) {
+                    return Err(ParamError::new(
+                        "roots.textures.density",
+                        &map.path,
+                        "every texel's red channel is 0, so no triangle can carry strands: \
+                         a density map needs some texel above 0 where the mesh is",
+                    ));
                 }
             }
         }
@@ -312,6 +361,80 @@ impl RootParams {
         Ok(())
     }
 }
+
+impl RootParams {
+    /// Checks what combines these maps with `growth`: the longest strand, the longest
+    /// region's `length · (1 + length_jitter)` times the largest per-vertex length
+    /// scale, must stay within [`crate::MAX_EXTENT`] (each factor may be in range while
+    /// their product overflows); a region map must have regions to choose between and
+    /// regions a region map choosing them. Errors name `roots.length_scale`,
+    /// `roots.region` / `roots.textures.region` or `growth.regions`.
+    pub fn validate_with(&self, growth: &GrowthParams) -> Result<(), ParamError> {
+        self.validate_lengths(growth)?;
+        self.validate_regions_used(growth)
+    }
+
+    /// The first half of [`RootParams::validate_with`]: the longest strand, the longest
+    /// region's `length · (1 + length_jitter)` times the largest per-vertex length scale,
+    /// within [`crate::MAX_EXTENT`]; the error names `roots.length_scale`.
+    pub fn validate_lengths(&self, growth: &GrowthParams) -> Result<(), ParamError> {
+        if let Some(map) = &self.length_scale {
+            let scale = map.iter().copied().fold(0.0f32, f32::max);
+            let longest = growth
+                .resolved_regions()
+                .iter()
+                .map(|g| f64::from(g.length) * (1.0 + f64::from(g.length_jitter)))
+                .fold(0.0f64, f64::max);
+            let product = longest * f64::from(scale);
+            if product > f64::from(crate::MAX_EXTENT) {
+                return Err(ParamError::new(
+                    "roots.length_scale",
+                    format!(
+                        "largest {scale} times a strand length of up to {longest} = {product:e}"
+                    ),
+                    &format!(
+                        "the longest scaled strand must be at most {:e} scene units",
+                        crate::MAX_EXTENT
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// The second half of [`RootParams::validate_with`]: a region map needs regions, and
+    /// regions a region map.
+    pub fn validate_regions_used(&self, growth: &GrowthParams) -> Result<(), ParamError> {
+        let map_key = if self.region.is_some() {
+            Some("roots.region")
+        } else if self.textures.region.is_some() {
+            Some("roots.textures.region")
+        } else {
+            None
+        };
+        match (map_key, growth.regions.is_empty()) {
+            (Some(key), true) => Err(ParamError::new(
+                key,
+                "a region map",
+                "there are no [[hair.growth.regions]] for it to choose: every root would be \
+                 in region 0 ([hair.growth]); add regions or leave the map out",
+            )),
+            (None, false) => Err(ParamError::new(
+                "growth.regions",
+                format!("{} regions", growth.regions.len()),
+                "no region map says where they grow, so they would never be used: give \
+                 [hair.roots.textures] region = \"map.png\" (or a per-vertex \
+                 [hair.roots] region) or leave the regions out",
+            )),
+            _ => Ok(()),
+        }
+    }
+}
+
+/// The most waves (or turns of a curl) a strand may have, and the steepest slope of a
+/// wave (amplitude x frequency): products of two keys that the growth shader takes sines
+/// and arctangents of, which must stay finite.
+pub const MAX_WAVES: f32 = 1.0e6;
 
 /// The most regions a groom may have besides `[hair.growth]` (an 8-bit region map's
 /// largest index).
@@ -514,10 +637,49 @@ impl GrowthParams {
             } => {
                 non_negative("growth.hair_type.amplitude", amplitude)?;
                 non_negative("growth.hair_type.frequency", frequency)?;
+                // Combined in the shader: the slope 2π·amplitude·frequency and the phase
+                // 2π·frequency·s along a strand of up to `length`.
+                let (slope, waves) = (
+                    f64::from(amplitude) * f64::from(frequency),
+                    f64::from(frequency) * f64::from(self.length),
+                );
+                if slope > f64::from(MAX_WAVES) || waves > f64::from(MAX_WAVES) {
+                    return Err(ParamError::new(
+                        "growth.hair_type.frequency",
+                        frequency,
+                        &format!(
+                            "amplitude x frequency ({slope:e}) and frequency x growth.length \
+                             ({waves:e}) must each be at most {MAX_WAVES:e}"
+                        ),
+                    ));
+                }
             }
             HairType::Curly { radius, pitch } => {
                 non_negative("growth.hair_type.radius", radius)?;
                 positive("growth.hair_type.pitch", pitch)?;
+                for (name, v) in [
+                    ("growth.hair_type.radius", radius),
+                    ("growth.hair_type.pitch", pitch),
+                ] {
+                    if v > crate::MAX_EXTENT {
+                        return Err(ParamError::new(
+                            name,
+                            v,
+                            &format!("must be at most {:e} scene units", crate::MAX_EXTENT),
+                        ));
+                    }
+                }
+                // Turns along a strand: length / pitch.
+                let turns = f64::from(self.length) / f64::from(pitch);
+                if turns > f64::from(MAX_WAVES) {
+                    return Err(ParamError::new(
+                        "growth.hair_type.pitch",
+                        pitch,
+                        &format!(
+                            "growth.length / pitch ({turns:e} turns) must be at most {MAX_WAVES:e}"
+                        ),
+                    ));
+                }
             }
         }
         extent("growth.width", self.width)?;
@@ -529,14 +691,7 @@ impl GrowthParams {
                 "must be in [0, 1]",
             ));
         }
-        finite_vec("growth.color", self.color)?;
-        if self.color.min_element() < 0.0 {
-            return Err(ParamError::new(
-                "growth.color",
-                self.color,
-                "components must be >= 0",
-            ));
-        }
+        color("growth.color", self.color)?;
         non_negative("growth.color_jitter", self.color_jitter)?;
         if self.color_jitter >= 1.0 {
             return Err(ParamError::new(
@@ -681,7 +836,10 @@ pub struct DynamicsParams {
     /// vertex loses on contact.
     pub friction: f32,
     /// The longest substep, seconds, in (0, 0.05]: a frame of `dt` takes
-    /// `ceil(dt / max_substep)` equal substeps, give or take [`SUBSTEP_SLACK`].
+    /// `ceil(dt / max_substep)` equal substeps, give or take [`SUBSTEP_SLACK`]. A
+    /// simulation also refuses one shorter than [`DynamicsParams::min_substep`] for
+    /// its scene's size and accelerations (2.2e-4 s for strands 1 unit from the origin
+    /// under gravity 9.8), where 32-bit positions can no longer hold a substep's motion.
     pub max_substep: f32,
     /// The longest frame simulated, seconds, in (0, 1]: a longer frame (a hitch, a
     /// breakpoint) is simulated as this long.
@@ -705,6 +863,11 @@ pub const STIFFNESS_INTERVAL: f32 = 1.0 / 120.0;
 /// `f32` times up to 2 048 s (34 minutes); past that a time's rounding alone is over 1%
 /// of a 1/60 s frame, and callers should restart their clock.
 pub const SUBSTEP_SLACK: f32 = 0.01;
+
+/// How many units in the last place of a 32-bit position the velocity change of one
+/// substep must be at least (see [`DynamicsParams::min_substep`]): 4, so that rounding
+/// takes at most an eighth of it.
+pub const SUBSTEP_ULPS: f32 = 4.0;
 
 /// The most colliders a simulation takes.
 pub const MAX_COLLIDERS: usize = 16;
@@ -949,6 +1112,51 @@ impl DynamicsParams {
         Ok(())
     }
 
+    /// The steady acceleration the strands are under, scene units per second squared:
+    /// gravity's length plus `wind_response` times the wind's mean force
+    /// (`wind.strength`; gusts and turbulence come and go).
+    pub fn steady_acceleration(&self, wind: &WindParams) -> f32 {
+        self.gravity.length() + self.wind_response * wind.strength
+    }
+
+    /// The shortest `max_substep` that moves strands reaching `extent` scene units from
+    /// the origin under [`DynamicsParams::steady_acceleration`] `a`:
+    /// `sqrt(SUBSTEP_ULPS · extent · ε / a)`, `ε` being `f32::EPSILON`. Verlet
+    /// integration keeps a vertex's velocity as the difference of two 32-bit positions,
+    /// so a substep of `h` changes it by `a·h²`, which must be several units in the
+    /// last place of the positions (`extent · ε`): below about half of one it rounds to
+    /// nothing and the strands freeze in their rest pose (at `extent` 1 and gravity
+    /// 9.8, any `h` under about 8e-5 s; the bound there is 2.2e-4 s). 0 when `a` is 0 (nothing pulls the strands).
+    pub fn min_substep(&self, extent: f32, wind: &WindParams) -> f32 {
+        let a = f64::from(self.steady_acceleration(wind));
+        if !(a > 0.0 && extent.is_finite()) {
+            return 0.0;
+        }
+        let ulp = f64::from(extent.abs()) * f64::from(f32::EPSILON);
+        (f64::from(SUBSTEP_ULPS) * ulp / a).sqrt() as f32
+    }
+
+    /// Checks `max_substep` against [`DynamicsParams::min_substep`] for strands reaching
+    /// `extent` scene units from the origin with `wind` (what [`DynamicsParams::validate`]
+    /// cannot know); the error names `dynamics.max_substep` and its range there.
+    pub fn validate_at_scale(&self, extent: f32, wind: &WindParams) -> Result<(), ParamError> {
+        let min = self.min_substep(extent, wind);
+        if self.max_substep < min {
+            return Err(ParamError::new(
+                "dynamics.max_substep",
+                self.max_substep,
+                &format!(
+                    "must be in [{min:.3e}, 0.05] seconds for this scene: a shorter substep \
+                     changes a strand's velocity by less than {SUBSTEP_ULPS} units in the last \
+                     place of 32-bit positions {extent} units from the origin under an \
+                     acceleration of {} (gravity and the mean wind), and the strands freeze",
+                    self.steady_acceleration(wind)
+                ),
+            ));
+        }
+        Ok(())
+    }
+
     /// The substeps a frame of `dt` seconds takes, and their length: `dt` clamped to
     /// [0, `max_frame`], cut into `ceil(dt / (max_substep · (1 + SUBSTEP_SLACK)))` equal
     /// substeps (none for 0): a substep is at most 1% longer than `max_substep`.
@@ -1131,6 +1339,7 @@ impl HairParams {
     pub fn validate(&self, vertex_count: usize) -> Result<(), ParamError> {
         self.roots.validate(vertex_count)?;
         self.growth.validate()?;
+        self.roots.validate_with(&self.growth)?;
         self.roots
             .validate_maps(self.growth.regions.len() + 1, None)?;
         self.wind.validate()?;
@@ -1181,9 +1390,16 @@ impl Default for ShadeParams {
 impl ShadeParams {
     /// Checks every field; the error names the first bad one.
     pub fn validate(&self) -> Result<(), ParamError> {
-        finite_vec("shade.background", self.background)?;
-        finite_vec("shade.mesh_color", self.mesh_color)?;
+        color("shade.background", self.background)?;
+        color("shade.mesh_color", self.mesh_color)?;
         non_negative("shade.ambient", self.ambient)?;
+        if self.ambient > MAX_COLOR {
+            return Err(ParamError::new(
+                "shade.ambient",
+                self.ambient,
+                &format!("must be in [0, {MAX_COLOR:e}]"),
+            ));
+        }
         self.model.validate()?;
         non_negative("shade.root_occlusion", self.root_occlusion)?;
         if self.root_occlusion > 1.0 {

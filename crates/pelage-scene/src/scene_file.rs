@@ -87,6 +87,17 @@
 //! `guides = { strands = 6000, clump = 0.3 }` in `[groom]` takes the file's strands as
 //! guides and interpolates render strands rooted on the mesh from them (see
 //! [`GuideParams`](crate::GuideParams)).
+//!
+//! **Nothing is silently ignored**: a value that would have no effect in the scene is
+//! an error naming its key (a key left at its default is fine). With a `[groom]`:
+//! `roots.count`, `roots.length_scale`, `roots.textures.length_scale`, region maps and
+//! the shape keys of `[hair.growth]` (`segments`, `length`, `length_jitter`,
+//! `direction_jitter`, `hair_type`, `gravity`, `surface`), and without `guides` also
+//! `roots.density`, `roots.textures.density` and `roots.textures.color` (with guides
+//! the colour map is refused when the groom has colours of its own); with
+//! `[dynamics]`: `growth.gravity` and `growth.force_weight`; `[[hair.growth.regions]]`
+//! without a region map and a region map without regions; `shadow.resolution` beside
+//! `shadow.voxel_size`.
 
 use std::path::{Path, PathBuf};
 
@@ -367,7 +378,133 @@ impl SceneFile {
         if let Some(motion) = &self.motion {
             motion.validate()?;
         }
-        Light::validate_all(&self.lights)
+        Light::validate_all(&self.lights)?;
+        self.shade.transparency.validate_pools()?;
+        self.check_every_value_used()
+    }
+
+    /// Refuses a value that has no effect in this scene (a key left at its default is
+    /// fine: [`SceneFile::to_toml`] writes every key). With a `[groom]`: the roots'
+    /// count, length maps and region maps, and the growth keys of the strands' shape
+    /// (the groom's file, or its guides, gives them), and without guides its density and
+    /// colour maps too (the file places and colours every strand); with `[dynamics]`:
+    /// `growth.gravity` and `growth.force_weight` (the simulation's gravity and wind
+    /// response move the strands); regions without a region map and a region map
+    /// without regions; `shadow.resolution` beside `shadow.voxel_size`.
+    fn check_every_value_used(&self) -> Result<(), crate::ParamError> {
+        let ignored = |key: &str, value: String, why: &str| {
+            Err(crate::ParamError::new(
+                key,
+                value,
+                &format!("has no effect here: {why}; leave it out"),
+            ))
+        };
+        let (roots, growth) = (&self.hair.roots, &self.hair.growth);
+        let (root_defaults, growth_defaults) =
+            (crate::RootParams::default(), crate::GrowthParams::default());
+        if let Some(groom) = &self.groom {
+            let why = if groom.guides.is_some() {
+                "with [groom] guides the render strands' count is guides.strands and their \
+                 shape and length the guides'"
+            } else {
+                "a [groom]'s strands, their roots, shape, length and placement come from its \
+                 file"
+            };
+            if roots.count != root_defaults.count {
+                return ignored("roots.count", roots.count.to_string(), why);
+            }
+            let mut maps = vec![
+                ("roots.length_scale", roots.length_scale.is_some()),
+                (
+                    "roots.textures.length_scale",
+                    roots.textures.length_scale.is_some(),
+                ),
+            ];
+            if groom.guides.is_none() {
+                maps.extend([
+                    ("roots.density", roots.density.is_some()),
+                    ("roots.textures.density", roots.textures.density.is_some()),
+                    ("roots.textures.color", roots.textures.color.is_some()),
+                ]);
+            }
+            if let Some((key, _)) = maps.into_iter().find(|(_, given)| *given) {
+                return ignored(key, "a map".into(), why);
+            }
+            let shape = [
+                (
+                    "growth.segments",
+                    growth.segments != growth_defaults.segments,
+                    format!(
+                        "{} (the groom's segments are groom.segments)",
+                        growth.segments
+                    ),
+                ),
+                (
+                    "growth.length",
+                    growth.length != growth_defaults.length,
+                    growth.length.to_string(),
+                ),
+                (
+                    "growth.length_jitter",
+                    growth.length_jitter != growth_defaults.length_jitter,
+                    growth.length_jitter.to_string(),
+                ),
+                (
+                    "growth.direction_jitter",
+                    growth.direction_jitter != growth_defaults.direction_jitter,
+                    growth.direction_jitter.to_string(),
+                ),
+                (
+                    "growth.hair_type",
+                    growth.hair_type != growth_defaults.hair_type,
+                    format!("{:?}", growth.hair_type),
+                ),
+                (
+                    "growth.gravity",
+                    growth.gravity != growth_defaults.gravity,
+                    format!("{:?} (a groom's rest shape already hangs)", growth.gravity),
+                ),
+                (
+                    "growth.surface",
+                    growth.surface != growth_defaults.surface,
+                    format!("{:?}", growth.surface),
+                ),
+            ];
+            if let Some((key, _, value)) = shape.into_iter().find(|(_, differs, _)| *differs) {
+                return ignored(key, value, why);
+            }
+        }
+        if self.dynamics.is_some() {
+            let why = "with [dynamics] the simulation moves the strands (dynamics.gravity, \
+                       dynamics.wind_response); their rest shape is grown without gravity or \
+                       wind";
+            if growth.gravity != growth_defaults.gravity {
+                return ignored("growth.gravity", format!("{:?}", growth.gravity), why);
+            }
+            if growth.force_weight != growth_defaults.force_weight {
+                return ignored("growth.force_weight", growth.force_weight.to_string(), why);
+            }
+        }
+        if self.groom.is_none() || !growth.regions.is_empty() {
+            roots.validate_with(growth)?;
+        } else if roots.region.is_some() || roots.textures.region.is_some() {
+            let key = if roots.region.is_some() {
+                "roots.region"
+            } else {
+                "roots.textures.region"
+            };
+            return ignored(key, "a region map".into(), "a [groom] has no regions");
+        }
+        if let ShadowParams::Voxel(v) = &self.shadow {
+            if v.voxel_size.is_some() && v.resolution != crate::VoxelParams::default().resolution {
+                return ignored(
+                    "shadow.resolution",
+                    format!("{:?}", v.resolution),
+                    "shadow.voxel_size sets the resolution",
+                );
+            }
+        }
+        Ok(())
     }
 
     /// Loads and resamples the groom file, if the scene has one (`path` names the scene
@@ -376,14 +513,32 @@ impl SceneFile {
         let Some(source) = &self.groom else {
             return Ok(None);
         };
-        source
+        let resampled = source
             .load()
-            .map(Some)
             .map_err(|source_error| SceneFileError::Groom {
                 path: path.to_path_buf(),
                 groom: source.path.clone(),
                 source: Box::new(source_error),
-            })
+            })?;
+        // Guides with colours of their own colour the render strands: a colour map
+        // beside them would change nothing.
+        if let Some(map) = &self.hair.roots.textures.color {
+            if resampled.colors.is_some() {
+                return Err(SceneFileError::Param {
+                    path: path.to_path_buf(),
+                    source: crate::ParamError::new(
+                        "roots.textures.color",
+                        &map.path,
+                        &format!(
+                            "has no effect here: the groom {} has colours of its own, which \
+                             colour the strands interpolated from its guides; leave it out",
+                            source.path.display()
+                        ),
+                    ),
+                });
+            }
+        }
+        Ok(Some(resampled))
     }
 
     /// Builds or loads the mesh (`path` names the scene file in errors); an empty mesh

@@ -47,28 +47,68 @@ pub enum MapError {
     },
 }
 
-/// An RGBA8 image held for sampling: `texels[y * width + x]`, row 0 at the top.
+/// The texels of a [`MapImage`], at the file's precision.
+#[derive(Clone, Debug, PartialEq)]
+enum Texels {
+    /// 8 bits per channel (and files of 1, 2 or 4, expanded).
+    Eight(Vec<[u8; 4]>),
+    /// 16 bits per channel.
+    Sixteen(Vec<[u16; 4]>),
+}
+
+/// An RGBA image held for sampling at the file's bit depth: row 0 at the top.
+///
+/// Every PNG bit depth and colour type is read: grey of 1, 2, 4, 8 or 16 bits, grey with
+/// alpha, RGB and RGBA of 8 or 16 bits, and palette images of 1 to 8 bits (each texel
+/// the colour of its palette entry). A texel has two readings:
+///
+/// - its **native** integer values ([`MapImage::texel`], [`MapImage::nearest`],
+///   [`MapImage::region`]): 0 to `2^bits - 1` for grey of `bits` bits, 0 to 255 for 8-bit
+///   and palette images, 0 to 65535 for 16-bit ones. Region maps read these: a 16-bit
+///   map's region 1 is the value 1, a 1-bit map's regions are 0 and 1.
+/// - its **unit** values in [0, 1] ([`MapImage::unit`]): the native value over its
+///   largest, so that black is 0 and white is 1 at every bit depth (an 8-bit 255, a
+///   16-bit 65535 and a 1-bit 1 are all 1). Density, length and colour maps read these.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MapImage {
     width: u32,
     height: u32,
-    texels: Vec<[u8; 4]>,
+    texels: Texels,
+    /// Bits per channel of the native values: 1, 2, 4, 8 or 16.
+    bits: u8,
 }
 
 impl MapImage {
-    /// An image of `width` x `height` texels (row 0 at the top). `None` when a side is
-    /// 0 or above [`MAX_MAP_SIZE`], or `texels` does not hold `width * height` texels.
+    /// An 8-bit image of `width` x `height` texels (row 0 at the top). `None` when a
+    /// side is 0 or above [`MAX_MAP_SIZE`], or `texels` does not hold `width * height`
+    /// texels.
     pub fn new(width: u32, height: u32, texels: Vec<[u8; 4]>) -> Option<Self> {
-        let sides_ok = (1..=MAX_MAP_SIZE).contains(&width) && (1..=MAX_MAP_SIZE).contains(&height);
-        (sides_ok && texels.len() == width as usize * height as usize).then_some(Self {
+        Self::checked(width, texels.len(), height).then_some(Self {
             width,
             height,
-            texels,
+            texels: Texels::Eight(texels),
+            bits: 8,
         })
     }
 
-    /// Decodes an image file's bytes (PNG), at most [`MAX_MAP_SIZE`] texels on a side.
-    /// `path` only names the file in errors.
+    /// A 16-bit image, as [`MapImage::new`].
+    pub fn new16(width: u32, height: u32, texels: Vec<[u16; 4]>) -> Option<Self> {
+        Self::checked(width, texels.len(), height).then_some(Self {
+            width,
+            height,
+            texels: Texels::Sixteen(texels),
+            bits: 16,
+        })
+    }
+
+    fn checked(width: u32, len: usize, height: u32) -> bool {
+        (1..=MAX_MAP_SIZE).contains(&width)
+            && (1..=MAX_MAP_SIZE).contains(&height)
+            && len == width as usize * height as usize
+    }
+
+    /// Decodes a PNG file's bytes (any bit depth and colour type), at most
+    /// [`MAX_MAP_SIZE`] texels on a side. `path` only names the file in errors.
     pub fn decode(bytes: &[u8], path: &Path) -> Result<Self, MapError> {
         let decode_error = |message: String| MapError::Decode {
             path: path.to_path_buf(),
@@ -81,14 +121,29 @@ impl MapImage {
         limits.max_image_width = Some(MAX_MAP_SIZE);
         limits.max_image_height = Some(MAX_MAP_SIZE);
         reader.limits(limits);
-        let rgba = reader
-            .decode()
-            .map_err(|e| decode_error(e.to_string()))?
-            .into_rgba8();
-        let (width, height) = rgba.dimensions();
-        let texels = rgba.pixels().map(|p| p.0).collect();
-        Self::new(width, height, texels)
-            .ok_or_else(|| decode_error(format!("{width} x {height} texels")))
+        let decoded = reader.decode().map_err(|e| decode_error(e.to_string()))?;
+        let (width, height) = (decoded.width(), decoded.height());
+        let wide = matches!(
+            decoded,
+            image::DynamicImage::ImageLuma16(_)
+                | image::DynamicImage::ImageLumaA16(_)
+                | image::DynamicImage::ImageRgb16(_)
+                | image::DynamicImage::ImageRgba16(_)
+        );
+        let image = if wide {
+            let texels = decoded.into_rgba16().pixels().map(|p| p.0).collect();
+            Self::new16(width, height, texels)
+        } else {
+            let texels = decoded.into_rgba8().pixels().map(|p| p.0).collect();
+            // The decoder expands grey of 1, 2 or 4 bits to 8 (times 255, 85 or 17):
+            // keep the file's depth so native values are the file's.
+            let bits = match png_header(bytes) {
+                Some((depth @ (1 | 2 | 4), GREY)) => depth,
+                _ => 8,
+            };
+            Self::new(width, height, texels).map(|m| Self { bits, ..m })
+        };
+        image.ok_or_else(|| decode_error(format!("{width} x {height} texels")))
     }
 
     /// Reads and decodes the file at `path` (at most [`MAX_MAP_FILE_BYTES`]).
@@ -112,19 +167,56 @@ impl MapImage {
         self.height
     }
 
-    /// Every texel, row 0 (the top) first.
-    pub fn texels(&self) -> &[[u8; 4]] {
-        &self.texels
+    /// Bits per channel of the native values: 1, 2, 4 (grey files of that depth), 8
+    /// (8-bit and palette files) or 16.
+    pub fn bits(&self) -> u8 {
+        self.bits
     }
 
-    /// Texel `(x, y)`, both clamped into the image.
-    pub fn texel(&self, x: i64, y: i64) -> [u8; 4] {
+    /// The largest native value, `2^bits - 1`: what reads as 1.
+    pub fn max_value(&self) -> u16 {
+        ((1u32 << self.bits) - 1) as u16
+    }
+
+    /// Number of texels.
+    fn len(&self) -> usize {
+        match &self.texels {
+            Texels::Eight(t) => t.len(),
+            Texels::Sixteen(t) => t.len(),
+        }
+    }
+
+    /// The native values of texel number `i` (row 0 first), or zeros past the end.
+    fn native(&self, i: usize) -> [u16; 4] {
+        match &self.texels {
+            Texels::Eight(t) => {
+                // 1-, 2- and 4-bit grey was expanded by 255 / max.
+                let div = 255 / self.max_value().max(1);
+                t.get(i)
+                    .map_or([0; 4], |t| t.map(|c| u16::from(c) / div.max(1)))
+            }
+            Texels::Sixteen(t) => t.get(i).copied().unwrap_or_default(),
+        }
+    }
+
+    /// The red channel's native value of every texel, row 0 (the top) first: a region
+    /// map's regions.
+    pub fn reds(&self) -> impl Iterator<Item = u32> + '_ {
+        (0..self.len()).map(|i| u32::from(self.native(i)[0]))
+    }
+
+    /// Native values of texel `(x, y)`, both clamped into the image.
+    pub fn texel(&self, x: i64, y: i64) -> [u16; 4] {
         let x = x.clamp(0, i64::from(self.width) - 1) as usize;
         let y = y.clamp(0, i64::from(self.height) - 1) as usize;
-        self.texels
-            .get(y * self.width as usize + x)
-            .copied()
-            .unwrap_or_default()
+        self.native(y * self.width as usize + x)
+    }
+
+    /// Unit values (native over [`MapImage::max_value`], in [0, 1]) of texel `(x, y)`,
+    /// both clamped into the image.
+    pub fn unit(&self, x: i64, y: i64) -> [f32; 4] {
+        let max = f32::from(self.max_value());
+        self.texel(x, y).map(|c| f32::from(c) / max)
     }
 
     /// `uv` in texel units, the image's top-left corner at (0, 0) (non-finite reads as 0).
@@ -133,27 +225,33 @@ impl MapImage {
         Vec2::new(uv.x * self.width as f32, (1.0 - uv.y) * self.height as f32)
     }
 
-    /// The texel holding `uv` (nearest lookup, clamped to the edge).
-    pub fn nearest(&self, uv: Vec2) -> [u8; 4] {
+    /// Native values of the texel holding `uv` (nearest lookup, clamped to the edge).
+    pub fn nearest(&self, uv: Vec2) -> [u16; 4] {
         let t = self.texel_space(uv).floor();
         self.texel(t.x as i64, t.y as i64)
     }
 
+    /// The region at `uv`: the red channel's native value of the texel holding it.
+    pub fn region(&self, uv: Vec2) -> u32 {
+        u32::from(self.nearest(uv)[0])
+    }
+
     /// The bilinear blend at `uv` of the four texels around it, each read through
-    /// `decode` (the red channel / 255 for a scalar map, sRGB to linear for colour).
-    pub fn bilinear(&self, uv: Vec2, decode: impl Fn([u8; 4]) -> Vec3) -> Vec3 {
+    /// `decode` from its unit values (the red channel for a scalar map, sRGB to linear
+    /// for colour).
+    pub fn bilinear(&self, uv: Vec2, decode: impl Fn([f32; 4]) -> Vec3) -> Vec3 {
         let t = self.texel_space(uv) - Vec2::splat(0.5);
         let base = t.floor();
         let f = t - base;
         let (x, y) = (base.x as i64, base.y as i64);
-        let row = |y: i64| decode(self.texel(x, y)).lerp(decode(self.texel(x + 1, y)), f.x);
+        let row = |y: i64| decode(self.unit(x, y)).lerp(decode(self.unit(x + 1, y)), f.x);
         row(y).lerp(row(y + 1), f.y)
     }
 
-    /// The red channel / 255 at `uv`, blended bilinearly (a scalar map's value, in [0, 1]).
+    /// The red channel's unit value at `uv`, blended bilinearly (a scalar map's value,
+    /// in [0, 1]).
     pub fn scalar(&self, uv: Vec2) -> f32 {
-        self.bilinear(uv, |t| Vec3::splat(f32::from(t[0]) / 255.0))
-            .x
+        self.bilinear(uv, |t| Vec3::splat(t[0])).x
     }
 
     /// The linear RGB colour at `uv`: each texel's sRGB colour made linear, then blended
@@ -161,17 +259,32 @@ impl MapImage {
     pub fn color(&self, uv: Vec2) -> Vec3 {
         self.bilinear(uv, |t| {
             Vec3::new(
-                srgb_to_linear(t[0]),
-                srgb_to_linear(t[1]),
-                srgb_to_linear(t[2]),
+                srgb_unit_to_linear(t[0]),
+                srgb_unit_to_linear(t[1]),
+                srgb_unit_to_linear(t[2]),
             )
         })
     }
 }
 
+/// PNG colour type 0: grey.
+const GREY: u8 = 0;
+
+/// The bit depth and colour type of a PNG's header (`IHDR`, which must come first), or
+/// `None` for bytes that do not start as a PNG.
+fn png_header(bytes: &[u8]) -> Option<(u8, u8)> {
+    const SIGNATURE: &[u8] = b"\x89PNG\r\n\x1a\n";
+    let header = bytes.get(..26)?;
+    (header.starts_with(SIGNATURE) && &header[12..16] == b"IHDR").then(|| (header[24], header[25]))
+}
+
 /// The sRGB transfer function inverted: an 8-bit sRGB channel as linear [0, 1].
 pub fn srgb_to_linear(c: u8) -> f32 {
-    let c = f32::from(c) / 255.0;
+    srgb_unit_to_linear(f32::from(c) / 255.0)
+}
+
+/// The sRGB transfer function inverted: an sRGB value in [0, 1] as linear [0, 1].
+pub fn srgb_unit_to_linear(c: f32) -> f32 {
     if c <= 0.04045 {
         c / 12.92
     } else {

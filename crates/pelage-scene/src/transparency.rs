@@ -13,6 +13,17 @@ use crate::params::{ParamError, positive};
 /// linked-list resolves: the resolve sorts k fragments in registers.
 pub const MAX_OIT_K: u32 = 64;
 
+/// The smallest strand-rasterizer pool a scene may ask for, references per segment
+/// ([`Transparency::StrandRaster`]'s `pool`): every segment on screen takes at least one
+/// reference (one per tile it crosses; long hair needs about 1.2 at tiles of 16), so a
+/// smaller pool drops hair in every frame that shows all of it.
+pub const MIN_POOL: f32 = 1.0;
+
+/// The smallest linked-list pool a scene may ask for, nodes per pixel (the A-buffer's
+/// and the DBK-buffer's `nodes_per_pixel`): fewer cannot hold one layer of hair over the
+/// whole screen.
+pub const MIN_NODES_PER_PIXEL: f32 = 1.0;
+
 /// The weight function of weighted blended OIT (McGuire and Bavoil 2013, eq. 7 to 10).
 /// `z` is the fragment's view depth in scene units and `d` its window depth in [0, 1].
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -265,6 +276,44 @@ impl Transparency {
                 format!("strand_raster tile={tile} bins={bins} pool={pool}/seg")
             }
         }
+    }
+
+    /// Checks the pools against their floors, [`MIN_POOL`] and
+    /// [`MIN_NODES_PER_PIXEL`]: what a scene may ask for. ([`Transparency::validate`]
+    /// accepts smaller pools, which a program may want to see overflow; a frame that
+    /// overflows counts what it dropped.) The error names `transparency.pool` or
+    /// `transparency.nodes_per_pixel` and the allowed range.
+    pub fn validate_pools(&self) -> Result<(), ParamError> {
+        self.validate()?;
+        let (name, value, floor, unit) = match *self {
+            Self::StrandRaster { pool, .. } => (
+                "transparency.pool",
+                pool,
+                MIN_POOL,
+                "1024 references per segment: every segment on screen takes at least one",
+            ),
+            Self::ABuffer {
+                nodes_per_pixel, ..
+            }
+            | Self::Dbk {
+                nodes_per_pixel, ..
+            } => (
+                "transparency.nodes_per_pixel",
+                nodes_per_pixel,
+                MIN_NODES_PER_PIXEL,
+                "4096 nodes per pixel: fewer than one cannot hold one layer of hair over \
+                 the screen",
+            ),
+            _ => return Ok(()),
+        };
+        if value < floor {
+            return Err(ParamError::new(
+                name,
+                value,
+                &format!("must be in [{floor}, {unit}; a smaller pool drops most of the hair"),
+            ));
+        }
+        Ok(())
     }
 
     /// Checks every field; the error names the first bad one.

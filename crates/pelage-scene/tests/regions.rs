@@ -290,7 +290,10 @@ width = 0.006
     let e = SceneFile::parse("[[hair.growth.regions]]\nlength = -0.4\n").unwrap_err();
     assert!(e.to_string().contains("growth.regions[0].length"), "{e}");
     // Regions with dynamics are simulated fur grown per region; with a groom, refused.
-    let simulated = SceneFile::parse("[[hair.growth.regions]]\nlength = 0.4\n[dynamics]\n");
+    let simulated = SceneFile::parse(
+        "[hair.roots.textures]\nregion = \"halves.png\"\n[[hair.growth.regions]]\nlength = 0.4\n\
+         [dynamics]\n",
+    );
     assert!(simulated.is_ok(), "{simulated:?}");
     let e = SceneFile::parse("[[hair.growth.regions]]\nlength = 0.4\n[groom]\npath = \"x.hair\"\n")
         .unwrap_err();

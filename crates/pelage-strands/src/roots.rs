@@ -130,6 +130,7 @@ pub fn sample_roots(
     roots.validate(mesh.positions.len())?;
     growth.validate()?;
     roots.validate_maps(growth.regions.len() + 1, Some(mesh))?;
+    roots.validate_lengths(growth)?;
     let regions = growth.resolved_regions();
 
     let areas = mesh.triangle_areas();
@@ -171,8 +172,27 @@ pub fn sample_roots(
         cdf.push(total);
     }
     if total <= 0.0 || !total.is_finite() {
+        // Name the maps that weighted the area: they are what the user wrote.
+        let mut maps = Vec::new();
+        if roots.density.is_some() {
+            maps.push("the per-vertex map roots.density".to_string());
+        }
+        if let Some(map) = &roots.textures.density {
+            maps.push(format!(
+                "the texture map roots.textures.density = {} (read at the triangles' UVs)",
+                map.path.display()
+            ));
+        }
+        let weighted = if maps.is_empty() || total.is_nan() || total > 0.0 {
+            String::new()
+        } else {
+            format!(
+                ", weighted by {}, which is 0 on every triangle",
+                maps.join(" and ")
+            )
+        };
         return Err(crate::StrandsError::NoSurface(format!(
-            "total weighted area is {total} over {} triangles ({} degenerate)",
+            "total weighted area is {total} over {} triangles ({} degenerate){weighted}",
             areas.len(),
             report.degenerate_triangles.len()
         )));

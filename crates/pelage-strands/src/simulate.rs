@@ -179,6 +179,11 @@ pub struct SimulateStrands {
     last_uniforms: SimUniforms,
     /// The hash draw the strands' brightness comes from (see [`crate::strand_brightness`]).
     brightness_draw: u32,
+    /// How far from the origin the strands reach (the largest coordinate of the reach
+    /// box), for [`DynamicsParams::validate_at_scale`].
+    scale: f32,
+    /// The wind, for the same.
+    wind: pelage_scene::WindParams,
 }
 
 impl SimulateStrands {
@@ -322,6 +327,9 @@ impl SimulateStrands {
             + max_width;
         let (lo, hi) = mesh_buffers.bounds;
         let reach = (lo - Vec3::splat(pad), hi + Vec3::splat(pad));
+        // 32-bit positions this far out must still hold a substep's motion.
+        let scale = reach.0.abs().max(reach.1.abs()).max_element();
+        dynamics.validate_at_scale(scale, &params.wind)?;
         let mut pass = StrandPass::with_inputs(
             gpu,
             "strands: simulate",
@@ -354,6 +362,8 @@ impl SimulateStrands {
             last_time: None,
             last_uniforms,
             brightness_draw,
+            scale,
+            wind: params.wind.clone(),
         })
     }
 
@@ -386,9 +396,16 @@ impl SimulateStrands {
     /// colliders, from the next `prepare` on.
     pub fn set_dynamics(&mut self, dynamics: &DynamicsParams) -> crate::Result<()> {
         dynamics.validate()?;
+        dynamics.validate_at_scale(self.scale, &self.wind)?;
         self.dynamics = dynamics.clone();
         self.colliders = dynamics.colliders.clone();
         Ok(())
+    }
+
+    /// The shortest `max_substep` this simulation accepts
+    /// ([`DynamicsParams::min_substep`] for the strands' reach and the wind).
+    pub fn min_substep(&self) -> f32 {
+        self.dynamics.min_substep(self.scale, &self.wind)
     }
 
     /// The dynamics parameters in use.

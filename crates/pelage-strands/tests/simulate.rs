@@ -568,3 +568,55 @@ fn the_shape_pull_per_second_does_not_depend_on_the_substep() {
         );
     }
 }
+
+/// `max_substep` at the floor the simulation derives from its size and gravity
+/// (`DynamicsParams::min_substep`) still lets gravity move the strands as far as the
+/// default substep does; below the floor (1e-4 s, where the strands froze in their rest
+/// pose: gravity's `a·h²` rounded away against 32-bit positions) it is refused, naming
+/// the key.
+#[test]
+fn a_substep_at_its_floor_moves_the_strands_and_one_below_it_is_refused() {
+    let gpu = gpu();
+    let mesh = head();
+    let buffers = MeshBuffers::upload(&gpu, &mesh).unwrap();
+    let params = hair(200, WindParams::calm());
+    let with = |max_substep: f32| DynamicsParams {
+        max_substep,
+        ..DynamicsParams::default()
+    };
+    let floor = SimulateStrands::grown(&gpu, &mesh, &buffers, &params, &with(1.0 / 120.0))
+        .unwrap()
+        .min_substep();
+    let moved = |max_substep: f32| -> f32 {
+        let mut sim =
+            SimulateStrands::grown(&gpu, &mesh, &buffers, &params, &with(max_substep)).unwrap();
+        let rest = grow_on_gpu(&gpu, &mut sim, 0.0);
+        let mut last = rest.clone();
+        for frame in 1..=12 {
+            last = grow_on_gpu(&gpu, &mut sim, frame as f32 / 60.0);
+        }
+        last.iter()
+            .zip(&rest)
+            .map(|(a, b)| (*a - *b).truncate().length())
+            .sum::<f32>()
+            / last.len() as f32
+    };
+    let default = moved(1.0 / 120.0);
+    let at_floor = moved(floor);
+    println!(
+        "floor {floor:.3e} s; mean distance from rest after 0.2 s: substeps of 1/120 s \
+         {default:.4}, at the floor {at_floor:.4}"
+    );
+    assert!(default > 1e-2, "gravity moved nothing: {default}");
+    assert!(
+        (at_floor - default).abs() <= 0.2 * default,
+        "at the floor {at_floor}, at 1/120 s {default}"
+    );
+    for below in [1e-4, floor * 0.9] {
+        let e = SimulateStrands::grown(&gpu, &mesh, &buffers, &params, &with(below)).unwrap_err();
+        assert!(
+            e.to_string().contains("dynamics.max_substep"),
+            "{below}: {e}"
+        );
+    }
+}
