@@ -705,14 +705,23 @@ mod tests {
             );
             assert_eq!(e.exit_code(), 2, "{value}");
         }
-        // A bad pheomelanin of the scene file stays the scene's when --melanin sets only
-        // the eumelanin.
-        let scene = SceneWith::new("chiang_bad_pheo", "model = \"chiang\"\npheomelanin = -1.0");
-        let e = scene.model(&["--melanin", "0.3"]).unwrap_err();
+        // A bad pheomelanin of the model stays the model's when --melanin sets only the
+        // eumelanin (a scene file's is refused as the file loads, naming the file).
+        let mut model = ShadingModel::Chiang(pelage::scene::ChiangParams {
+            pheomelanin: Some(-1.0),
+            ..Default::default()
+        });
+        let melanin = opts(&["--melanin", "0.3"]);
+        let e = melanin.apply_chiang_options(&mut model).unwrap_err();
+        let e = melanin.blame(e);
         assert!(
             matches!(&e, CliError::Render(pelage::Error::Param(p)) if p.name == "shading.chiang.pheomelanin"),
             "{e}"
         );
+        let e = opts(&["--melanin", "0.3,-1"]).blame(CliError::Render(pelage::Error::Param(
+            ParamError::new("shading.chiang.pheomelanin", -1.0, "must be in [0, 50]"),
+        )));
+        assert!(e.to_string().starts_with("--melanin = -1.0"), "{e}");
     }
 
     #[test]
