@@ -412,6 +412,19 @@ impl Renderer {
     /// per-frame uniforms of every stage for time `t` and `camera`: stage 1 first, whose
     /// [`StrandFrame`] every later stage is prepared and recorded with.
     fn prepare(&mut self, gpu: &Gpu, t: f32, camera: &Camera) -> crate::Result<StrandFrame> {
+        let frame = self.prepare_strands(gpu, t, camera)?;
+        self.prepare_later_stages(gpu, &frame, camera)?;
+        Ok(frame)
+    }
+
+    /// The first half of [`Renderer::prepare`]: the mesh's motion, the colliders, the
+    /// level of detail and stage 1's uniforms for time `t`.
+    fn prepare_strands(
+        &mut self,
+        gpu: &Gpu,
+        t: f32,
+        camera: &Camera,
+    ) -> crate::Result<StrandFrame> {
         camera.validate()?;
         if let Some((motion, rest)) = &self.motion {
             self.mesh_buffers
@@ -430,6 +443,19 @@ impl Renderer {
         self.strands.set_lod(level)?;
         let frame = self.strands.prepare(&gpu.queue, t)?;
         self.frame = Some(frame);
+        Ok(frame)
+    }
+
+    /// The second half of [`Renderer::prepare`]: every later stage's uniforms for
+    /// stage 1's `frame` and `camera`.
+    fn prepare_later_stages(
+        &mut self,
+        gpu: &Gpu,
+        frame: &StrandFrame,
+        camera: &Camera,
+    ) -> crate::Result<()> {
+        let frame = *frame;
+        let (width, height) = (self.targets.width, self.targets.height);
         for (i, ((shadow, hand_over), light)) in self.shadows.iter().zip(&self.lights).enumerate() {
             shadow.prepare(
                 &gpu.queue,
@@ -450,7 +476,40 @@ impl Renderer {
             width,
             height,
         )?;
-        Ok(frame)
+        Ok(())
+    }
+
+    /// Advances stage 1 to time `t` without drawing: the mesh's motion, the colliders
+    /// and the level of detail as [`Renderer::render`] sets them for `t` and `camera`,
+    /// then only stage 1 recorded and submitted (no shadows, no shading, no timestamp
+    /// queries, nothing read back). For a simulation ([`Scene::dynamics`]) this steps
+    /// the hair to `t` as a rendered frame would, so that later frames are those of a
+    /// renderer that drew this one, at a fraction of the cost; for the stateless
+    /// methods it is wasted work. Like `render`, it returns without waiting for the GPU
+    /// (at most [`FRAMES_IN_FLIGHT`] frames queued).
+    pub fn advance(&mut self, gpu: &Gpu, t: f32, camera: &Camera) -> crate::Result<()> {
+        let frame = self.prepare_strands(gpu, t, camera)?;
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        self.strands.encode(&mut encoder, &frame, None)?;
+        let index = gpu.submit([encoder.finish()])?;
+        self.queue_frame(gpu, index)
+    }
+
+    /// Remembers a submitted frame; beyond [`FRAMES_IN_FLIGHT`] waits for the oldest,
+    /// as a swap chain would hold the CPU back.
+    fn queue_frame(&mut self, gpu: &Gpu, index: wgpu::SubmissionIndex) -> crate::Result<()> {
+        self.in_flight.push_back(index);
+        while self.in_flight.len() > FRAMES_IN_FLIGHT {
+            if let Some(oldest) = self.in_flight.pop_front() {
+                gpu.device
+                    .poll(wgpu::PollType::Wait {
+                        submission_index: Some(oldest),
+                        timeout: None,
+                    })
+                    .map_err(|e| pelage_gpu::GpuError::Poll(e.to_string()))?;
+            }
+        }
+        Ok(())
     }
 
     /// Records a whole frame into `encoder`: prepares every stage for time `t` and
@@ -504,17 +563,7 @@ impl Renderer {
         let index = gpu.submit([encoder.finish()])?;
         // At most FRAMES_IN_FLIGHT frames queued: beyond that the CPU waits for the
         // oldest, as a swap chain would hold it back.
-        self.in_flight.push_back(index);
-        while self.in_flight.len() > FRAMES_IN_FLIGHT {
-            if let Some(oldest) = self.in_flight.pop_front() {
-                gpu.device
-                    .poll(wgpu::PollType::Wait {
-                        submission_index: Some(oldest),
-                        timeout: None,
-                    })
-                    .map_err(|e| pelage_gpu::GpuError::Poll(e.to_string()))?;
-            }
-        }
+        self.queue_frame(gpu, index)?;
         let Some(timer) = &mut self.timer else {
             return Ok(FrameStats::default());
         };

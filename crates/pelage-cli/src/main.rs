@@ -7,7 +7,7 @@
 
 use std::process::ExitCode;
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 
 mod animate;
 mod auto;
@@ -16,6 +16,7 @@ mod error;
 mod hair_timing;
 mod info;
 mod lab;
+mod output;
 mod progress;
 mod render;
 mod report;
@@ -57,9 +58,9 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
-    /// Render one frame of a scene to a PNG.
+    /// Render one frame of a scene to a PNG or JPEG.
     #[command(
-        long_about = "Render one frame of a scene to a PNG and print the GPU time of each pass \
+        long_about = "Render one frame of a scene to a PNG or JPEG (by the extension of -o) and print the GPU time of each pass \
                       (timestamp queries). The scene is the built-in furred creature unless \
                       --scene names a TOML scene file; the other options override the file.",
         after_help = "Examples:\n  \
@@ -190,10 +191,36 @@ fn ensure_runtime_dir() {
     }
 }
 
+/// Lets every option that takes a value take a negative number (`--time -5`): clap
+/// otherwise reads `-5` as an unknown flag and names no option. Options whose values
+/// are not plain numbers (`--size WxH`, `--range A..B`) allow leading hyphens
+/// themselves; either way the value parser's error names the option and its range.
+fn allow_negative_numbers(command: clap::Command) -> clap::Command {
+    let command = command.mut_args(|arg| {
+        if arg.get_action().takes_values() {
+            arg.allow_negative_numbers(true)
+        } else {
+            arg
+        }
+    });
+    let names: Vec<String> = command
+        .get_subcommands()
+        .map(|c| c.get_name().to_owned())
+        .collect();
+    names.iter().fold(command, |command, name| {
+        command.mut_subcommand(name, allow_negative_numbers)
+    })
+}
+
+/// The command line's grammar: [`Cli`]'s, every value allowed to be negative.
+fn command() -> clap::Command {
+    allow_negative_numbers(Cli::command())
+}
+
 fn main() -> ExitCode {
     #[cfg(unix)]
     ensure_runtime_dir();
-    let cli = Cli::parse();
+    let cli = Cli::from_arg_matches(&command().get_matches()).unwrap_or_else(|e| e.exit());
     // On SIGINT, SIGTERM or SIGHUP, remove the temporary of any output being written
     // (the target keeps its old content) and exit with 130, as a shell reports Ctrl-C.
     // Without a handler (it could not be installed) a later run sweeps the leftovers.
@@ -207,6 +234,125 @@ fn main() -> ExitCode {
         Err(e) => {
             eprintln!("error: {e}");
             ExitCode::from(e.exit_code())
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every subcommand that takes options, as the words that reach it
+    /// (`["lab", "scattering"]`), with its grammar.
+    fn leaves(
+        command: &clap::Command,
+        path: Vec<String>,
+        out: &mut Vec<(Vec<String>, clap::Command)>,
+    ) {
+        if command.has_subcommands() {
+            for sub in command.get_subcommands() {
+                let mut path = path.clone();
+                path.push(sub.get_name().to_owned());
+                leaves(sub, path, out);
+            }
+        } else {
+            out.push((path, command.clone()));
+        }
+    }
+
+    /// Negative values of the shape an option takes.
+    fn negatives(value_name: &str) -> &'static [&'static str] {
+        match value_name {
+            "WxH" => &["-5x5", "5x-5", "-1x-1"],
+            "A..B" => &["-1..2", "1..-2"],
+            "EU[,PHEO]" => &["-1", "1,-1"],
+            _ => &["-1", "-5", "-0.5", "-1e3"],
+        }
+    }
+
+    /// `--time -5` and every other negative number on the command line: parsed when the
+    /// option takes it, or an error naming the option; never clap's "unexpected
+    /// argument '-1' found". Walks every option of every command, so it holds for new
+    /// ones.
+    #[test]
+    fn every_option_names_itself_for_a_negative_number() {
+        let mut found = Vec::new();
+        leaves(&command(), Vec::new(), &mut found);
+        let mut checked = 0;
+        for (path, sub) in &found {
+            for arg in sub.get_arguments() {
+                let Some(long) = arg.get_long() else { continue };
+                if !arg.get_action().takes_values() {
+                    continue;
+                }
+                let value_name = arg
+                    .get_value_names()
+                    .and_then(|v| v.first())
+                    .map_or(String::new(), |v| v.to_string());
+                for value in negatives(&value_name) {
+                    let option = format!("--{long}");
+                    let mut argv = vec!["pelage".to_owned()];
+                    argv.extend(path.iter().cloned());
+                    argv.push(option.clone());
+                    argv.push((*value).to_owned());
+                    checked += 1;
+                    match command().try_get_matches_from(&argv) {
+                        Ok(matches) => {
+                            // Parsed: the option holds the value (the command checks it).
+                            let cli = Cli::from_arg_matches(&matches);
+                            assert!(cli.is_ok(), "{argv:?}: {:?}", cli.err());
+                        }
+                        Err(e) => {
+                            let message = e.to_string();
+                            assert_ne!(
+                                e.kind(),
+                                clap::error::ErrorKind::UnknownArgument,
+                                "{argv:?}: {message}"
+                            );
+                            assert!(message.contains(&option), "{argv:?}: {message}");
+                        }
+                    }
+                }
+            }
+        }
+        // render's and animate's scene options, their own, the labs' and bench's.
+        assert!(
+            checked > 60,
+            "only {checked} cases: the walk missed commands"
+        );
+    }
+
+    /// The negative numbers that are valid are taken, and the others name the allowed
+    /// range.
+    #[test]
+    fn negative_numbers_are_values() {
+        let parse = |args: &[&str]| {
+            command().try_get_matches_from(std::iter::once("pelage").chain(args.iter().copied()))
+        };
+        let matches = parse(&["render", "--time", "-5"]).unwrap();
+        let Ok(Cli {
+            command: Command::Render(opts),
+        }) = Cli::from_arg_matches(&matches)
+        else {
+            panic!("not render");
+        };
+        assert_eq!(opts.time, -5.0);
+        for (args, range) in [
+            (&["render", "--strands", "-1"][..], "1.."),
+            (&["render", "--shadow-res", "-1"], "1.."),
+            (&["render", "--fps", "-1"], "1..=1000000"),
+            (&["animate", "--fps", "-1"], "1..=1000000"),
+            (&["animate", "--frames", "-1"], "1..=1000000"),
+            (&["animate", "--range", "-1..2"], "0 to 1000000"),
+            (&["render", "--size", "-5x5"], "from 1 to"),
+            (&["lab", "scattering", "--spp", "-5"], "1..=4096"),
+            (&["lab", "scattering", "--spp", "4294967295"], "1..=4096"),
+        ] {
+            let e = parse(args).unwrap_err().to_string();
+            assert!(
+                e.contains(args[args.len() - 2]) && e.contains(range),
+                "{args:?}: {e}"
+            );
         }
     }
 }

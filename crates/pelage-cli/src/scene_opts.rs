@@ -6,7 +6,7 @@ use std::str::FromStr;
 
 use clap::ValueEnum;
 use pelage::Scene;
-use pelage::scene::{Light, ShadingModel, ShadowParams, Transparency};
+use pelage::scene::{Light, ParamError, ShadingModel, ShadowParams, Transparency};
 
 use crate::error::CliError;
 
@@ -26,14 +26,12 @@ impl FromStr for Size {
         let (w, h) = text
             .split_once(['x', 'X'])
             .ok_or_else(|| format!("expected WxH in pixels, e.g. 480x360, not `{text}`"))?;
-        let side = |v: &str| {
-            v.trim()
-                .parse::<u32>()
-                .map_err(|e| format!("`{v}` in `{text}`: {e}"))
-                .and_then(|n| match n {
-                    0 => Err(format!("`{text}`: width and height must be at least 1")),
-                    n => Ok(n),
-                })
+        let side = |v: &str| match v.trim().parse::<u32>() {
+            Ok(n) if n > 0 => Ok(n),
+            _ => Err(format!(
+                "`{v}` in `{text}`: width and height are whole numbers of pixels from 1 to {}",
+                u32::MAX
+            )),
         };
         Ok(Self {
             width: side(w)?,
@@ -173,8 +171,8 @@ pub struct Melanin {
 impl FromStr for Melanin {
     type Err = String;
 
-    /// Parses the numbers only; their range is checked with the model's parameters, so
-    /// the error names the parameter (`shading.chiang.eumelanin`).
+    /// Parses the numbers only; their range is checked with the model's parameters
+    /// (and the error then names `--melanin`, [`SceneOpts::blame`]).
     fn from_str(text: &str) -> Result<Self, String> {
         let number = |v: &str, what: &str| {
             v.trim().parse::<f32>().map_err(|e| {
@@ -223,18 +221,23 @@ pub struct SceneOpts {
     #[arg(long, value_name = "FILE")]
     pub scene: Option<PathBuf>,
     /// Image size in pixels, width x height.
-    #[arg(long, value_name = "WxH", default_value = "480x360")]
+    #[arg(
+        long,
+        value_name = "WxH",
+        default_value = "480x360",
+        allow_hyphen_values = true
+    )]
     pub size: Size,
     /// Number of strands (the scene's own count by default: 20000 for the built-in scene;
     /// with guides, the render strands interpolated from them).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     pub strands: Option<u32>,
     /// Shadow method (the scene's by default: voxel).
     #[arg(long, value_name = "METHOD")]
     pub shadow: Option<ShadowArg>,
     /// Shadow resolution: voxels per axis for voxel shadows (default 128), texels per
     /// side for dom, map and adsm (default 1024). Applies to --shadow or the scene's method.
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     pub shadow_res: Option<u32>,
     /// Transparency (the scene's by default: opaque).
     #[arg(long, value_name = "METHOD")]
@@ -270,7 +273,13 @@ pub struct SceneOpts {
 
 impl SceneOpts {
     /// The scene file (or the built-in scene) with the command line's overrides applied.
+    /// An out-of-range value of an option is an error naming the option
+    /// ([`SceneOpts::blame`]).
     pub fn scene(&self) -> Result<Scene, CliError> {
+        self.scene_unblamed().map_err(|e| self.blame(e))
+    }
+
+    fn scene_unblamed(&self) -> Result<Scene, CliError> {
         let mut scene = match &self.scene {
             Some(path) => Scene::from_file(path)?,
             None => Scene::default(),
@@ -332,10 +341,76 @@ impl SceneOpts {
     }
 }
 
+/// Which scene key each command-line option sets, as errors name the key (a
+/// [`ParamError`]'s `name`): the one table that turns an error about a value the
+/// command line gave into an error naming the option ([`SceneOpts::blame`]).
+pub const OPTION_KEYS: &[(&str, &str)] = &[
+    ("--size", "image size"),
+    ("--strands", "roots.count"),
+    ("--strands", "guides.strands"),
+    ("--shadow-res", "shadow.resolution"),
+    ("--shadow-res", "shadow.deep_opacity.size"),
+    ("--shadow-res", "shadow.shadow_map.size"),
+    ("--shadow-res", "shadow.adsm.size"),
+    ("--melanin", "shading.chiang.eumelanin"),
+    ("--melanin", "shading.chiang.pheomelanin"),
+];
+
+/// The parameter error inside `e`, if it is one.
+fn param_error(e: &CliError) -> Option<&ParamError> {
+    use pelage::{shade::ShadeError, shadow::ShadowError, strands::StrandsError};
+    match e {
+        CliError::Render(
+            pelage::Error::Param(p)
+            | pelage::Error::Strands(StrandsError::Param(p))
+            | pelage::Error::Shadow(ShadowError::Param(p))
+            | pelage::Error::Shade(ShadeError::Param(p)),
+        ) => Some(p),
+        _ => None,
+    }
+}
+
+impl SceneOpts {
+    /// Whether `option` was given and set `key` (an entry of [`OPTION_KEYS`]): `--size`
+    /// always is (its default is the option's), `--melanin` sets pheomelanin only
+    /// when it names it.
+    fn sets(&self, option: &str, key: &str) -> bool {
+        match option {
+            "--size" => true,
+            "--strands" => self.strands.is_some(),
+            "--shadow-res" => self.shadow_res.is_some(),
+            "--melanin" => self
+                .melanin
+                .is_some_and(|m| key != "shading.chiang.pheomelanin" || m.pheomelanin.is_some()),
+            _ => false,
+        }
+    }
+
+    /// `e`, naming the option instead of the scene key when it is about a value an option
+    /// gave (see [`OPTION_KEYS`]): a usage error (exit code 2) that names the option, the
+    /// value, its range and the key it sets. Other errors are returned as they are.
+    pub fn blame(&self, e: CliError) -> CliError {
+        let Some(param) = param_error(&e) else {
+            return e;
+        };
+        match OPTION_KEYS
+            .iter()
+            .find(|(option, key)| *key == param.name && self.sets(option, key))
+        {
+            Some((option, key)) => CliError::Usage(format!(
+                "{option} = {}: {} ({option} sets `{key}`)",
+                param.value, param.reason
+            )),
+            None => e,
+        }
+    }
+}
+
 impl SceneOpts {
     /// Applies --melanin and --dual-scattering to `model`, which must be Chiang's when
     /// either is given, then checks the model's parameters (a bad value is an error that
-    /// names the parameter, `shading.chiang.eumelanin` say, with exit code 2).
+    /// names the parameter, `shading.chiang.eumelanin` say, which [`SceneOpts::scene`]
+    /// turns into one naming `--melanin`, with exit code 2).
     fn apply_chiang_options(&self, model: &mut ShadingModel) -> Result<(), CliError> {
         let given: Vec<&str> = [
             self.melanin.map(|_| "--melanin"),
@@ -621,11 +696,45 @@ mod tests {
                 .scene()
                 .unwrap_err();
             let m = e.to_string();
+            assert!(matches!(&e, CliError::Usage(_)), "{value}: {m}");
             assert!(
-                matches!(&e, CliError::Render(pelage::Error::Param(p)) if p.name == key),
+                m.starts_with("--melanin = ")
+                    && m.contains(key)
+                    && (m.contains("[0, 50]") || m.contains("finite")),
                 "{value}: {m}"
             );
             assert_eq!(e.exit_code(), 2, "{value}");
+        }
+        // A bad pheomelanin of the model stays the model's when --melanin sets only the
+        // eumelanin (a scene file's is refused as the file loads, naming the file).
+        let mut model = ShadingModel::Chiang(pelage::scene::ChiangParams {
+            pheomelanin: Some(-1.0),
+            ..Default::default()
+        });
+        let melanin = opts(&["--melanin", "0.3"]);
+        let e = melanin.apply_chiang_options(&mut model).unwrap_err();
+        let e = melanin.blame(e);
+        assert!(
+            matches!(&e, CliError::Render(pelage::Error::Param(p)) if p.name == "shading.chiang.pheomelanin"),
+            "{e}"
+        );
+        let e = opts(&["--melanin", "0.3,-1"]).blame(CliError::Render(pelage::Error::Param(
+            ParamError::new("shading.chiang.pheomelanin", -1.0, "must be in [0, 50]"),
+        )));
+        assert!(e.to_string().starts_with("--melanin = -1.0"), "{e}");
+    }
+
+    #[test]
+    fn every_key_of_the_option_table_is_set_by_its_option() {
+        let given = opts(&["--strands", "5", "--shadow-res", "64", "--melanin", "1,1"]);
+        let none = opts(&[]);
+        for (option, key) in OPTION_KEYS {
+            assert!(given.sets(option, key), "{option} {key}");
+            assert_eq!(
+                none.sets(option, key),
+                *option == "--size",
+                "{option} {key}"
+            );
         }
     }
 

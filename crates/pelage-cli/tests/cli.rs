@@ -378,7 +378,8 @@ fn bad_chiang_values_on_the_command_line_exit_2() {
                 "--melanin",
                 melanin,
             ],
-            &[key],
+            // The option the value came from, and the scene key it sets.
+            &["--melanin", key],
         );
     }
 }
@@ -1135,4 +1136,384 @@ fn lab_dynamics_refuses_a_scene_without_dynamics() {
         "{stderr}"
     );
     assert!(!stderr.contains("adapter"), "{stderr}");
+}
+
+/// Every negative number on the command line is a value: taken where it is valid
+/// (`--time -5`), refused naming the option and its range where it is not; never clap's
+/// "unexpected argument '-1' found".
+#[test]
+fn negative_numbers_name_the_option() {
+    for (args, words) in [
+        (
+            &["render", "--strands", "-1"][..],
+            &["--strands", "1.."][..],
+        ),
+        (&["render", "--size", "-5x5"], &["--size", "-5x5", "from 1"]),
+        (&["render", "--shadow-res", "-1"], &["--shadow-res", "1.."]),
+        (&["render", "--fps", "-1"], &["--fps", "1..="]),
+        (&["animate", "--fps", "-1"], &["--fps", "1..="]),
+        (&["animate", "--frames", "-1"], &["--frames", "1..="]),
+        (
+            &["animate", "--range", "-1..2"],
+            &["--range", "0 to 1000000"],
+        ),
+        (
+            &["lab", "scattering", "--spp", "-5"],
+            &["--spp", "1..=4096"],
+        ),
+        (
+            &["lab", "scattering", "--spp", "4294967295"],
+            &["--spp", "1..=4096"],
+        ),
+    ] {
+        let stderr = exits_2(args, words);
+        assert!(
+            !stderr.contains("unexpected argument"),
+            "{args:?}: {stderr}"
+        );
+    }
+}
+
+#[test]
+fn a_negative_time_renders_the_stateless_wind() {
+    let dir = Scratch::new("negative_time");
+    let png = dir.0.join("t.png");
+    let stdout = ok(&[
+        "render",
+        "--size",
+        "64x48",
+        "--strands",
+        "300",
+        "--time",
+        "-5",
+        "-o",
+        &png.to_string_lossy(),
+    ]);
+    assert!(stdout.contains("t = -5 s"), "{stdout}");
+    assert_not_blank(&png, 64, 48);
+}
+
+/// Values an option gave that the scene refuses are named by the option, not by the
+/// scene key they set.
+#[test]
+fn out_of_range_option_values_name_the_option() {
+    exits_2(
+        &["render", "--shadow", "voxel", "--shadow-res", "1000"],
+        &["--shadow-res", "1000", "shadow.resolution", "2..=512"],
+    );
+    exits_2(
+        &["render", "--shadow", "dom", "--shadow-res", "8"],
+        &["--shadow-res", "8", "16..=8192"],
+    );
+    exits_2(
+        &["render", "--model", "chiang", "--melanin", "51"],
+        &["--melanin", "51", "[0, 50]"],
+    );
+    // The same value from a scene file is named by its key.
+    let dir = Scratch::new("option_keys");
+    let scene = dir.file(
+        "res.toml",
+        "[shadow]\nmethod = \"voxel\"\nresolution = [1000, 1000, 1000]\n",
+    );
+    let stderr = exits_2(
+        &["render", "--scene", &scene.to_string_lossy()],
+        &["resolution"],
+    );
+    assert!(!stderr.contains("--shadow-res"), "{stderr}");
+}
+
+/// A scene with `[dynamics]`: no wind, long hair sagging under gravity from its rest
+/// pose (the first frame).
+fn sagging_scene(dir: &Scratch) -> String {
+    dir.file(
+        "sag.toml",
+        "[mesh]\nkind = \"icosphere\"\nradius = 0.5\nsubdivisions = 2\n\
+         [hair.growth]\nlength = 0.8\n\
+         [dynamics]\ncolliders = [{ center = [0.0, 0.0, 0.0], radius = 0.45 }]\n",
+    )
+    .to_string_lossy()
+    .into_owned()
+}
+
+/// `render --time T` of a simulated scene simulates up to T as `animate` does: it draws
+/// animate's frame at T (the camera there turns by a few millionths of a radian), not
+/// the rest pose; a late `--range` simulates the frames before it without drawing them.
+#[test]
+fn render_of_a_simulated_scene_draws_the_time_asked() {
+    let dir = Scratch::new("render_dynamics");
+    let scene = sagging_scene(&dir);
+    let common = ["--scene", &scene, "--size", "64x48", "--strands", "300"];
+    let render = |name: &str, time: &str| {
+        let png = dir.0.join(name);
+        let mut args = vec!["render"];
+        args.extend_from_slice(&common);
+        let png_arg = png.to_string_lossy().into_owned();
+        args.extend_from_slice(&["--time", time, "-o", &png_arg]);
+        let stdout = ok(&args);
+        (stdout, image::open(&png).unwrap().into_rgba8())
+    };
+    let (_, rest) = render("rest.png", "0");
+    let (stdout, late) = render("late.png", "0.5");
+    assert!(stdout.contains("simulated 12 frames at 24 fps"), "{stdout}");
+    let frames = dir.0.join("frames");
+    let mut args = vec!["animate"];
+    args.extend_from_slice(&common);
+    let frames_arg = frames.to_string_lossy().into_owned();
+    args.extend_from_slice(&[
+        "--frames",
+        "1000000",
+        "--range",
+        "12..13",
+        "--out",
+        &frames_arg,
+    ]);
+    ok(&args);
+    let animated = image::open(frames.join("frame_0012.png"))
+        .unwrap()
+        .into_rgba8();
+    let same = mean_difference(&late, &animated);
+    let moved = mean_difference(&late, &rest);
+    println!(
+        "render --time 0.5 against animate's frame 12: {same:.4}; against the rest pose: {moved:.4}"
+    );
+    assert!(
+        same < 0.05,
+        "render --time 0.5 differs from animate's frame 12 by {same}"
+    );
+    assert!(
+        moved > 0.5,
+        "render --time 0.5 draws the rest pose ({moved} from it)"
+    );
+    assert!(moved > 20.0 * same);
+}
+
+#[test]
+fn fps_without_dynamics_and_a_negative_simulated_time_are_refused() {
+    exits_2(&["render", "--fps", "30"], &["--fps", "[dynamics]"]);
+    let dir = Scratch::new("dynamics_time");
+    let scene = sagging_scene(&dir);
+    exits_2(
+        &["render", "--scene", &scene, "--time", "-1"],
+        &["--time", "-1", "at least 0"],
+    );
+    exits_2(
+        &["render", "--scene", &scene, "--time", "1e9"],
+        &["--time", "1000000"],
+    );
+}
+
+/// The output's format follows its extension: PNG, JPEG; another extension is refused
+/// naming `-o` before any work.
+#[test]
+fn the_output_format_follows_the_extension() {
+    let dir = Scratch::new("formats");
+    for (name, magic) in [
+        ("a.jpg", &[0xFF, 0xD8, 0xFF][..]),
+        ("b.JPEG", &[0xFF, 0xD8, 0xFF]),
+        ("c.png", &[0x89, b'P', b'N', b'G']),
+    ] {
+        let path = dir.0.join(name);
+        let out = tiny_render(&path.to_string_lossy());
+        assert!(out.status.success(), "{name}: {}", text(&out.stderr));
+        let bytes = std::fs::read(&path).unwrap();
+        assert!(
+            bytes.starts_with(magic),
+            "{name} starts with {:02x?}",
+            &bytes[..4]
+        );
+        assert_eq!(
+            image::open(&path).unwrap().into_rgba8().dimensions(),
+            (32, 24),
+            "{name}"
+        );
+    }
+    for name in ["d.gif", "e.exr", "f.png.txt"] {
+        let path = dir.0.join(name);
+        let stderr = exits_2(
+            &["render", "-o", &path.to_string_lossy()],
+            &["-o", name, ".png, .jpg, .jpeg"],
+        );
+        assert!(!stderr.contains("adapter"), "{stderr}");
+        assert!(!path.exists());
+    }
+}
+
+/// A pool too small for the frame drops hair: every command that draws the frame says
+/// how much and which scene key to raise, and still exits 0 (the picture is written).
+#[test]
+fn dropped_work_is_reported_with_the_key_to_raise() {
+    let dir = Scratch::new("dropped");
+    for (method, key) in [("strand_raster", "pool"), ("a_buffer", "nodes_per_pixel")] {
+        let scene = dir.file(
+            &format!("{method}.toml"),
+            &format!("[shade.transparency]\nmethod = \"{method}\"\n{key} = 0.01\n"),
+        );
+        let scene = scene.to_string_lossy().into_owned();
+        let png = dir.0.join(format!("{method}.png"));
+        let out = pelage(&[
+            "render",
+            "--scene",
+            &scene,
+            "--size",
+            "64x48",
+            "--strands",
+            "2000",
+            "-o",
+            &png.to_string_lossy(),
+        ]);
+        let stderr = text(&out.stderr);
+        assert!(out.status.success(), "{method}: {stderr}");
+        assert!(
+            stderr.contains("warning: ") && stderr.contains(&format!("[shade.transparency] {key}")),
+            "render {method}: {stderr}"
+        );
+        let frames = dir.0.join(format!("{method}_frames"));
+        let out = pelage(&[
+            "animate",
+            "--scene",
+            &scene,
+            "--size",
+            "32x24",
+            "--strands",
+            "1000",
+            "--frames",
+            "2",
+            "--out",
+            &frames.to_string_lossy(),
+        ]);
+        let stderr = text(&out.stderr);
+        assert!(out.status.success(), "{method}: {stderr}");
+        assert!(
+            stderr.contains(&format!("[shade.transparency] {key}"))
+                && stderr.contains("of 2 frames"),
+            "animate {method}: {stderr}"
+        );
+    }
+    // Enough nodes: no word.
+    let out = pelage(&[
+        "render",
+        "--size",
+        "32x24",
+        "--strands",
+        "200",
+        "--oit",
+        "a_buffer",
+        "-o",
+        "/dev/null",
+    ]);
+    assert!(out.status.success());
+    assert!(
+        !text(&out.stderr).contains("warning"),
+        "{}",
+        text(&out.stderr)
+    );
+}
+
+/// `animate` whose frame 1 is taken by a folder refuses before drawing anything.
+#[test]
+fn animate_checks_the_frame_names_first() {
+    let dir = Scratch::new("frame_folder");
+    std::fs::create_dir(dir.0.join("frame_0001.png")).unwrap();
+    let stdout_and_err = exits_2(
+        &[
+            "animate",
+            "--size",
+            "32x24",
+            "--strands",
+            "200",
+            "--frames",
+            "3",
+            "--out",
+            &dir.0.to_string_lossy(),
+        ],
+        &["--out", "frame_0001.png", "folder"],
+    );
+    assert!(!stdout_and_err.contains("adapter"), "{stdout_and_err}");
+    let mut names: Vec<String> = std::fs::read_dir(&dir.0)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(names, ["frame_0001.png"]);
+}
+
+/// `animate` failing at frame 1 (its name a link into a folder that cannot be made)
+/// removes frame 0 and writes no GIF: nothing of the unfinished run is left.
+#[cfg(target_os = "linux")]
+#[test]
+fn animate_failing_mid_run_leaves_nothing() {
+    let dir = Scratch::new("frame_fails");
+    std::os::unix::fs::symlink(
+        "/proc/pelage-no-such-folder/x.png",
+        dir.0.join("frame_0001.png"),
+    )
+    .unwrap();
+    let stderr = fails(&[
+        "animate",
+        "--size",
+        "32x24",
+        "--strands",
+        "200",
+        "--frames",
+        "3",
+        "--out",
+        &dir.0.to_string_lossy(),
+    ]);
+    assert!(
+        stderr.contains("frame_0001.png") || stderr.contains("pelage-no-such-folder"),
+        "{stderr}"
+    );
+    let mut names: Vec<String> = std::fs::read_dir(&dir.0)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(names, ["frame_0001.png"], "left {names:?}");
+}
+
+/// On GL the first pipelines can take a minute to compile: the run says so on stderr
+/// before building them. Stopped as soon as the line is seen.
+#[test]
+fn gl_says_it_is_compiling_shaders() {
+    use std::io::BufRead;
+    if !llvmpipe_gl() {
+        return;
+    }
+    let mut command = Command::new(env!("CARGO_BIN_EXE_pelage"));
+    command
+        .args([
+            "render",
+            "--size",
+            "32x24",
+            "--strands",
+            "200",
+            "--oit",
+            "strand_raster",
+            "-o",
+            "/dev/null",
+        ])
+        .env("WGPU_BACKEND", "gl")
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped());
+    if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
+        command.env("XDG_RUNTIME_DIR", std::env::temp_dir());
+    }
+    let mut child = command.spawn().unwrap();
+    let stderr = child.stderr.take().unwrap();
+    let mut seen = Vec::new();
+    for line in std::io::BufReader::new(stderr).lines() {
+        let line = line.unwrap();
+        let found = line.contains("compiling shaders for the GL backend");
+        seen.push(line);
+        if found {
+            break;
+        }
+    }
+    let _ = child.kill();
+    let _ = child.wait();
+    assert!(
+        seen.iter()
+            .any(|l| l.contains("compiling shaders for the GL backend")),
+        "{seen:?}"
+    );
 }

@@ -48,6 +48,7 @@ use pelage_lab::{Table, contact_sheet};
 
 use super::{LabOpts, background, flip_scores};
 use crate::progress;
+use crate::report::DroppedWork;
 
 type LabResult<T> = Result<T, Box<dyn std::error::Error>>;
 
@@ -239,12 +240,18 @@ pub fn run(opts: &LabOpts, scene: Option<&Path>) -> LabResult<()> {
     let (stateless, simulated, floor) = scenes(scene, strands)?;
     let gpu = Gpu::headless()?;
     println!("adapter: {}", gpu.describe());
+    crate::report::notice_gl_compile(&gpu);
     let camera = stateless.camera.clone();
     let bg = background(&stateless);
     let mut renderers = [&stateless, &simulated]
         .into_iter()
         .chain(&floor)
         .map(|scene| Renderer::new(&gpu, scene, size.0, size.1))
+        .collect::<Result<Vec<_>, _>>()?;
+    // What each variant's frames drop (a pool of the scene's method too small).
+    let mut dropped = renderers
+        .iter()
+        .map(|r| DroppedWork::start(r, &gpu))
         .collect::<Result<Vec<_>, _>>()?;
     let roots = renderers[0].strands().roots();
     let lengths: Vec<f64> = roots.iter().map(|r| f64::from(r.length)).collect();
@@ -269,13 +276,14 @@ pub fn run(opts: &LabOpts, scene: Option<&Path>) -> LabResult<()> {
         let t = frame as f32 / FPS;
         let mut wall_ms = [0.0; 2];
         let mut images = Vec::with_capacity(3);
-        for (i, renderer) in renderers.iter_mut().enumerate() {
+        for (i, (renderer, dropped)) in renderers.iter_mut().zip(&mut dropped).enumerate() {
             let began = Instant::now();
             renderer.render(&gpu, t, &camera)?;
             renderer.finish(&gpu)?;
             if let Some(ms) = wall_ms.get_mut(i) {
                 *ms = began.elapsed().as_secs_f64() * 1e3;
             }
+            dropped.after_frame(renderer, &gpu, frame as u32)?;
             images.push(renderer.image(&gpu)?);
         }
         let flip_sim = flip_scores(&images[0], &images[1], bg)?;
@@ -317,6 +325,16 @@ pub fn run(opts: &LabOpts, scene: Option<&Path>) -> LabResult<()> {
         bar.inc(1);
     }
     bar.finish_and_clear();
+    let variants = [&stateless, &simulated].into_iter().chain(&floor);
+    for ((dropped, name), scene) in dropped
+        .iter()
+        .zip(["stateless", "simulated", "other roots"])
+        .zip(variants)
+    {
+        if let Some(line) = dropped.report(&scene.shade.transparency) {
+            eprintln!("{name}: {line}");
+        }
+    }
     // Each strand stage alone, one frame step past the last (the simulation steps 1/FPS
     // each repeat; the stateless growth does the same work at any time).
     let t_next = frames as f32 / FPS;
