@@ -141,9 +141,14 @@ pub struct ScatteringOpts {
     /// What every lab takes.
     #[command(flatten)]
     pub lab: LabOpts,
-    /// Samples per pixel of each of the path tracer's two renders (default 64; 16 with
-    /// --quick). Each row's noise floor says whether it was enough.
-    #[arg(long, value_name = "N")]
+    /// Samples per pixel of each of the path tracer's two renders, in 1..=65536 (default
+    /// 64; 16 with --quick). Each row's noise floor says whether it was enough.
+    #[arg(
+        long,
+        value_name = "N",
+        value_parser = crate::trace::spp_parser(),
+        allow_hyphen_values = true
+    )]
     pub spp: Option<u32>,
 }
 
