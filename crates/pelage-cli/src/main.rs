@@ -2,7 +2,8 @@
 //!
 //! `render` and `animate` run the frame pipeline on a scene (a TOML scene file or the
 //! built-in creature), `lab` and `bench` chart every method's speed against its
-//! accuracy, and `info` says what the adapter can do. Run `pelage --help` or
+//! accuracy, `trace` path-traces a scene (the ground truth) and `compare` measures an
+//! image against it, and `info` says what the adapter can do. Run `pelage --help` or
 //! `pelage <command> --help`.
 
 use std::process::ExitCode;
@@ -116,7 +117,7 @@ enum Command {
                       (--shadow, --shadow-res, --oit, --dual-scattering, --lod) are refused.",
         after_help = "Examples:\n  \
                       pelage trace --scene scenes/long_hair.toml --size 64x64 --spp 4 -o out/ref.png\n  \
-                      pelage trace --scene scenes/blond_chiang.toml --spp 256 -o out/ref.hdr\n  \
+                      pelage trace --scene scenes/blond_chiang.toml --size 240x180 --spp 64 -o out/ref.hdr\n  \
                       pelage render --scene scenes/long_hair.toml --size 64x64 -o out/test.png\n  \
                       pelage compare out/ref.png out/test.png --heat out/flip.png"
     )]

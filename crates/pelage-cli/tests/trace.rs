@@ -163,6 +163,38 @@ fn trace_writes_png_hdr_and_mask_with_the_renderers_background_and_sky() {
 }
 
 #[test]
+fn help_of_trace_and_compare() {
+    let top = ok(&["--help"]);
+    assert!(top.contains("trace") && top.contains("compare"), "{top}");
+    let trace = ok(&["trace", "--help"]);
+    for word in [
+        "--scene",
+        "--size",
+        "--spp",
+        "1..=65536",
+        "--bounces",
+        "1..=1024",
+        "--seed",
+        "--time",
+        ".png",
+        ".hdr",
+        "mask",
+        "background",
+        "ambient",
+        "Examples:",
+    ] {
+        assert!(trace.contains(word), "trace --help lacks {word}:\n{trace}");
+    }
+    let compare = ok(&["compare", "--help"]);
+    for word in ["REF", "TEST", "--mask", "--heat", "FLIP", "Examples:"] {
+        assert!(
+            compare.contains(word),
+            "compare --help lacks {word}:\n{compare}"
+        );
+    }
+}
+
+#[test]
 fn trace_bounds_and_bad_options_are_named() {
     let dir = Scratch::new("bounds");
     let scene = dir.file("scene.toml", SKY_ONLY);
