@@ -247,9 +247,7 @@ pub fn run(opts: &TraceOpts) -> Result<(), CliError> {
         })
         .map_err(failed)?;
     bar.finish_and_clear();
-    if let Some((i, _)) =
-        (image.pixels.iter().enumerate()).find(|(_, p)| p.iter().any(|v| !v.is_finite()))
-    {
+    if let Some(i) = (image.pixels.iter()).position(|p| p.iter().any(|v| !v.is_finite())) {
         // The path tracer never returns one; refuse to write a wrong picture if it did.
         return Err(CliError::Lab(
             format!("pixel {i} of the traced image is not finite").into(),
