@@ -2,7 +2,8 @@
 //!
 //! `render` and `animate` run the frame pipeline on a scene (a TOML scene file or the
 //! built-in creature), `lab` and `bench` chart every method's speed against its
-//! accuracy, and `info` says what the adapter can do. Run `pelage --help` or
+//! accuracy, `trace` path-traces a scene (the ground truth) and `compare` measures an
+//! image against it, and `info` says what the adapter can do. Run `pelage --help` or
 //! `pelage <command> --help`.
 
 use std::process::ExitCode;
@@ -12,15 +13,18 @@ use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 mod animate;
 mod auto;
 mod bench;
+mod compare;
 mod error;
 mod hair_timing;
 mod info;
 mod lab;
 mod output;
+mod path_trace;
 mod progress;
 mod render;
 mod report;
 mod scene_opts;
+mod trace;
 
 use error::CliError;
 
@@ -101,6 +105,36 @@ enum Command {
                       pelage lab lod"
     )]
     Lab(lab::Lab),
+    /// Path-trace a scene: the ground truth a render is compared with.
+    #[command(
+        long_about = "Path-trace a scene file with the renderer's meaning of it: the strands \
+                      grown on the GPU for --time and read back, traced on the CPU as real \
+                      cylinders with Chiang's fibre BSDF (every bounce up to --bounces), the \
+                      mesh a diffuse surface of albedo pi x mesh_color, the scene's camera and \
+                      lights; shade.background is what camera rays that miss see and \
+                      shade.ambient/pi the sky that lights. Writes -o as PNG (sRGB) or HDR \
+                      (linear) and the hair mask beside it (FILE.mask.png) for pelage compare. \
+                      The scene options are render's; those the path tracer has no use for \
+                      (--shadow, --shadow-res, --oit, --dual-scattering, --lod) are refused.",
+        after_help = "Examples:\n  \
+                      pelage trace --scene scenes/long_hair.toml --size 64x64 --spp 4 -o out/ref.png\n  \
+                      pelage trace --scene scenes/blond_chiang.toml --size 240x180 --spp 64 -o out/ref.hdr\n  \
+                      pelage render --scene scenes/long_hair.toml --size 64x64 -o out/test.png\n  \
+                      pelage compare out/ref.png out/test.png --heat out/flip.png"
+    )]
+    Trace(trace::TraceOpts),
+    /// Compare an image with a reference: FLIP, over the image and the hair.
+    #[command(
+        long_about = "Compare TEST with the reference REF (PNG, sRGB, or HDR, linear; one \
+                      size): mean LDR-FLIP over the image and over the hair, the hair's mean \
+                      luminance TEST/REF and its mean linear colour difference TEST - REF per \
+                      channel. The hair is the mask (--mask, or REF.mask.png as pelage trace \
+                      writes it); without one only the image-wide FLIP is printed.",
+        after_help = "Examples:\n  \
+                      pelage compare out/ref.png out/test.png\n  \
+                      pelage compare out/ref.hdr out/test.png --mask out/ref.mask.png --heat out/flip.png"
+    )]
+    Compare(compare::CompareOpts),
     /// Run the performance report: stage times, bandwidth, scaling.
     #[command(
         long_about = "The performance report: GPU time of each stage (timestamp queries, median \
@@ -136,6 +170,8 @@ fn run(command: &Command) -> Result<(), CliError> {
         Command::Render(opts) => render::run(opts),
         Command::Animate(opts) => animate::run(opts),
         Command::Lab(lab) => lab.run().map_err(CliError::Lab),
+        Command::Trace(opts) => trace::run(opts),
+        Command::Compare(opts) => compare::run(opts),
         Command::Bench(opts) => bench::run(opts).map_err(CliError::Lab),
         Command::Info => info::run(),
     }

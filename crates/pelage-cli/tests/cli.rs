@@ -1159,11 +1159,11 @@ fn negative_numbers_name_the_option() {
         ),
         (
             &["lab", "scattering", "--spp", "-5"],
-            &["--spp", "1..=4096"],
+            &["--spp", "1..=65536"],
         ),
         (
             &["lab", "scattering", "--spp", "4294967295"],
-            &["--spp", "1..=4096"],
+            &["--spp", "1..=65536"],
         ),
     ] {
         let stderr = exits_2(args, words);

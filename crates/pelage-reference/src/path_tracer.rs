@@ -13,13 +13,18 @@
 //!   `wgsl/shade/mesh.wgsl` shades its mesh `style.color · Σ E max(n·l, 0)` (+ ambient), which
 //!   is a Lambertian of albedo `ρ = π · style.color` lit directly; pass that albedo for a
 //!   like-for-like direct term (albedos above 1 are accepted but then multiple bounces add
-//!   energy). pelage's constant `ambient` corresponds to a background of radiance `ambient/π`
-//!   seen unoccluded.
+//!   energy).
 //! - **Lights** (`pelage_scene::Light`, as `wgsl/shade/frame.wgsl` delivers them): a
 //!   directional light is a delta light of irradiance `color · intensity` (on a surface facing
 //!   it) from `-direction`; a point light delivers `color · intensity / max(d², 1e-4)` at
 //!   distance `d` (the same floor as `frame_irradiance`). Lights are not visible to rays.
-//! - **Background**: a constant radiance seen by every ray that escapes (primary or not).
+//! - **Background and sky**: two constant radiances, as pelage's renderer means them.
+//!   [`PathTracerSettings::background`] is what a *camera* ray that hits nothing sees (the
+//!   renderer's `shade.background`, its clear colour: it lights nothing);
+//!   [`PathTracerSettings::sky`] is the radiance an escaping ray sees after at least one
+//!   scattering (the light of the environment). pelage's constant `ambient` lights an
+//!   unoccluded Lambertian surface of albedo `ρ` with `ρ · ambient`, which is a sky of
+//!   radiance `ambient/π` seen unoccluded: pass `sky = ambient/π` for a like-for-like scene.
 //!
 //! # Camera
 //! Pixel `(x, y)`, `y` down, covers exactly the area pelage's raster of
@@ -34,9 +39,9 @@
 //! reaches through fibres only by scattering, which is what makes this a multiple-scattering
 //! reference), then a continuation sampled from the BSDF (Chiang: [`ChiangFibre::sample`];
 //! Lambert: cosine-weighted). Scattering vertex `k` (1-based) adds its light-sampled term and,
-//! if its continuation escapes, the background; vertex `max_bounces` is the last, so
-//! `max_bounces = 1` is direct light only (lights and background seen after one scattering).
-//! No MIS is needed: lights are delta lights and the background is only reached by BSDF
+//! if its continuation escapes, the sky; vertex `max_bounces` is the last, so
+//! `max_bounces = 1` is direct light only (lights and sky seen after one scattering).
+//! No MIS is needed: lights are delta lights and the sky is only reached by BSDF
 //! sampling. Russian roulette from vertex `roulette_start` on, survival probability
 //! `min(0.95, max component of the path throughput)`, the throughput divided by it (unbiased).
 //!
@@ -55,7 +60,8 @@
 //! # Determinism
 //! Every pixel has its own [`Pcg32`] seeded from `(seed, pixel index)`; rows are rendered in
 //! parallel with rayon but no random number depends on scheduling, so a seed gives the same
-//! image bit for bit on any number of threads.
+//! image bit for bit on any number of threads ([`PathTracer::render_with_progress`] reports
+//! each finished row, for a progress bar).
 
 use std::f64::consts::{PI, TAU};
 use std::path::Path;
@@ -70,6 +76,10 @@ use crate::transmittance::{Segment, SegmentBvh, SegmentHit};
 
 /// Most bounces a render may ask for.
 pub const MAX_BOUNCES_LIMIT: u32 = 1024;
+
+/// Most samples per pixel a render may ask for (65 536: beyond it the `f64` mean of a
+/// pixel still converges, but a render of any useful size would take days).
+pub const MAX_SPP: u32 = 65_536;
 
 /// Largest image side accepted (8192² pixels of radiance and mask take 1 GiB).
 pub const MAX_IMAGE_SIDE: u32 = 8192;
@@ -132,9 +142,9 @@ fn splitmix64(x: u64) -> u64 {
 /// What is wrong with a path-tracing request.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum PathTraceError {
-    /// `spp` is 0.
-    #[error("spp is 0: a render needs at least one sample per pixel")]
-    ZeroSpp,
+    /// `spp` is 0 or above [`MAX_SPP`].
+    #[error("spp = {0}: must be in 1..={MAX_SPP} samples per pixel")]
+    Spp(u32),
     /// `max_bounces` is 0 or above [`MAX_BOUNCES_LIMIT`].
     #[error("max_bounces = {0}: must be in 1..={MAX_BOUNCES_LIMIT} (1 = direct light only)")]
     Bounces(u32),
@@ -174,14 +184,19 @@ pub enum PathTraceError {
 /// Render settings.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PathTracerSettings {
-    /// Samples (paths) per pixel, >= 1. Default 64.
+    /// Samples (paths) per pixel, in 1..=[`MAX_SPP`]. Default 64.
     pub spp: u32,
     /// Most scattering vertices per path, in 1..=1024; 1 = direct light only. Default 16.
     pub max_bounces: u32,
     /// Seed of every pixel's random numbers. Default 0.
     pub seed: u64,
-    /// Linear RGB radiance seen by escaping rays, finite and >= 0. Default black.
+    /// Linear RGB radiance a camera ray that hits nothing sees (pelage's
+    /// `shade.background`: it lights nothing), finite and >= 0. Default black.
     pub background: DVec3,
+    /// Linear RGB radiance an escaping ray sees after at least one scattering: the light
+    /// of the environment (pelage's `shade.ambient / π`, see the module docs), finite and
+    /// >= 0. Default black.
+    pub sky: DVec3,
     /// First scattering vertex (1-based) whose continuation faces Russian roulette; values
     /// above `max_bounces` turn it off. Default 4.
     pub roulette_start: u32,
@@ -194,6 +209,7 @@ impl Default for PathTracerSettings {
             max_bounces: 16,
             seed: 0,
             background: DVec3::ZERO,
+            sky: DVec3::ZERO,
             roulette_start: 4,
         }
     }
@@ -202,22 +218,22 @@ impl Default for PathTracerSettings {
 impl PathTracerSettings {
     /// Checks the settings (see the field docs).
     pub fn validate(&self) -> Result<(), PathTraceError> {
-        if self.spp == 0 {
-            return Err(PathTraceError::ZeroSpp);
+        if self.spp == 0 || self.spp > MAX_SPP {
+            return Err(PathTraceError::Spp(self.spp));
         }
         if self.max_bounces == 0 || self.max_bounces > MAX_BOUNCES_LIMIT {
             return Err(PathTraceError::Bounces(self.max_bounces));
         }
-        if !self.background.is_finite() {
-            return Err(PathTraceError::NonFinite {
-                what: "background".into(),
-            });
-        }
-        if self.background.min_element() < 0.0 {
-            return Err(PathTraceError::Invalid {
-                what: "background".into(),
-                reason: format!("{:?} must be >= 0", self.background),
-            });
+        for (what, v) in [("background", self.background), ("sky", self.sky)] {
+            if !v.is_finite() {
+                return Err(PathTraceError::NonFinite { what: what.into() });
+            }
+            if v.min_element() < 0.0 {
+                return Err(PathTraceError::Invalid {
+                    what: what.into(),
+                    reason: format!("{v:?} must be >= 0"),
+                });
+            }
         }
         Ok(())
     }
@@ -653,6 +669,20 @@ impl PathTracer {
         height: u32,
         settings: &PathTracerSettings,
     ) -> Result<PathTracedImage, PathTraceError> {
+        self.render_with_progress(camera, width, height, settings, &|| {})
+    }
+
+    /// [`PathTracer::render`], calling `row_done` once per finished row (from rayon's
+    /// threads, in any order; `height` calls in all when the render succeeds): what a
+    /// progress bar counts. The image does not depend on it.
+    pub fn render_with_progress(
+        &self,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+        settings: &PathTracerSettings,
+        row_done: &(dyn Fn() + Sync),
+    ) -> Result<PathTracedImage, PathTraceError> {
         settings.validate()?;
         if width == 0 || height == 0 || width > MAX_IMAGE_SIDE || height > MAX_IMAGE_SIDE {
             return Err(PathTraceError::Size { width, height });
@@ -672,7 +702,7 @@ impl PathTracer {
         let rows: Vec<Vec<([f32; 3], f32)>> = (0..h)
             .into_par_iter()
             .map(|y| {
-                (0..w)
+                let row = (0..w)
                     .map(|x| {
                         let index = (y * w + x) as u64;
                         let mut rng = Pcg32::new(settings.seed, index);
@@ -702,7 +732,9 @@ impl PathTracer {
                             (f64::from(hair) / n) as f32,
                         )
                     })
-                    .collect()
+                    .collect();
+                row_done();
+                row
             })
             .collect();
         let (pixels, hair_mask) = rows.into_iter().flatten().unzip();
@@ -813,7 +845,7 @@ impl PathTracer {
             }
             match self.intersect(next_o, next_d, f64::INFINITY, skip) {
                 None => {
-                    radiance += throughput * settings.background;
+                    radiance += throughput * settings.sky;
                     break;
                 }
                 Some(h) => {

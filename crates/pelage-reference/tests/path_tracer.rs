@@ -7,7 +7,7 @@ use std::f64::consts::PI;
 use glam::{DVec3, DVec4, Vec3, Vec4};
 use pelage_reference::chiang::ChiangFibre;
 use pelage_reference::path_tracer::{
-    HairScene, PathTraceError, PathTracedImage, PathTracer, PathTracerSettings,
+    HairScene, MAX_SPP, PathTraceError, PathTracedImage, PathTracer, PathTracerSettings,
 };
 use pelage_reference::transmittance::{Segment, segments_from_strands};
 use pelage_scene::{Camera, DirectionalLight, Light, Mesh, PointLight};
@@ -267,6 +267,7 @@ fn bundle_scene_render(spp: u32, seed: u64) -> PathTracedImage {
                 max_bounces: 8,
                 seed,
                 background: DVec3::splat(0.1),
+                sky: DVec3::splat(0.1),
                 ..Default::default()
             },
         )
@@ -362,6 +363,7 @@ fn white_furnace_conserves_energy_over_many_bounces() {
         max_bounces: 1024,
         seed: 9,
         background: DVec3::ONE,
+        sky: DVec3::ONE,
         roulette_start: 2000,
     };
     let exact = tracer.render(&camera, 32, 32, &base).unwrap();
@@ -428,6 +430,7 @@ fn absorbing_fibres_in_the_furnace_are_darker_and_more_bounces_add_light() {
                     max_bounces: bounces,
                     seed: 1,
                     background: DVec3::ONE,
+                    sky: DVec3::ONE,
                     roulette_start: 2000,
                 },
             )
@@ -526,6 +529,83 @@ fn mesh_direct_light_is_lambert() {
 }
 
 #[test]
+fn camera_misses_see_the_background_and_scattered_rays_the_sky() {
+    // pelage's semantics: `background` is what camera rays that miss see (it lights
+    // nothing), `sky` lights what they hit. A red background, a blue sky, no lights: a
+    // white quad over the left half of the view behind a strand. Pixels missing everything
+    // are exactly the background; the quad and the strand are lit blue only, never red.
+    let segments = straight_strands(&[(0.0, 0.0)], 4.0, 4, 0.08);
+    let quad = [
+        Vec3::new(-3.0, -3.0, -0.5),
+        Vec3::new(0.0, -3.0, -0.5),
+        Vec3::new(0.0, 3.0, -0.5),
+        Vec3::new(-3.0, 3.0, -0.5),
+    ];
+    let tris = [[0u32, 1, 2], [0, 2, 3]];
+    let tracer = PathTracer::new(&HairScene {
+        segments: &segments,
+        fibre: ChiangFibre::default(),
+        strand_sigma_a: None,
+        mesh_positions: &quad,
+        mesh_triangles: &tris,
+        mesh_albedo: DVec3::splat(0.5),
+        lights: &[],
+    })
+    .unwrap();
+    let background = DVec3::new(1.0, 0.0, 0.0);
+    let (w, h) = (16usize, 16usize);
+    let img = tracer
+        .render(
+            &front_camera(1.0, 40.0),
+            w as u32,
+            h as u32,
+            &PathTracerSettings {
+                spp: 16,
+                max_bounces: 8,
+                seed: 3,
+                background,
+                sky: DVec3::new(0.0, 0.0, 1.0),
+                ..Default::default()
+            },
+        )
+        .unwrap();
+    let (mut misses, mut mesh, mut hair) = (0, Vec::new(), Vec::new());
+    for y in 0..h {
+        for x in 0..w {
+            let i = y * w + x;
+            let p = img.pixels[i];
+            if img.hair_mask[i] == 1.0 {
+                assert_eq!(
+                    p[0], 0.0,
+                    "hair pixel ({x}, {y}) {p:?} has background in it"
+                );
+                hair.push(f64::from(p[2]));
+            } else if img.hair_mask[i] > 0.0 {
+                continue; // the strand's edge: hair and background or quad
+            } else if x >= w / 2 {
+                assert_eq!(p, [1.0, 0.0, 0.0], "miss pixel ({x}, {y})");
+                misses += 1;
+            } else {
+                assert_eq!((p[0], p[1]), (0.0, 0.0), "quad pixel ({x}, {y}) {p:?}");
+                mesh.push(f64::from(p[2]));
+            }
+        }
+    }
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+    println!(
+        "{misses} misses, {} quad pixels (mean blue {:.3}), {} hair pixels (mean blue {:.3})",
+        mesh.len(),
+        mean(&mesh),
+        hair.len(),
+        mean(&hair)
+    );
+    assert!(misses > 40 && mesh.len() > 40 && hair.len() >= 4);
+    // The quad sees the sky over (most of) its hemisphere: radiance albedo · sky = 0.5.
+    assert!((0.4..=0.55).contains(&mean(&mesh)), "{}", mean(&mesh));
+    assert!(hair.iter().all(|b| *b > 0.0), "{hair:?}");
+}
+
+#[test]
 fn bad_settings_and_inputs_are_typed_errors() {
     let segments = straight_strands(&[(0.0, 0.0)], 2.0, 2, 0.05);
     let lights = [directional(Vec3::Y, 1.0)];
@@ -542,7 +622,23 @@ fn bad_settings_and_inputs_are_typed_errors() {
             4,
             4
         ),
-        PathTraceError::ZeroSpp
+        PathTraceError::Spp(0)
+    );
+    assert_eq!(
+        r(
+            PathTracerSettings {
+                spp: MAX_SPP + 1,
+                ..s.clone()
+            },
+            4,
+            4
+        ),
+        PathTraceError::Spp(MAX_SPP + 1)
+    );
+    assert!(
+        PathTraceError::Spp(0)
+            .to_string()
+            .contains(&format!("1..={MAX_SPP}"))
     );
     assert_eq!(
         r(
@@ -583,6 +679,28 @@ fn bad_settings_and_inputs_are_typed_errors() {
             4
         ),
         PathTraceError::NonFinite { .. }
+    ));
+    assert_eq!(
+        r(
+            PathTracerSettings {
+                sky: DVec3::new(0.0, f64::INFINITY, 0.0),
+                ..s.clone()
+            },
+            4,
+            4
+        ),
+        PathTraceError::NonFinite { what: "sky".into() }
+    );
+    assert!(matches!(
+        r(
+            PathTracerSettings {
+                sky: DVec3::new(0.0, -0.1, 0.0),
+                ..s.clone()
+            },
+            4,
+            4
+        ),
+        PathTraceError::Invalid { what, .. } if what == "sky"
     ));
     let bad_cam = Camera {
         fov_y: f32::NAN,
@@ -725,6 +843,7 @@ fn timing_256x256_64spp_3000_strands() {
     let settings = PathTracerSettings {
         spp: 64,
         background: DVec3::splat(0.05),
+        sky: DVec3::splat(0.05),
         ..Default::default()
     };
     let start = std::time::Instant::now();

@@ -135,21 +135,20 @@ pub struct DynamicsOpts {
     pub scene: Option<PathBuf>,
 }
 
-/// The most samples per pixel `lab scattering --spp` takes: 64 times the default's
-/// 15 minutes is already 16 hours on 2 CPU cores.
-pub const MAX_SPP: u32 = 4096;
-
 /// The options of `pelage lab scattering`.
 #[derive(Clone, Debug, clap::Args)]
 pub struct ScatteringOpts {
     /// What every lab takes.
     #[command(flatten)]
     pub lab: LabOpts,
-    /// Samples per pixel of each of the path tracer's two renders, 1 to 4096 (default
-    /// 64, about 15 minutes; 16 with --quick). Each row's noise floor says whether it
-    /// was enough.
-    #[arg(long, value_name = "N",
-          value_parser = clap::value_parser!(u32).range(1..=i64::from(MAX_SPP)))]
+    /// Samples per pixel of each of the path tracer's two renders, in 1..=65536 (default
+    /// 64; 16 with --quick). Each row's noise floor says whether it was enough.
+    #[arg(
+        long,
+        value_name = "N",
+        value_parser = crate::trace::spp_parser(),
+        allow_hyphen_values = true
+    )]
     pub spp: Option<u32>,
 }
 

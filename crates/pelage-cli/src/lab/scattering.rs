@@ -23,22 +23,20 @@
 
 use std::time::Instant;
 
-use glam::{DVec3, Vec3, Vec4};
+use glam::{DVec3, Vec3};
 use image::RgbaImage;
-use pelage::gpu::{Gpu, read_buffer};
+use pelage::gpu::Gpu;
 use pelage::scene::{
     Camera, ChiangParams, DirectionalLight, Light, Mesh, ShadingModel, Transparency, WindParams,
     chiang_color_scale, sigma_a_from_melanin,
 };
 use pelage::{Renderer, Scene};
 use pelage_lab::{ScatterChart, ScatterPoint, Table, contact_sheet};
-use pelage_reference::chiang::ChiangFibre;
-use pelage_reference::flip::{DEFAULT_PIXELS_PER_DEGREE, FlipMap, LinearImage, flip};
-use pelage_reference::oit::linear_to_srgb8;
-use pelage_reference::path_tracer::{HairScene, PathTracedImage, PathTracer, PathTracerSettings};
-use pelage_reference::transmittance::segments_from_strands;
+use pelage_reference::flip::{DEFAULT_PIXELS_PER_DEGREE, LinearImage, flip};
+use pelage_reference::path_tracer::{PathTracedImage, PathTracerSettings};
 
 use super::LabOpts;
+use crate::path_trace::{TracedScene, hair_luminance, heat, masked_mean};
 use crate::progress;
 
 /// Sky radiance of the lab's scenes (pelage's `ambient` is π times it, see `hair_ambient`).
@@ -135,7 +133,8 @@ fn render_pelage(
 }
 
 /// Path-traces the strands `renderer` drew for `scene`: twice (seeds 1 and 2) with every
-/// bounce, and once (seed 3) with one bounce only, the single-scattering reference.
+/// bounce, and once (seed 3) with one bounce only, the single-scattering reference. The
+/// sky that lights the hair and the background camera rays see are both [`SKY`].
 fn path_trace(
     scene: &Scene,
     renderer: &Renderer,
@@ -143,42 +142,10 @@ fn path_trace(
     size: u32,
     spp: u32,
 ) -> Result<[PathTracedImage; 3], Box<dyn std::error::Error>> {
-    let strands = renderer.strands();
-    let buffers = strands.buffers();
-    let vertices: Vec<Vec4> =
-        bytemuck::cast_slice::<u8, [f32; 4]>(&read_buffer(gpu, &buffers.vertices)?)
-            .iter()
-            .map(|v| Vec4::from_array(*v))
-            .collect();
-    let widths: Vec<f32> = strands.roots().iter().map(|r| r.width).collect();
-    let per = (buffers.segments + 1) as usize;
-    let g = &scene.hair.growth;
-    let segments = segments_from_strands(&vertices, per, &widths, g.tip_width, 1.0);
-    let ShadingModel::Chiang(p) = &scene.shade.model else {
+    if !matches!(scene.shade.model, ShadingModel::Chiang(_)) {
         return Err("the scattering lab's scenes use the Chiang model".into());
-    };
-    let fibre = ChiangFibre {
-        sigma_a: p.sigma_a_for(g.color).as_dvec3(),
-        beta_m: f64::from(p.beta_m),
-        beta_n: f64::from(p.beta_n),
-        alpha: f64::from(p.alpha_deg).to_radians(),
-        eta: f64::from(p.eta),
-    };
-    let triangles: Vec<[u32; 3]> = scene
-        .mesh
-        .indices
-        .chunks_exact(3)
-        .map(|t| [t[0], t[1], t[2]])
-        .collect();
-    let tracer = PathTracer::new(&HairScene {
-        segments: &segments,
-        fibre,
-        strand_sigma_a: None,
-        mesh_positions: &scene.mesh.positions,
-        mesh_triangles: &triangles,
-        mesh_albedo: (scene.shade.mesh_color * std::f32::consts::PI).as_dvec3(),
-        lights: &scene.lights,
-    })?;
+    }
+    let tracer = TracedScene::from_renderer(scene, renderer, gpu)?.tracer()?;
     let render = |seed, max_bounces| {
         tracer.render(
             &scene.camera,
@@ -189,56 +156,12 @@ fn path_trace(
                 seed,
                 max_bounces,
                 background: DVec3::splat(f64::from(SKY)),
+                sky: DVec3::splat(f64::from(SKY)),
                 ..Default::default()
             },
         )
     };
     Ok([render(1, 16)?, render(2, 16)?, render(3, 1)?])
-}
-
-/// Mean of `map` over the pixels where `mask` is at least 0.5 (NaN when there are none).
-fn masked_mean(map: &FlipMap, mask: &[f32]) -> f64 {
-    let (sum, n) = map
-        .values
-        .iter()
-        .zip(mask)
-        .filter(|(_, m)| **m >= 0.5)
-        .fold((0.0f64, 0usize), |(s, n), (v, _)| {
-            (s + f64::from(*v), n + 1)
-        });
-    if n == 0 { f64::NAN } else { sum / n as f64 }
-}
-
-/// Mean linear luminance of `image` over the mask's hair pixels.
-fn hair_luminance(image: &LinearImage, mask: &[f32]) -> f64 {
-    let (sum, n) = image
-        .pixels
-        .iter()
-        .zip(mask)
-        .filter(|(_, m)| **m >= 0.5)
-        .fold((0.0f64, 0usize), |(s, n), (p, _)| {
-            let y = 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
-            (s + f64::from(y), n + 1)
-        });
-    if n == 0 { f64::NAN } else { sum / n as f64 }
-}
-
-/// A FLIP map as a heat image (black, red, yellow, white at 1).
-fn heat(map: &FlipMap) -> Result<RgbaImage, Box<dyn std::error::Error>> {
-    let mut out = RgbaImage::new(map.width, map.height);
-    for (px, v) in out.pixels_mut().zip(&map.values) {
-        let v = v.clamp(0.0, 1.0);
-        let r = (3.0 * v).min(1.0);
-        let g = (3.0 * v - 1.0).clamp(0.0, 1.0);
-        let b = (3.0 * v - 2.0).clamp(0.0, 1.0);
-        *px = image::Rgba([
-            linear_to_srgb8(r),
-            linear_to_srgb8(g),
-            linear_to_srgb8(b),
-            255,
-        ]);
-    }
-    Ok(out)
 }
 
 fn srgb_image(image: &PathTracedImage) -> Result<RgbaImage, Box<dyn std::error::Error>> {
