@@ -494,9 +494,13 @@ struct TextShape {
 /// Bytes openusd allocates at most for one token of a statement (outside arrays and
 /// tuples), besides its path: a spec or a field in a hash map, a name.
 const STATEMENT_BYTES: u64 = 512;
-/// Bytes openusd allocates at most for one token inside an array or a tuple, besides
-/// the token's text (an `f64`, a `String` or token, a path).
+/// Bytes openusd allocates at most for one token inside an array or a tuple other
+/// than a number or punctuation, besides the token's text and prim path (a `String`,
+/// a token, a path).
 const VALUE_BYTES: u64 = 48;
+/// Bytes openusd allocates at most for one number inside an array or a tuple (an
+/// `f64` is 8; twice that for the vectors' growth).
+const NUMBER_BYTES: u64 = 16;
 
 /// Lexes `text` with openusd's tokenizer (so strings, comments and asset paths are
 /// skipped exactly as the parser skips them) and measures its bracket nesting and an
@@ -516,7 +520,12 @@ fn scan_text(text: &str, file: &Path) -> Result<TextShape, UsdFileError> {
         let Ok(token) = token else { break };
         let in_value = matches!(stack.last(), Some(('[' | '(', _)));
         let cost = if in_value {
-            VALUE_BYTES + lexer.span().len() as u64 + path_len
+            match token {
+                // Separators and brackets of a value hold nothing of their own.
+                Token::Punctuation(_) => 0,
+                Token::Number(_) => NUMBER_BYTES,
+                _ => VALUE_BYTES + lexer.span().len() as u64 + path_len,
+            }
         } else {
             shape.statements += 1;
             STATEMENT_BYTES + path_len
@@ -559,8 +568,8 @@ fn scan_text(text: &str, file: &Path) -> Result<TextShape, UsdFileError> {
 
 /// The estimate, in bytes, of what openusd allocates to parse the USD text `text` (the
 /// figure [`USD_MEMORY_FACTOR`] bounds): per token of a statement 512 bytes plus the
-/// length of its prim path, per token inside an array or tuple 48 bytes plus its
-/// length and its prim path's.
+/// length of its prim path; inside an array or tuple, per number 16 bytes, per other
+/// value 48 bytes plus its length and its prim path's, nothing for punctuation.
 ///
 /// Errors: brackets nested deeper than [`MAX_USD_NESTING`] ([`UsdFileError::TooDeep`]).
 pub fn text_memory_estimate(text: &str) -> Result<u64, UsdFileError> {
