@@ -41,8 +41,11 @@ fn fifo(name: &str) -> PathBuf {
     path
 }
 
+/// A reader run on a thread: its error text.
+type Read = Box<dyn FnOnce() -> Result<(), String> + Send>;
+
 /// Every reader, on `path`.
-fn readers(path: &Path) -> Vec<(String, Box<dyn FnOnce() -> Result<(), String> + Send>)> {
+fn readers(path: &Path) -> Vec<(String, Read)> {
     let p = path.to_path_buf();
     let (a, b, c, d) = (p.clone(), p.clone(), p.clone(), p.clone());
     vec![
