@@ -263,7 +263,10 @@ fn usd_seeds() -> Vec<(&'static str, Vec<u8>)> {
     use pelage_scene::{Groom, usd_file};
     let groom = Groom::from_strands(&[strand(Vec3::ZERO, 3), strand(Vec3::X, 2)]).unwrap();
     let mut seeds = vec![
-        ("written-usda", usd_file::to_usda(&groom).unwrap().into_bytes()),
+        (
+            "written-usda",
+            usd_file::to_usda(&groom).unwrap().into_bytes(),
+        ),
         ("written-usdc", usd_file::to_usdc(&groom).unwrap()),
         ("written-usdz", usd_file::to_usdz(&groom).unwrap()),
     ];
@@ -278,9 +281,180 @@ fn usd_seeds() -> Vec<(&'static str, Vec<u8>)> {
     seeds.push(("bspline-pinned", text(&format!("uniform token type = \"cubic\"\nuniform token basis = \"bspline\"\nuniform token wrap = \"pinned\"\nint[] curveVertexCounts = [4]\n{points4}\ncolor3f[] primvars:displayColor = [(1, 0, 0)]"))));
     seeds.push(("catmull-periodic", text(&format!("uniform token type = \"cubic\"\nuniform token basis = \"catmullRom\"\nuniform token wrap = \"periodic\"\nint[] curveVertexCounts = [4]\n{points4}\nfloat[] widths = [0.1, 0.2, 0.3, 0.4]\ncolor3f[] primvars:displayColor = [(1, 0, 0), (0, 1, 0), (0, 0, 1), (1, 1, 1)] (interpolation = \"vertex\")"))));
     seeds.push(("linear-uniform", text("uniform token type = \"linear\"\nint[] curveVertexCounts = [2, 2]\npoint3f[] points = [(0, 0, 0), (0, 1, 0), (1, 0, 0), (1, 1, 0)]\nfloat[] widths = [0.1, 0.2] (interpolation = \"uniform\")\ncolor3f[] primvars:displayColor = [(1, 0, 0), (0, 1, 0)] (interpolation = \"uniform\")")));
-    seeds.push(("counts-mismatch", text(&format!("uniform token type = \"linear\"\nint[] curveVertexCounts = [3]\n{points4}"))));
+    seeds.push((
+        "counts-mismatch",
+        text(&format!(
+            "uniform token type = \"linear\"\nint[] curveVertexCounts = [3]\n{points4}"
+        )),
+    ));
     seeds.push(("empty", Vec::new()));
     seeds.push(("magic-only", b"PXR-USDC".to_vec()));
+    seeds.extend(deep_usd_seeds());
+    seeds
+}
+
+/// USD files with nesting depth as the dimension: nested prims, curves, dictionaries,
+/// arrays and variant sets around `usd_file::MAX_USD_NESTING` (below, at, past it and
+/// far past it), brackets hidden in strings and comments, and a binary crate and a
+/// package of a hierarchy past the limit.
+fn deep_usd_seeds() -> Vec<(&'static str, Vec<u8>)> {
+    use pelage_scene::usd_file::{self, MAX_USD_NESTING};
+    let curve = "def BasisCurves \"C\" {\n uniform token type = \"linear\"\n int[] curveVertexCounts = [2]\n point3f[] points = [(0, 0, 0), (0, 1, 0)]\n}\n";
+    // `depth` braces deep; the curve's `[(` make the brackets nest `depth + 2` deep.
+    let xforms = |depth: usize| {
+        let mut text = String::from("#usda 1.0\n");
+        for level in 0..depth.saturating_sub(1) {
+            text.push_str(&format!("def Xform \"X{level}\" {{\n"));
+        }
+        text.push_str(curve);
+        text.push_str(&"}\n".repeat(depth.saturating_sub(1)));
+        text.into_bytes()
+    };
+    let nested_curves = |depth: usize| {
+        let mut text = String::from("#usda 1.0\n");
+        for level in 0..depth {
+            text.push_str(&format!("def BasisCurves \"C{level}\" {{\n uniform token type = \"linear\"\n int[] curveVertexCounts = [2]\n point3f[] points = [(0, 0, 0), (0, 1, 0)]\n double3 xformOp:translate = (1, 0, 0)\n uniform token[] xformOpOrder = [\"xformOp:translate\"]\n"));
+        }
+        text.push_str(&"}\n".repeat(depth));
+        text.into_bytes()
+    };
+    let dictionaries = |depth: usize| {
+        format!(
+            "#usda 1.0\ndef \"A\" (\n customData = {}{{}}{}\n)\n{{\n}}\n{curve}",
+            "{ dictionary d = ".repeat(depth),
+            " }".repeat(depth)
+        )
+        .into_bytes()
+    };
+    let arrays = |depth: usize| {
+        format!(
+            "#usda 1.0\ndef \"A\" {{\n int[] a = {}1{}\n}}\n{curve}",
+            "[".repeat(depth),
+            "]".repeat(depth)
+        )
+        .into_bytes()
+    };
+    let variants = |depth: usize| {
+        let mut text = String::from("#usda 1.0\n");
+        for level in 0..depth {
+            text.push_str(&format!(
+                "def Xform \"V{level}\" {{\n variantSet \"s\" = {{\n \"a\" {{\n"
+            ));
+        }
+        text.push_str(curve);
+        text.push_str(&"}\n}\n}\n".repeat(depth));
+        text.into_bytes()
+    };
+    let l = MAX_USD_NESTING;
+    let mut seeds = vec![
+        ("deep-xforms-32", xforms(32)),
+        ("deep-xforms-at-limit", xforms(l - 2)),
+        ("deep-xforms-past-limit", xforms(l - 1)),
+        ("deep-xforms-2000", xforms(2000)),
+        ("deep-curves-64", nested_curves(64)),
+        ("deep-curves-past-limit", nested_curves(l - 1)),
+        ("deep-dictionaries-at-limit", dictionaries(l - 3)),
+        ("deep-dictionaries-past-limit", dictionaries(l)),
+        ("deep-arrays-at-limit", arrays(l - 1)),
+        ("deep-arrays-5000", arrays(5000)),
+        ("deep-variants-40", variants(40)),
+        ("deep-variants-past-limit", variants(l / 3 + 1)),
+        (
+            "deep-brackets-in-strings",
+            format!(
+                "#usda 1.0\n# {}\ndef \"A\" ( doc = \"{}\" ) {{\n string s = '{}'\n asset a = @{}@\n /* {} */\n}}\n{curve}",
+                "{".repeat(5000),
+                "(".repeat(5000),
+                "[".repeat(5000),
+                "{".repeat(5000),
+                "[".repeat(5000)
+            )
+            .into_bytes(),
+        ),
+    ];
+    // A binary hierarchy past the limit, and a package of a text past it.
+    {
+        use openusd::sdf::{self, ChildrenKey, FieldKey, SpecType, Value};
+        let mut data = sdf::Data::new();
+        let mut path = sdf::Path::abs_root();
+        let root = data.create_spec(path.clone(), SpecType::PseudoRoot);
+        root.add(ChildrenKey::PrimChildren, Value::TokenVec(vec!["P".into()]));
+        for level in 0..=l {
+            path = path.append_path("P").unwrap();
+            let spec = data.create_spec(path.clone(), SpecType::Prim);
+            spec.add(FieldKey::Specifier, Value::Specifier(sdf::Specifier::Def));
+            spec.add(FieldKey::TypeName, Value::Token("Xform".into()));
+            if level < l {
+                spec.add(ChildrenKey::PrimChildren, Value::TokenVec(vec!["P".into()]));
+            }
+        }
+        let mut out = std::io::Cursor::new(Vec::new());
+        openusd::usdc::CrateWriter::write(&data, &mut out).unwrap();
+        seeds.push(("deep-crate-past-limit", out.into_inner()));
+    }
+    let mut writer = openusd::usdz::ArchiveWriter::new(std::io::Cursor::new(Vec::new()));
+    writer.add_layer("deep.usda", &xforms(l - 1)).unwrap();
+    seeds.push((
+        "deep-package-past-limit",
+        writer.finish().unwrap().into_inner(),
+    ));
+    // Keep the readers' verdicts on the seeds in view when they are written.
+    for (name, bytes) in &seeds {
+        let verdict = usd_file::read(bytes.clone(), Path::new(name))
+            .map(|g| format!("{} strands", g.strand_count()))
+            .unwrap_or_else(|e| e.to_string().chars().take(120).collect());
+        println!("{name}: {verdict}");
+    }
+    seeds
+}
+
+/// Region and texture maps: a 3 x 2 PNG of every colour type and bit depth PNG has
+/// (grey 1/2/4/8/16, RGB 8/16, palette 1/2/4/8, grey + alpha 8/16, RGBA 8/16), an
+/// interlaced one, a truncated one and one claiming a huge size.
+fn map_seeds() -> Vec<(String, Vec<u8>)> {
+    use png::{BitDepth, ColorType};
+    let (width, height) = (3u32, 2u32);
+    let mut seeds = Vec::new();
+    let kinds = [
+        (ColorType::Grayscale, &[1u8, 2, 4, 8, 16][..]),
+        (ColorType::Rgb, &[8, 16][..]),
+        (ColorType::Indexed, &[1, 2, 4, 8][..]),
+        (ColorType::GrayscaleAlpha, &[8, 16][..]),
+        (ColorType::Rgba, &[8, 16][..]),
+    ];
+    for (color, depths) in kinds {
+        for &bits in depths {
+            let depth = BitDepth::from_u8(bits).unwrap();
+            let samples = color.samples();
+            let row_bits = width as usize * samples * bits as usize;
+            let row = row_bits.div_ceil(8);
+            // Rising sample values so that every texel differs.
+            let data: Vec<u8> = (0..row * height as usize)
+                .map(|i| (i * 37 + 11) as u8)
+                .collect();
+            let mut bytes = Vec::new();
+            {
+                let mut encoder = png::Encoder::new(&mut bytes, width, height);
+                encoder.set_color(color);
+                encoder.set_depth(depth);
+                if color == ColorType::Indexed {
+                    let entries = 1usize << bits.min(8);
+                    let palette: Vec<u8> = (0..entries * 3).map(|i| (i * 53) as u8).collect();
+                    encoder.set_palette(palette);
+                }
+                let mut writer = encoder.write_header().unwrap();
+                writer.write_image_data(&data).unwrap();
+            }
+            seeds.push((format!("{color:?}-{bits}").to_lowercase(), bytes));
+        }
+    }
+    let rgba = seeds.iter().find(|(n, _)| n == "rgba-8").unwrap().1.clone();
+    seeds.push(("truncated".into(), rgba[..rgba.len() / 2].to_vec()));
+    let mut huge = rgba.clone();
+    // IHDR width at byte 16: claim 2^31 - 1 texels across (the CRC no longer matches).
+    huge[16..20].copy_from_slice(&0x7fff_ffffu32.to_be_bytes());
+    seeds.push(("huge-header".into(), huge));
+    seeds.push(("empty".into(), Vec::new()));
     seeds
 }
 
@@ -288,6 +462,13 @@ fn main() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("corpus");
     write_all(&root.join("hair_file"), hair_seeds());
     write_all(&root.join("usd"), usd_seeds());
+    let maps = root.join("map");
+    std::fs::create_dir_all(&maps).unwrap();
+    for (name, bytes) in map_seeds() {
+        let path = maps.join(format!("seed-{name}"));
+        std::fs::write(&path, bytes).unwrap();
+        println!("{}", path.display());
+    }
     write_all(
         &root.join("obj"),
         obj_seeds().into_iter().map(|(n, s)| (n, s.into_bytes())),

@@ -12,7 +12,17 @@
 //!
 //! Invariants (checked by every constructor): at least one strand, at least
 //! one point per strand, at most `u32::MAX` points, every point finite,
-//! every width finite and non-negative.
+//! every width finite, non-negative and at most [`MAX_EXTENT`](crate::MAX_EXTENT)
+//! (errors name the file's attribute: a `.hair` or `.tfx` file's `thickness`).
+//!
+//! **Colours.** A groom carries at most one colour per strand (linear RGB), which
+//! becomes the strand's colour in pelage-strands in place of `growth.color` (the
+//! scene's `growth.color_jitter` still varies its brightness). Files with per-point
+//! colours give each strand its **root** point's colour: a `.hair` file's colour array
+//! (not its header's default colour, as its default thickness is not used either),
+//! a `.tfx` file's `vertex_color` (RGB; alpha is not read), a USD file's
+//! `primvars:displayColor` (see `usd_file`). Every colour of the file is checked
+//! (finite, not negative), not only the roots'.
 
 use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
@@ -137,17 +147,35 @@ pub enum GroomError {
         /// The value found.
         value: Vec3,
     },
-    /// A width is negative, NaN or infinite.
+    /// A width is negative, NaN, infinite or larger than [`MAX_EXTENT`](crate::MAX_EXTENT).
     #[error(
-        "the width of point {point} of strand {strand} is {value}; widths must be finite and not negative"
+        "the {attribute} of point {point} of strand {strand} is {value}; it must be finite and in 0..={max:e}",
+        max = crate::MAX_EXTENT
     )]
     BadWidth {
+        /// Where the width came from: `"thickness"` (a `.hair` or `.tfx` file's
+        /// thickness array), `"width"`, `"width after groom.fit and groom.scale"`.
+        attribute: &'static str,
         /// Strand index.
         strand: usize,
         /// Point index within the strand.
         point: usize,
         /// The value found.
         value: f32,
+    },
+    /// A colour of a file's per-point colour array is NaN, infinite or negative.
+    #[error(
+        "the {attribute} of point {point} (strand {strand}) is {value}; every component must be finite and not negative"
+    )]
+    BadPointColor {
+        /// The array: `"colour array"` (`.hair`), `"vertex_color"` (`.tfx`).
+        attribute: &'static str,
+        /// Point index in the file (counting every strand's points).
+        point: usize,
+        /// The strand it belongs to.
+        strand: usize,
+        /// The value found.
+        value: Vec3,
     },
     /// A [`HairFile`]'s arrays do not agree (its public fields were edited).
     #[error(
@@ -220,18 +248,19 @@ impl Groom {
             offsets.push(u32::try_from(total).map_err(|_| too_many(total))?);
         }
         let points = strands.iter().flatten().copied().collect();
-        Groom::from_parts(points, offsets, None, None)
+        Groom::from_parts(points, offsets, None, None, "width")
     }
 
-    /// A groom from a `.hair` file: its strands as they are, and its
-    /// per-point thickness as widths when the file has a thickness array
-    /// (`has_thickness`); a file without one gets no widths (its default
-    /// thickness is not used).
+    /// A groom from a `.hair` file: its strands as they are, its per-point
+    /// thickness as widths when the file has a thickness array (`has_thickness`),
+    /// and each strand's root colour as the strand's colour when it has a colour
+    /// array (`has_colors`); a file without one gets no widths or colours (its
+    /// default thickness and colour are not used).
     ///
     /// Errors: no strands, a strand without points (segment count 0 is a
     /// single point, which is allowed), arrays whose lengths disagree with
-    /// the segment counts, a NaN or infinite point, a negative or
-    /// non-finite thickness.
+    /// the segment counts, a NaN or infinite point, a negative, non-finite or
+    /// too large thickness, a negative or non-finite colour (any point's).
     pub fn from_hair(hair: &HairFile) -> Result<Groom, GroomError> {
         let expected: u64 = hair.segments.iter().map(|&s| u64::from(s) + 1).sum();
         if expected != hair.points.len() as u64 {
@@ -256,15 +285,31 @@ impl Groom {
             offsets.push(u32::try_from(total).map_err(|_| too_many(total))?);
         }
         let widths = hair.has_thickness.then(|| hair.thickness.clone());
-        Groom::from_parts(hair.points.clone(), offsets, widths, None)
+        let colors = if hair.has_colors {
+            if hair.colors.len() != hair.points.len() {
+                return Err(GroomError::InconsistentHair {
+                    array: "colors",
+                    len: hair.colors.len(),
+                    expected,
+                });
+            }
+            check_point_colors("colour array", hair.colors.iter().copied(), &offsets)?;
+            Some(root_colors(&offsets, |point| {
+                hair.colors.get(point).copied()
+            }))
+        } else {
+            None
+        };
+        Groom::from_parts(hair.points.clone(), offsets, widths, colors, "thickness")
     }
 
     /// A groom from a `.tfx` file: its strands' `xyz` (the inverse mass `w`
-    /// is dropped), and its per-strand thickness, if any, as the width of
-    /// every point of the strand.
+    /// is dropped), its per-strand thickness, if any, as the width of
+    /// every point of the strand, and the RGB of each strand's root
+    /// `vertex_color`, if any, as the strand's colour (alpha is not read).
     ///
-    /// Errors: what [`TfxFile::check`] reports, a negative thickness, more
-    /// than `u32::MAX` points.
+    /// Errors: what [`TfxFile::check`] reports, a negative or too large thickness, a
+    /// negative or non-finite colour, more than `u32::MAX` points.
     pub fn from_tfx(tfx: &TfxFile) -> Result<Groom, GroomError> {
         tfx.check()?;
         let vps = tfx.vertices_per_strand as usize;
@@ -279,7 +324,16 @@ impl Groom {
                 .flat_map(|&w| std::iter::repeat_n(w, vps))
                 .collect()
         });
-        Groom::from_parts(points, offsets, widths, None)
+        let colors = match &tfx.vertex_color {
+            Some(c) => {
+                check_point_colors("vertex_color", c.iter().map(|c| c.truncate()), &offsets)?;
+                Some(root_colors(&offsets, |point| {
+                    c.get(point).map(|c| c.truncate())
+                }))
+            }
+            None => None,
+        };
+        Groom::from_parts(points, offsets, widths, colors, "thickness")
     }
 
     /// A groom from its parts as the USD reader gathers them (one colour per strand).
@@ -290,7 +344,7 @@ impl Groom {
         widths: Option<Vec<f32>>,
         colors: Option<Vec<Vec3>>,
     ) -> Result<Groom, GroomError> {
-        Groom::from_parts(points, offsets, widths, colors)
+        Groom::from_parts(points, offsets, widths, colors, "width")
     }
 
     /// This groom with one colour per strand (linear RGB), or none.
@@ -334,6 +388,7 @@ impl Groom {
         offsets: Vec<u32>,
         widths: Option<Vec<f32>>,
         colors: Option<Vec<Vec3>>,
+        width_attribute: &'static str,
     ) -> Result<Groom, GroomError> {
         if offsets.len() < 2 {
             return Err(GroomError::NoStrands);
@@ -364,9 +419,10 @@ impl Groom {
                 if let Some((point, &value)) = widths
                     .iter()
                     .enumerate()
-                    .find(|(_, w)| !(w.is_finite() && **w >= 0.0))
+                    .find(|(_, w)| !(w.is_finite() && (0.0..=crate::MAX_EXTENT).contains(*w)))
                 {
                     return Err(GroomError::BadWidth {
+                        attribute: width_attribute,
                         strand,
                         point,
                         value,
@@ -560,7 +616,13 @@ impl Groom {
             .widths
             .as_ref()
             .map(|w| w.iter().map(|&w| (f64::from(w) * s) as f32).collect());
-        Groom::from_parts(points, self.offsets.clone(), widths, self.colors.clone())
+        Groom::from_parts(
+            points,
+            self.offsets.clone(),
+            widths,
+            self.colors.clone(),
+            "width after groom.fit and groom.scale",
+        )
     }
 
     /// The groom centred on the origin (the centre of its bounding box goes
@@ -595,7 +657,13 @@ impl Groom {
             .widths
             .as_ref()
             .map(|w| w.iter().map(|&w| (f64::from(w) * scale) as f32).collect());
-        Groom::from_parts(points, self.offsets.clone(), widths, self.colors.clone())
+        Groom::from_parts(
+            points,
+            self.offsets.clone(),
+            widths,
+            self.colors.clone(),
+            "width after groom.fit and groom.scale",
+        )
     }
 }
 
@@ -688,6 +756,39 @@ impl GroomSource {
         }
         groom.resample(self.segments)
     }
+}
+
+/// Refuses a NaN, infinite or negative colour of a file's per-point colour array
+/// (`colors`, one per point of the strands `offsets` delimit).
+fn check_point_colors(
+    attribute: &'static str,
+    colors: impl Iterator<Item = Vec3>,
+    offsets: &[u32],
+) -> Result<(), GroomError> {
+    for (point, value) in colors.enumerate() {
+        if !(value.is_finite() && value.min_element() >= 0.0) {
+            // The strand whose range holds the point: the last offset at or before it.
+            let strand = offsets
+                .partition_point(|&o| o as usize <= point)
+                .saturating_sub(1);
+            return Err(GroomError::BadPointColor {
+                attribute,
+                point,
+                strand,
+                value,
+            });
+        }
+    }
+    Ok(())
+}
+
+/// The root point's colour of every strand `offsets` delimit (white where `color` has
+/// none, which the callers' length checks rule out).
+fn root_colors(offsets: &[u32], color: impl Fn(usize) -> Option<Vec3>) -> Vec<Vec3> {
+    offsets
+        .windows(2)
+        .map(|w| color(w[0] as usize).unwrap_or(Vec3::ONE))
+        .collect()
 }
 
 pub(crate) fn too_many(count: u64) -> GroomError {

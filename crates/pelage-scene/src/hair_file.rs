@@ -485,7 +485,8 @@ impl HairFile {
             path: path.to_path_buf(),
             source,
         };
-        let mut file = std::fs::File::open(path).map_err(io)?;
+        let mut file = crate::limits::open_regular(path).map_err(io)?;
+        let file_len = file.metadata().map(|m| m.len()).map_err(io)?;
         let mut bytes = Vec::with_capacity(HEADER_SIZE);
         (&mut file)
             .take(HEADER_SIZE as u64)
@@ -493,7 +494,20 @@ impl HairFile {
             .map_err(io)?;
         if bytes.len() == HEADER_SIZE && bytes[..4] == SIGNATURE {
             let word = |at: usize| u32::from_le_bytes(fixed(&bytes[at..at + 4]));
-            if let Some(size) = file_size(word(4), word(8), word(12)) {
+            let (hair_count, point_count, arrays) = (word(4), word(8), word(12));
+            let needed = file_size(hair_count, point_count, arrays);
+            // A header that claims more than the file holds is named by its counts and
+            // the file's real size, whether or not the claim passes the size cap.
+            if needed.is_none_or(|n| n > file_len) && arrays & ARRAY_POINTS != 0 {
+                return Err(HairFileError::ArraysExceedFile {
+                    hair_count,
+                    point_count,
+                    arrays,
+                    needed: needed.unwrap_or(u64::MAX),
+                    got: file_len,
+                });
+            }
+            if let Some(size) = needed {
                 let limit = crate::MAX_GROOM_FILE_BYTES;
                 if size > limit {
                     return Err(io(crate::limits::too_large(limit, "groom files")));

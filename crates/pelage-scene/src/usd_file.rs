@@ -37,6 +37,21 @@
 //! Reading is capped at [`MAX_GROOM_FILE_BYTES`](crate::MAX_GROOM_FILE_BYTES), checks
 //! every count against the data before it allocates by it, and names the file, the
 //! prim and the attribute of every problem ([`UsdFileError`]).
+//!
+//! **Bounds.** Before text is handed to openusd's parser (which recurses once per
+//! nested prim, dictionary or array), it is lexed with openusd's own tokenizer, and
+//! brackets nested deeper than [`MAX_USD_NESTING`] are refused
+//! ([`UsdFileError::TooDeep`]): the parser's stack at that depth fits a 2 MiB thread
+//! with room to spare. The same pass estimates what openusd will allocate for the
+//! layer (every spec, its path and its values; [`USD_MEMORY_FACTOR`]) and refuses a
+//! text whose estimate exceeds [`USD_MEMORY_FACTOR`] times its size plus
+//! [`USD_MEMORY_ALLOWANCE`] ([`UsdFileError::TooManySpecs`]): a file of many tiny prims
+//! costs openusd far more per byte than a groom's long arrays. Binary crate files are
+//! read by openusd without recursion; their prims nested deeper than
+//! [`MAX_USD_NESTING`] are refused when pelage walks them. A zip package's layer gets
+//! the checks of its encoding; packages nest at most [`MAX_USDZ_NESTING`] deep.
+//! Pelage's own walk is linear in the prims: every prim's world transform is computed
+//! once, from its parent's.
 
 use std::borrow::Cow;
 use std::path::{Path, PathBuf};
@@ -54,6 +69,26 @@ pub const USD_EXTENSIONS: [&str; 4] = ["usda", "usdc", "usd", "usdz"];
 
 /// The name of the prim [`write_path`] writes the curves to.
 pub const WRITTEN_PRIM: &str = "/Groom";
+
+/// The deepest nesting of brackets (`{` prim bodies and dictionaries, `(` metadata and
+/// tuples, `[` arrays) a USD text may have, and the deepest prim path pelage walks in
+/// any USD file. openusd's text parser recurses once per level; at this depth it needs
+/// well under 2 MiB of stack (tested on a 2 MiB thread in a debug build). Real
+/// hierarchies are a few dozen levels deep.
+pub const MAX_USD_NESTING: usize = 128;
+
+/// The deepest nesting of `.usdz` packages inside `.usdz` packages pelage opens.
+pub const MAX_USDZ_NESTING: usize = 4;
+
+/// Reading a USD text of `B` bytes is refused when the estimate of what openusd
+/// allocates for it exceeds `USD_MEMORY_FACTOR × B +` [`USD_MEMORY_ALLOWANCE`]; the
+/// estimate is made from the tokens before parsing. With pelage's own copies, the
+/// peak heap of reading a text file stays under `(USD_MEMORY_FACTOR + 16) × B +
+/// USD_MEMORY_ALLOWANCE` (measured in `tests/usd_memory.rs`).
+pub const USD_MEMORY_FACTOR: u64 = 16;
+
+/// The constant part of the memory budget of a USD text (see [`USD_MEMORY_FACTOR`]).
+pub const USD_MEMORY_ALLOWANCE: u64 = 64 << 20;
 
 /// What is wrong with a USD groom file, or why one could not be written.
 #[derive(Debug, thiserror::Error)]
@@ -79,6 +114,94 @@ pub enum UsdFileError {
         file: PathBuf,
         /// Its first bytes.
         start: Vec<u8>,
+    },
+    /// The file is empty or holds only blank space.
+    #[error(
+        "{} is empty{}: a USD file starts with \"#usda 1.0\" (text), \"PXR-USDC\" (binary) or is a zip package (.usdz)",
+        file.display(),
+        blank_words(*.bytes)
+    )]
+    Empty {
+        /// The file.
+        file: PathBuf,
+        /// Its size.
+        bytes: u64,
+    },
+    /// A USD text nests brackets deeper than [`MAX_USD_NESTING`].
+    #[error(
+        "{}: brackets nest {depth} deep at line {line} (prims inside prims, dictionaries or arrays); pelage reads USD nested at most {limit} deep",
+        file.display()
+    )]
+    TooDeep {
+        /// The file.
+        file: PathBuf,
+        /// The depth reached (the first past the limit).
+        depth: usize,
+        /// The line where it is reached (1 for the first).
+        line: usize,
+        /// [`MAX_USD_NESTING`].
+        limit: usize,
+    },
+    /// A prim path is deeper than [`MAX_USD_NESTING`] (a binary file's hierarchy).
+    #[error(
+        "{}: prim {prim} is nested {depth} deep; pelage reads USD nested at most {limit} deep",
+        file.display()
+    )]
+    TooDeepPrim {
+        /// The file.
+        file: PathBuf,
+        /// The prim path (its first 200 bytes).
+        prim: String,
+        /// Its depth.
+        depth: usize,
+        /// [`MAX_USD_NESTING`].
+        limit: usize,
+    },
+    /// Reading the text would take more memory than the budget for its size.
+    #[error(
+        "{}: {specs} statements in {bytes} bytes of USD text would need about {} MiB to read, more than {factor} times the file's size plus {} MiB; pelage reads grooms whose curves are long arrays in few prims, not files of very many small prims",
+        file.display(),
+        estimate >> 20,
+        allowance >> 20
+    )]
+    TooManySpecs {
+        /// The file.
+        file: PathBuf,
+        /// The statements (prims, attributes, metadata) counted.
+        specs: u64,
+        /// The file's size.
+        bytes: u64,
+        /// The estimated memory, bytes.
+        estimate: u64,
+        /// [`USD_MEMORY_FACTOR`].
+        factor: u64,
+        /// [`USD_MEMORY_ALLOWANCE`].
+        allowance: u64,
+    },
+    /// A zip package is unreadable or holds no USD layer.
+    #[error("{}: {problem}", file.display())]
+    Package {
+        /// The file.
+        file: PathBuf,
+        /// What is wrong, with the zip reader's reason.
+        problem: String,
+    },
+    /// A width is larger than [`MAX_EXTENT`](crate::MAX_EXTENT) (after the prim's
+    /// transform).
+    #[error(
+        "{}: {prim}.widths[{index}] gives a width of {value} after the prim's transform; widths must be at most {max:e}",
+        file.display(),
+        max = crate::MAX_EXTENT
+    )]
+    WidthTooLarge {
+        /// The file.
+        file: PathBuf,
+        /// The prim path.
+        prim: String,
+        /// The entry of `widths` (the first of the curve's).
+        index: usize,
+        /// The width after the transform.
+        value: f64,
     },
     /// openusd could not parse the file.
     #[error("cannot parse the {format} file {}: {message}", file.display())]
@@ -189,7 +312,8 @@ pub enum UsdFileError {
         /// The interpolation.
         interpolation: &'static str,
     },
-    /// A value is NaN, infinite, or (for a width) negative.
+    /// A value is NaN, infinite, or (for a width) negative or larger than
+    /// [`MAX_EXTENT`](crate::MAX_EXTENT).
     #[error(
         "{}: {prim}.{attribute}[{index}] is {value}; values must be finite{}",
         file.display(),
@@ -331,32 +455,227 @@ fn encoding(bytes: &[u8]) -> Option<Encoding> {
     }
 }
 
-/// The root layer of a USD file, whatever its encoding.
-fn open_layer(bytes: Vec<u8>, file: &Path) -> Result<Box<dyn AbstractData>, UsdFileError> {
-    let parse = |format, message: String| UsdFileError::Parse {
+/// " (0 bytes)" or " (its N bytes are blank space)", for [`UsdFileError::Empty`].
+fn blank_words(bytes: u64) -> String {
+    if bytes == 0 {
+        " (0 bytes)".to_owned()
+    } else {
+        format!(" (its {bytes} bytes are blank space)")
+    }
+}
+
+/// `error` and every error it stems from, joined by ": " (openusd's package errors say
+/// "failed to access USDZ entry" and keep the reason in their source).
+fn chain(error: &dyn std::error::Error) -> String {
+    let mut text = error.to_string();
+    let mut source = error.source();
+    while let Some(e) = source {
+        let part = e.to_string();
+        if !text.contains(&part) {
+            text.push_str(": ");
+            text.push_str(&part);
+        }
+        source = e.source();
+    }
+    text
+}
+
+/// What [`scan_text`] found.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+struct TextShape {
+    /// The deepest bracket nesting.
+    depth: usize,
+    /// Statements counted (tokens outside arrays and tuples).
+    statements: u64,
+    /// What openusd is estimated to allocate, bytes.
+    estimate: u64,
+}
+
+/// Bytes openusd allocates at most for one token of a statement (outside arrays and
+/// tuples), besides its path: a spec or a field in a hash map, a name.
+const STATEMENT_BYTES: u64 = 512;
+/// Bytes openusd allocates at most for one token inside an array or a tuple other
+/// than a number or punctuation, besides the token's text and prim path (a `String`,
+/// a token, a path).
+const VALUE_BYTES: u64 = 48;
+/// Bytes openusd allocates at most for one number inside an array or a tuple (an
+/// `f64` is 8; twice that for the vectors' growth).
+const NUMBER_BYTES: u64 = 16;
+
+/// Lexes `text` with openusd's tokenizer (so strings, comments and asset paths are
+/// skipped exactly as the parser skips them) and measures its bracket nesting and an
+/// estimate of what parsing it allocates; stops with [`UsdFileError::TooDeep`] at the
+/// first bracket past [`MAX_USD_NESTING`]. A lexing error ends the scan: the parser
+/// reports it, and never reads past it.
+fn scan_text(text: &str, file: &Path) -> Result<TextShape, UsdFileError> {
+    use logos::Logos;
+    use openusd::usda::token::Token;
+    let mut lexer = Token::lexer(text);
+    // Per open bracket: its kind and the length of the prim path outside it.
+    let mut stack: Vec<(char, u64)> = Vec::new();
+    let mut path_len: u64 = 1;
+    let mut last_name: u64 = 0;
+    let mut shape = TextShape::default();
+    while let Some(token) = lexer.next() {
+        let Ok(token) = token else { break };
+        let in_value = matches!(stack.last(), Some(('[' | '(', _)));
+        let cost = if in_value {
+            match token {
+                // Separators and brackets of a value hold nothing of their own.
+                Token::Punctuation(_) => 0,
+                Token::Number(_) => NUMBER_BYTES,
+                _ => VALUE_BYTES + lexer.span().len() as u64 + path_len,
+            }
+        } else {
+            shape.statements += 1;
+            STATEMENT_BYTES + path_len
+        };
+        shape.estimate = shape.estimate.saturating_add(cost);
+        match token {
+            Token::Punctuation(open @ ('{' | '(' | '[')) => {
+                stack.push((open, path_len));
+                if stack.len() > MAX_USD_NESTING {
+                    let at = lexer.span().start;
+                    let line = text
+                        .get(..at)
+                        .map_or(0, |t| t.bytes().filter(|&b| b == b'\n').count())
+                        + 1;
+                    return Err(UsdFileError::TooDeep {
+                        file: file.to_path_buf(),
+                        depth: stack.len(),
+                        line,
+                        limit: MAX_USD_NESTING,
+                    });
+                }
+                shape.depth = shape.depth.max(stack.len());
+                if open == '{' {
+                    // A prim body (or a variant's, or a dictionary): the paths inside it
+                    // are longer by the last name and a separator or `{set=sel}`.
+                    path_len = path_len.saturating_add(last_name + 4);
+                }
+            }
+            Token::Punctuation('}' | ')' | ']') => {
+                if let Some((_, outer)) = stack.pop() {
+                    path_len = outer;
+                }
+            }
+            Token::String(name) => last_name = name.len() as u64,
+            _ => {}
+        }
+    }
+    Ok(shape)
+}
+
+/// The estimate, in bytes, of what openusd allocates to parse the USD text `text` (the
+/// figure [`USD_MEMORY_FACTOR`] bounds): per token of a statement 512 bytes plus the
+/// length of its prim path; inside an array or tuple, per number 16 bytes, per other
+/// value 48 bytes plus its length and its prim path's, nothing for punctuation.
+///
+/// Errors: brackets nested deeper than [`MAX_USD_NESTING`] ([`UsdFileError::TooDeep`]).
+pub fn text_memory_estimate(text: &str) -> Result<u64, UsdFileError> {
+    Ok(scan_text(text, Path::new("<text>"))?.estimate)
+}
+
+/// Checks a USD text before parsing: its nesting ([`MAX_USD_NESTING`]) and the memory
+/// parsing it is estimated to take ([`USD_MEMORY_FACTOR`]).
+fn check_text(text: &str, file: &Path) -> Result<(), UsdFileError> {
+    let shape = scan_text(text, file)?;
+    let bytes = text.len() as u64;
+    let budget = bytes
+        .saturating_mul(USD_MEMORY_FACTOR)
+        .saturating_add(USD_MEMORY_ALLOWANCE);
+    if shape.estimate > budget {
+        return Err(UsdFileError::TooManySpecs {
+            file: file.to_path_buf(),
+            specs: shape.statements,
+            bytes,
+            estimate: shape.estimate,
+            factor: USD_MEMORY_FACTOR,
+            allowance: USD_MEMORY_ALLOWANCE,
+        });
+    }
+    Ok(())
+}
+
+/// The layer of a USD text (checked by [`check_text`] first).
+fn open_text(bytes: &[u8], file: &Path) -> Result<Box<dyn AbstractData>, UsdFileError> {
+    let parse = |message: String| UsdFileError::Parse {
         file: file.to_path_buf(),
-        format,
+        format: "usda",
         message,
     };
+    let text = std::str::from_utf8(bytes)
+        .map_err(|e| parse(format!("not UTF-8 text (at byte {})", e.valid_up_to())))?;
+    check_text(text, file)?;
+    let data = openusd::usda::parse(text).map_err(|e| parse(chain(&e)))?;
+    Ok(Box::new(data))
+}
+
+/// The layer of a binary crate file.
+fn open_crate(bytes: Vec<u8>, file: &Path) -> Result<Box<dyn AbstractData>, UsdFileError> {
+    let data = openusd::usdc::CrateData::open(bytes, true).map_err(|e| UsdFileError::Parse {
+        file: file.to_path_buf(),
+        format: "usdc",
+        message: chain(&e),
+    })?;
+    Ok(Box::new(data))
+}
+
+/// The root layer of a zip package: its first `.usda`, `.usdc` or `.usd` entry (or a
+/// nested package's, at most [`MAX_USDZ_NESTING`] deep), read with the checks of its
+/// encoding. `file` names the package in errors, `nesting` counts the packages around.
+fn open_package(
+    bytes: Vec<u8>,
+    file: &Path,
+    nesting: usize,
+) -> Result<Box<dyn AbstractData>, UsdFileError> {
+    let package = |problem: String| UsdFileError::Package {
+        file: file.to_path_buf(),
+        problem,
+    };
+    if nesting > MAX_USDZ_NESTING {
+        return Err(package(format!(
+            "packages nest more than {MAX_USDZ_NESTING} deep (a .usdz whose first layer is a .usdz ...)"
+        )));
+    }
+    let mut archive = openusd::usdz::Archive::from_bytes(bytes)
+        .map_err(|e| package(format!("not a readable zip package: {}", chain(&e))))?;
+    let name = archive.first_layer_name().ok_or_else(|| {
+        package(
+            "the zip package holds no USD layer (no .usda, .usdc, .usd or .usdz entry); a .usdz's first entry must be one".to_owned(),
+        )
+    })?;
+    let entry = archive
+        .entry(&name)
+        .map_err(|e| package(format!("cannot read its entry {name:?}: {}", chain(&e))))?
+        .to_vec();
+    drop(archive);
+    let inner = PathBuf::from(format!("{}[{name}]", file.display()));
+    match encoding(&entry) {
+        Some(Encoding::Zip) => open_package(entry, &inner, nesting + 1),
+        Some(Encoding::Crate) => open_crate(entry, &inner),
+        Some(Encoding::Text) => open_text(&entry, &inner),
+        None if entry.iter().all(u8::is_ascii_whitespace) => Err(UsdFileError::Empty {
+            file: inner,
+            bytes: entry.len() as u64,
+        }),
+        None => Err(UsdFileError::UnknownFormat {
+            file: inner,
+            start: entry.iter().take(8).copied().collect(),
+        }),
+    }
+}
+
+/// The root layer of a USD file, whatever its encoding.
+fn open_layer(bytes: Vec<u8>, file: &Path) -> Result<Box<dyn AbstractData>, UsdFileError> {
     match encoding(&bytes) {
-        Some(Encoding::Text) => {
-            let text = std::str::from_utf8(&bytes).map_err(|e| {
-                parse(
-                    "usda",
-                    format!("not UTF-8 text (at byte {})", e.valid_up_to()),
-                )
-            })?;
-            let data = openusd::usda::parse(text).map_err(|e| parse("usda", e.to_string()))?;
-            Ok(Box::new(data))
-        }
-        Some(Encoding::Crate) => {
-            let data = openusd::usdc::CrateData::open(bytes, true)
-                .map_err(|e| parse("usdc", e.to_string()))?;
-            Ok(Box::new(data))
-        }
-        Some(Encoding::Zip) => openusd::usdz::Archive::from_bytes(bytes)
-            .and_then(|mut archive| archive.read_first_layer())
-            .map_err(|e| parse("usdz", e.to_string())),
+        Some(Encoding::Text) => open_text(&bytes, file),
+        Some(Encoding::Crate) => open_crate(bytes, file),
+        Some(Encoding::Zip) => open_package(bytes, file, 0),
+        None if bytes.iter().all(u8::is_ascii_whitespace) => Err(UsdFileError::Empty {
+            file: file.to_path_buf(),
+            bytes: bytes.len() as u64,
+        }),
         None => Err(UsdFileError::UnknownFormat {
             file: file.to_path_buf(),
             start: bytes.iter().take(8).copied().collect(),
@@ -379,7 +698,8 @@ const HEAD_BYTES: u64 = 256;
 
 /// Reads the USD file at `path` (see [`read`]): at most
 /// [`MAX_GROOM_FILE_BYTES`](crate::MAX_GROOM_FILE_BYTES), and only its first 256 bytes
-/// when they are not USD (so a path to `/dev/zero` fails at once).
+/// when they are not USD. A path that is not a regular file (a FIFO, a device, a
+/// socket) is refused before it is opened.
 pub fn load(path: &Path) -> Result<Groom, crate::GroomError> {
     use std::io::Read;
     let io = |source| UsdFileError::Io {
@@ -388,7 +708,7 @@ pub fn load(path: &Path) -> Result<Groom, crate::GroomError> {
         source,
     };
     let limit = crate::MAX_GROOM_FILE_BYTES;
-    let mut file = std::fs::File::open(path).map_err(io)?;
+    let mut file = crate::limits::open_regular(path).map_err(io)?;
     let expected = file.metadata().map(|m| m.len()).unwrap_or(0);
     let mut bytes = Vec::with_capacity(expected.min(limit) as usize + 1);
     (&mut file)
@@ -425,17 +745,37 @@ struct Gathered {
 }
 
 fn read_layer(layer: &dyn AbstractData, file: &Path) -> Result<Groom, crate::GroomError> {
-    let prims: Vec<sdf::Path> = layer
-        .spec_paths()
-        .into_iter()
-        .filter(|p| {
-            matches!(layer.spec_type(p), Some(SpecType::Prim))
-                && !p.contains_prim_variant_selection()
-                && is_def(layer, p)
-                && token_field(layer, p, FieldKey::TypeName.as_str()).as_deref()
-                    == Some("BasisCurves")
-        })
-        .collect();
+    let mut prims: Vec<sdf::Path> = Vec::new();
+    for p in layer.spec_paths() {
+        if !matches!(layer.spec_type(&p), Some(SpecType::Prim)) {
+            continue;
+        }
+        let depth = p.prim_element_count();
+        if depth > MAX_USD_NESTING {
+            let text = p.as_str();
+            let cut = (0..=200.min(text.len()))
+                .rev()
+                .find(|&i| text.is_char_boundary(i))
+                .unwrap_or(0);
+            return Err(UsdFileError::TooDeepPrim {
+                file: file.to_path_buf(),
+                prim: format!(
+                    "{}{}",
+                    text.get(..cut).unwrap_or(""),
+                    if cut < text.len() { "..." } else { "" }
+                ),
+                depth,
+                limit: MAX_USD_NESTING,
+            }
+            .into());
+        }
+        if !p.contains_prim_variant_selection()
+            && is_def(layer, &p)
+            && token_field(layer, &p, FieldKey::TypeName.as_str()).as_deref() == Some("BasisCurves")
+        {
+            prims.push(p);
+        }
+    }
     if prims.is_empty() {
         return Err(UsdFileError::NoCurves {
             file: file.to_path_buf(),
@@ -446,8 +786,11 @@ fn read_layer(layer: &dyn AbstractData, file: &Path) -> Result<Groom, crate::Gro
         offsets: vec![0],
         ..Gathered::default()
     };
+    let mut worlds = Worlds::default();
     for prim in &prims {
-        read_prim(layer, &Site { file, prim }, &mut out)?;
+        let site = Site { file, prim };
+        let world = worlds.of(layer, &site)?;
+        read_prim(layer, &site, world, &mut out)?;
     }
     let widths = out.any_widths.then_some(out.widths);
     let colors = out.any_colors.then_some(out.colors);
@@ -727,6 +1070,7 @@ fn evaluate<T: Blend>(basis: Basis, values: &[T], span: [i64; 4], t: f64, zero: 
 fn read_prim(
     layer: &dyn AbstractData,
     site: &Site<'_>,
+    world: DMat4,
     out: &mut Gathered,
 ) -> Result<(), crate::GroomError> {
     let curve_type = token_attribute(layer, site, "type", "cubic")?;
@@ -758,7 +1102,6 @@ fn read_prim(
     };
 
     let counts = read_counts(layer, site)?;
-    let world = world_transform(layer, site)?;
     let points = read_points(layer, site, &world)?;
     let sum: u64 = counts.iter().map(|&c| c.max(0) as u64).sum();
     if sum != points.len() as u64 {
@@ -881,7 +1224,17 @@ fn read_prim(
                 } else {
                     evaluate(basis, w, span, t, 0.0)
                 };
-                out.widths.push((w.max(0.0) * width_scale) as f32);
+                let scaled = w.max(0.0) * width_scale;
+                if scaled > f64::from(crate::MAX_EXTENT) {
+                    return Err(UsdFileError::WidthTooLarge {
+                        file: site.file.to_path_buf(),
+                        prim: site.prim(),
+                        index: first_point,
+                        value: scaled,
+                    }
+                    .into());
+                }
+                out.widths.push(scaled as f32);
             } else if out.any_widths {
                 out.widths.push(0.0);
             }
@@ -1036,24 +1389,47 @@ fn read_per_curve<T>(
     Ok(Some((interpolation, values)))
 }
 
-/// The prim's world transform (column vectors): the product of the `xformOpOrder`
-/// ops of every ancestor and of the prim, outermost first.
-fn world_transform(layer: &dyn AbstractData, site: &Site<'_>) -> Result<DMat4, UsdFileError> {
-    let mut chain: Vec<sdf::Path> = site.prim.ancestors_below_root().collect();
-    // Root first.
-    chain.sort_by_key(sdf::Path::prim_element_count);
-    let mut world = DMat4::IDENTITY;
-    for prim in &chain {
-        let (local, reset) = local_transform(
-            layer,
-            &Site {
-                file: site.file,
-                prim,
-            },
-        )?;
-        world = if reset { local } else { world * local };
+/// The world transforms of the prims walked so far, each computed once from its
+/// parent's: the walk costs one local transform per prim, however deep the prims
+/// nest (it cost one per ancestor per curve prim, cubic in the depth of nested
+/// curves).
+#[derive(Default)]
+struct Worlds {
+    known: std::collections::HashMap<sdf::Path, DMat4>,
+}
+
+impl Worlds {
+    /// The prim's world transform (column vectors): the product of the `xformOpOrder`
+    /// ops of every ancestor and of the prim, outermost first.
+    fn of(&mut self, layer: &dyn AbstractData, site: &Site<'_>) -> Result<DMat4, UsdFileError> {
+        // The prim and its ancestors not yet known, innermost first.
+        let mut missing = Vec::new();
+        let mut world = DMat4::IDENTITY;
+        let mut next = Some(site.prim.clone());
+        while let Some(prim) = next {
+            if prim.is_abs_root() || prim.as_str().is_empty() {
+                break;
+            }
+            if let Some(known) = self.known.get(&prim) {
+                world = *known;
+                break;
+            }
+            next = prim.parent();
+            missing.push(prim);
+        }
+        for prim in missing.into_iter().rev() {
+            let (local, reset) = local_transform(
+                layer,
+                &Site {
+                    file: site.file,
+                    prim: &prim,
+                },
+            )?;
+            world = if reset { local } else { world * local };
+            self.known.insert(prim, world);
+        }
+        Ok(world)
     }
-    Ok(world)
 }
 
 /// A prim's local transform and whether it resets the parent's.
@@ -1061,6 +1437,8 @@ fn local_transform(
     layer: &dyn AbstractData,
     site: &Site<'_>,
 ) -> Result<(DMat4, bool), UsdFileError> {
+    #[cfg(test)]
+    tests::LOCAL_TRANSFORMS.with(|n| n.set(n.get() + 1));
     let Some(order) = attribute(layer, site, "xformOpOrder")? else {
         return Ok((DMat4::IDENTITY, false));
     };
@@ -1351,4 +1729,49 @@ fn layer_of(groom: &Groom) -> Result<sdf::Data, UsdFileError> {
         spec.add(FieldKey::Default, value);
     }
     Ok(data)
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+    use std::cell::Cell;
+
+    thread_local! {
+        /// Local transforms computed on this thread ([`local_transform`] calls).
+        pub(crate) static LOCAL_TRANSFORMS: Cell<usize> = const { Cell::new(0) };
+    }
+
+    /// `depth` nested `BasisCurves` prims, each with one linear curve and a translate.
+    fn nested_curves(depth: usize) -> String {
+        let mut text = String::from("#usda 1.0\n");
+        for level in 0..depth {
+            text.push_str(&format!(
+                "def BasisCurves \"C{level}\" {{\n uniform token type = \"linear\"\n int[] curveVertexCounts = [2]\n point3f[] points = [(0, 0, 0), (0, 1, 0)]\n double3 xformOp:translate = (1, 0, 0)\n uniform token[] xformOpOrder = [\"xformOp:translate\"]\n"
+            ));
+        }
+        text.push_str(&"}\n".repeat(depth));
+        text
+    }
+
+    #[test]
+    fn nested_curves_cost_one_transform_per_prim() {
+        let depth = 100;
+        let text = nested_curves(depth);
+        LOCAL_TRANSFORMS.with(|n| n.set(0));
+        let groom = read(text.into_bytes(), Path::new("nested.usda")).unwrap();
+        assert_eq!(groom.strand_count(), depth);
+        // Each prim's transform once (it was once per ancestor per curve prim:
+        // depth (depth + 1) / 2 = 5 050 here).
+        assert_eq!(LOCAL_TRANSFORMS.with(Cell::get), depth);
+        // The deepest curve is moved by every ancestor's translate.
+        let deepest = groom.strands().map(|s| s[0].x).fold(0.0f32, f32::max);
+        assert_eq!(deepest, depth as f32);
+    }
+
+    #[test]
+    fn the_scan_skips_brackets_in_strings_and_comments() {
+        let text = "#usda 1.0\n# {{{{ [[[[\ndef \"A\" ( doc = \"((((\" ) {\n string s = '[[[['\n asset a = @{{{{@\n /* {{{{ */ }\n";
+        let shape = scan_text(text, Path::new("a.usda")).unwrap();
+        assert_eq!(shape.depth, 1);
+    }
 }

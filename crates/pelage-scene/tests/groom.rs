@@ -321,6 +321,7 @@ fn bad_inputs_are_errors() {
         assert!(matches!(
             Groom::from_hair(&hair).unwrap_err(),
             GroomError::BadWidth {
+                attribute: "thickness",
                 strand: 0,
                 point: 1,
                 ..
@@ -438,4 +439,90 @@ fn load_dispatches_on_the_extension() {
         );
     }
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A `.hair` file's colour array and a `.tfx` file's vertex colours become one colour per
+/// strand, each strand's root colour; bad colours anywhere in the array are refused,
+/// naming the point.
+#[test]
+fn per_point_colours_give_each_strand_its_root_colour() {
+    let strands = vec![
+        vec![Vec3::ZERO, Vec3::X, Vec3::X * 2.0],
+        vec![Vec3::Y, Vec3::new(1.0, 1.0, 0.0)],
+    ];
+    let mut hair = HairFile::from_strands(&strands).unwrap();
+    let groom = Groom::from_hair(&hair).unwrap();
+    assert!(groom.colors().is_none(), "no colour array, no colours");
+    hair.has_colors = true;
+    hair.colors = vec![
+        Vec3::new(1.0, 0.0, 0.0),
+        Vec3::ONE,
+        Vec3::ONE,
+        Vec3::new(0.0, 0.5, 0.0),
+        Vec3::ONE,
+    ];
+    let groom = Groom::from_hair(&hair).unwrap();
+    assert_eq!(
+        groom.colors().unwrap(),
+        &[Vec3::new(1.0, 0.0, 0.0), Vec3::new(0.0, 0.5, 0.0)]
+    );
+    // Through the file, and resampled.
+    let read = Groom::from_hair(&HairFile::read(&hair.write().unwrap()).unwrap()).unwrap();
+    assert_eq!(
+        read.resample(4).unwrap().colors,
+        groom.colors().map(<[Vec3]>::to_vec)
+    );
+    // A bad colour past the root is refused too, naming the point and strand.
+    hair.colors[4] = Vec3::new(f32::NAN, 0.0, 0.0);
+    let e = Groom::from_hair(&hair).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            GroomError::BadPointColor {
+                point: 4,
+                strand: 1,
+                ..
+            }
+        ),
+        "{e}"
+    );
+    assert!(e.to_string().contains("colour array"), "{e}");
+
+    let mut tfx =
+        TfxFile::from_strands(&[vec![Vec3::ZERO, Vec3::X], vec![Vec3::Y, Vec3::ONE]]).unwrap();
+    tfx.vertex_color = Some(vec![
+        glam::Vec4::new(0.2, 0.3, 0.4, 1.0),
+        glam::Vec4::ONE,
+        glam::Vec4::new(0.5, 0.0, 0.0, 0.5),
+        glam::Vec4::ONE,
+    ]);
+    let groom = Groom::from_tfx(&TfxFile::read(&tfx.write().unwrap()).unwrap()).unwrap();
+    assert_eq!(
+        groom.colors().unwrap(),
+        &[Vec3::new(0.2, 0.3, 0.4), Vec3::new(0.5, 0.0, 0.0)]
+    );
+}
+
+/// Widths a file gives are named by the file's attribute, with the allowed range, at
+/// the groom (they were reported as the scene key `growth.width`).
+#[test]
+fn widths_too_large_name_the_files_attribute() {
+    let mut hair = HairFile::from_strands(&[vec![Vec3::ZERO, Vec3::X]]).unwrap();
+    hair.has_thickness = true;
+    hair.thickness = vec![0.5, 1e30];
+    let e = Groom::from_hair(&hair).unwrap_err().to_string();
+    assert!(
+        e.contains("thickness of point 1 of strand 0 is 1000000000000000000000000000000")
+            && e.contains("0..=1e9")
+            && !e.contains("growth.width"),
+        "{e}"
+    );
+    // Scaled past the limit by the scene's placement.
+    hair.thickness = vec![0.5, 1e6];
+    let e = Groom::from_hair(&hair)
+        .unwrap()
+        .transformed(1e4, Vec3::ZERO)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("width after groom.fit and groom.scale"), "{e}");
 }

@@ -495,3 +495,33 @@ fn concurrent_writes_of_one_path_do_not_race() {
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// A tiny file whose header claims 4 billion strands is named by its header's counts
+/// and its real size (it was "larger than 2 GiB (is it a device or a stream?)").
+#[test]
+fn a_header_claiming_more_than_the_file_holds_names_its_counts_and_the_size() {
+    let mut bytes = minimal().write().unwrap();
+    set_u32(&mut bytes, 4, u32::MAX);
+    set_u32(&mut bytes, 8, u32::MAX);
+    let path = std::env::temp_dir().join(format!("pelage-liar-{}.hair", std::process::id()));
+    std::fs::write(&path, &bytes).unwrap();
+    let e = HairFile::read_path(&path).unwrap_err();
+    std::fs::remove_file(&path).unwrap();
+    assert!(
+        matches!(
+            e,
+            HairFileError::ArraysExceedFile {
+                hair_count: u32::MAX,
+                ..
+            }
+        ),
+        "{e}"
+    );
+    let message = e.to_string();
+    assert!(
+        message.contains("hair_count 4294967295")
+            && message.contains(&format!("the file has {}", bytes.len()))
+            && !message.contains("device"),
+        "{message}"
+    );
+}

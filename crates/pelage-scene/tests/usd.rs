@@ -525,7 +525,7 @@ fn bad_files_name_the_prim_and_attribute() {
         Path::new("x.usdz"),
     ));
     assert!(
-        matches!(e, UsdFileError::Parse { format: "usdz", .. }),
+        matches!(e, UsdFileError::Package { .. }) && e.to_string().contains("Could not find EOCD"),
         "{e}"
     );
     // A missing file and an unknown extension.
@@ -536,9 +536,177 @@ fn bad_files_name_the_prim_and_attribute() {
 }
 
 #[test]
-fn a_stream_that_is_not_usd_stops_at_its_first_bytes() {
-    // /dev/zero is endless: the reader looks at its head and names the file.
+fn a_stream_that_is_not_usd_is_refused_before_it_is_read() {
+    // /dev/zero is endless: the reader refuses the device before opening it.
     let e = usd_error(usd_file::load(Path::new("/dev/zero")));
-    assert!(matches!(e, UsdFileError::UnknownFormat { .. }), "{e}");
+    assert!(matches!(e, UsdFileError::Io { .. }), "{e}");
     assert!(e.to_string().contains("/dev/zero"), "{e}");
+    assert!(e.to_string().contains("a character device"), "{e}");
+}
+
+/// `depth - 1` nested `def Xform` prims around a linear curve: braces nest `depth`
+/// deep, brackets `depth + 2` (the curve's `[(0, 0, 0), ...]`).
+fn nested_xforms(depth: usize) -> String {
+    let mut text = String::from("#usda 1.0\n");
+    for level in 0..depth - 1 {
+        text.push_str(&format!("def Xform \"X{level}\" {{\n"));
+    }
+    text.push_str("def BasisCurves \"C\" {\n uniform token type = \"linear\"\n int[] curveVertexCounts = [2]\n point3f[] points = [(0, 0, 0), (0, 1, 0)]\n");
+    text.push_str(&"}\n".repeat(depth));
+    text
+}
+
+/// Runs `f` on a thread with a 2 MiB stack (the default of a spawned thread).
+fn on_a_small_stack<T: Send + 'static>(f: impl FnOnce() -> T + Send + 'static) -> T {
+    std::thread::Builder::new()
+        .stack_size(2 << 20)
+        .spawn(f)
+        .unwrap()
+        .join()
+        .expect("no stack overflow")
+}
+
+#[test]
+fn nesting_is_read_up_to_the_limit_on_a_small_stack_and_refused_past_it() {
+    let limit = usd_file::MAX_USD_NESTING;
+    // The prim bodies nest `limit - 2` braces deep, the curve's points `[(` 2 more.
+    let at_limit = nested_xforms(limit - 2);
+    let groom = on_a_small_stack(move || read(&at_limit).map(|g| g.strand_count()));
+    assert_eq!(groom.unwrap(), 1);
+    // Nested dictionaries and arrays recurse in the parser too.
+    let dictionary = format!(
+        "#usda 1.0\ndef \"A\" (\n customData = {}{{}}{}\n)\n{{\n}}\n",
+        "{ dictionary d = ".repeat(limit - 3),
+        " }".repeat(limit - 3)
+    );
+    let e = on_a_small_stack(move || read(&dictionary));
+    assert!(matches!(usd_error(e), UsdFileError::NoCurves { .. }));
+    for text in [
+        nested_xforms(limit - 1),
+        nested_xforms(10_000),
+        format!(
+            "#usda 1.0\ndef \"A\" {{ int[] a = {} }}\n",
+            "[".repeat(100_000)
+        ),
+    ] {
+        let e = usd_error(on_a_small_stack(move || read(&text)));
+        assert!(matches!(e, UsdFileError::TooDeep { .. }), "{e}");
+        let message = e.to_string();
+        assert!(
+            message.contains(&format!("nest {} deep", limit + 1))
+                && message.contains(&format!("at most {limit} deep"))
+                && message.contains("test.usda"),
+            "{message}"
+        );
+    }
+}
+
+#[test]
+fn a_binary_hierarchy_deeper_than_the_limit_is_refused() {
+    use openusd::sdf::{self, ChildrenKey, FieldKey, SpecType, Value};
+    let depth = usd_file::MAX_USD_NESTING + 1;
+    let mut data = sdf::Data::new();
+    let mut path = sdf::Path::abs_root();
+    let root = data.create_spec(path.clone(), SpecType::PseudoRoot);
+    root.add(ChildrenKey::PrimChildren, Value::TokenVec(vec!["P".into()]));
+    for level in 0..depth {
+        path = path.append_path("P").unwrap();
+        let spec = data.create_spec(path.clone(), SpecType::Prim);
+        spec.add(FieldKey::Specifier, Value::Specifier(sdf::Specifier::Def));
+        spec.add(FieldKey::TypeName, Value::Token("Xform".into()));
+        if level + 1 < depth {
+            spec.add(ChildrenKey::PrimChildren, Value::TokenVec(vec!["P".into()]));
+        }
+    }
+    let mut out = std::io::Cursor::new(Vec::new());
+    openusd::usdc::CrateWriter::write(&data, &mut out).unwrap();
+    let e = usd_error(usd_file::read(out.into_inner(), Path::new("deep.usdc")));
+    assert!(matches!(e, UsdFileError::TooDeepPrim { .. }), "{e}");
+    assert!(e.to_string().contains("deep.usdc"), "{e}");
+}
+
+#[test]
+fn a_text_of_very_many_small_prims_is_refused_by_its_memory_estimate() {
+    // 150 000 prims of one attribute each: openusd took about 60 times the file's
+    // size to hold them.
+    let mut text = String::from("#usda 1.0\n");
+    for i in 0..150_000 {
+        text.push_str(&format!("def \"P{i}\" {{ float a = 1 }}\n"));
+    }
+    let e = usd_error(read(&text));
+    assert!(matches!(e, UsdFileError::TooManySpecs { .. }), "{e}");
+    assert!(e.to_string().contains("test.usda"), "{e}");
+    // A groom of the same size in one prim is read.
+    let points: Vec<String> = (0..text.len() / 40)
+        .map(|i| format!("({i}, 0, 1)"))
+        .collect();
+    let counts = vec!["2"; points.len() / 2].join(", ");
+    let groom = read(&curves(&format!(
+        "uniform token type = \"linear\"\nint[] curveVertexCounts = [{counts}]\npoint3f[] points = [{}]",
+        points[..points.len() / 2 * 2].join(", ")
+    )))
+    .unwrap();
+    assert_eq!(groom.strand_count(), points.len() / 2);
+}
+
+#[test]
+fn empty_files_and_broken_packages_say_what_is_wrong() {
+    for (bytes, name, expected) in [
+        (Vec::new(), "empty.usdz", "is empty (0 bytes)"),
+        (
+            b"  \n\n".to_vec(),
+            "blank.usda",
+            "its 4 bytes are blank space",
+        ),
+        (
+            b"PK\x03\x04 and nothing more".to_vec(),
+            "lying.usdz",
+            "not a readable zip package: ",
+        ),
+    ] {
+        let e = usd_error(usd_file::read(bytes, Path::new(name)));
+        let message = e.to_string();
+        assert!(
+            message.contains(name) && message.contains(expected),
+            "{message}"
+        );
+    }
+    // A zip without a USD layer.
+    let mut writer = openusd::usdz::ArchiveWriter::new(std::io::Cursor::new(Vec::new()));
+    writer.add_layer("notes.usda", b"#usda 1.0\n").unwrap();
+    let zip = writer.finish().unwrap().into_inner();
+    // Rename the entry in place so that the package holds no layer.
+    let renamed: Vec<u8> = String::from_utf8_lossy(&zip)
+        .replace("notes.usda", "notes.txtx")
+        .into_bytes();
+    if renamed.len() == zip.len() {
+        let e = usd_error(usd_file::read(renamed, Path::new("nolayer.usdz")));
+        assert!(e.to_string().contains("holds no USD layer"), "{e}");
+    }
+    // A package whose layer is deeper than the limit gets the text's check.
+    let mut writer = openusd::usdz::ArchiveWriter::new(std::io::Cursor::new(Vec::new()));
+    writer
+        .add_layer(
+            "deep.usda",
+            nested_xforms(usd_file::MAX_USD_NESTING + 1).as_bytes(),
+        )
+        .unwrap();
+    let zip = writer.finish().unwrap().into_inner();
+    let e = usd_error(usd_file::read(zip, Path::new("deep.usdz")));
+    assert!(matches!(e, UsdFileError::TooDeep { .. }), "{e}");
+    assert!(e.to_string().contains("deep.usdz[deep.usda]"), "{e}");
+}
+
+#[test]
+fn widths_too_large_after_the_transform_name_the_prim() {
+    let e = usd_error(read(&format!(
+        "#usda 1.0\ndef Xform \"Big\" {{\n double3 xformOp:scale = (1e6, 1e6, 1e6)\n uniform token[] xformOpOrder = [\"xformOp:scale\"]\n{}}}\n",
+        curves("uniform token type = \"linear\"\nint[] curveVertexCounts = [2]\npoint3f[] points = [(0, 0, 0), (0, 1, 0)]\nfloat[] widths = [0.5, 5000]")
+            .trim_start_matches("#usda 1.0\n")
+    )));
+    let message = e.to_string();
+    assert!(
+        message.contains("/Big/Hair.widths") && message.contains("at most 1e9"),
+        "{message}"
+    );
 }

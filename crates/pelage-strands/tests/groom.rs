@@ -344,3 +344,58 @@ fn inconsistent_grooms_are_refused_naming_what_is_wrong() {
         Err(StrandsError::Param(e)) if e.name.starts_with("wind.")
     ));
 }
+
+/// A `.hair` file's per-point colours reach the strands: each strand takes its root
+/// point's colour, in place of `growth.color`, in the roots the pass draws (the
+/// colours were never read: an all-red file drew in `growth.color`).
+#[test]
+fn a_hair_files_colours_colour_the_strands() {
+    let gpu = gpu();
+    let strands: Vec<Vec<Vec3>> = (0..8)
+        .map(|i| {
+            (0..5)
+                .map(|k| Vec3::new(i as f32, -(k as f32), 0.0))
+                .collect()
+        })
+        .collect();
+    let mut hair = pelage_scene::HairFile::from_strands(&strands).unwrap();
+    hair.has_colors = true;
+    // Red at every root, green further out: only the roots' colour is drawn.
+    hair.colors = (0..hair.points.len())
+        .map(|p| {
+            if p % 5 == 0 {
+                Vec3::new(0.8, 0.05, 0.02)
+            } else {
+                Vec3::Y
+            }
+        })
+        .collect();
+    let path = std::env::temp_dir().join(format!("pelage-red-{}.hair", std::process::id()));
+    hair.write_path(&path).unwrap();
+    let source = pelage_scene::GroomSource::new(&path);
+    let resampled = source.load().unwrap();
+    std::fs::remove_file(&path).unwrap();
+    let mut params = calm();
+    params.growth.color = Vec3::new(0.1, 0.1, 0.9);
+    params.growth.color_jitter = 0.0;
+    let mut pass = GroomStrands::new(&gpu, &resampled, &params).unwrap();
+    let red = Vec3::new(0.8, 0.05, 0.02);
+    let file_colors = pass.file_colors().expect("the .hair file's colours");
+    assert_eq!(file_colors.len(), 8);
+    assert!(file_colors.iter().all(|&c| c == red), "{file_colors:?}");
+    assert!(pass.roots().iter().all(|r| r.color == red));
+    // The roots the GPU draws hold the file's colour too.
+    grow_on_gpu(&gpu, &mut pass, 0.0);
+    let bytes = read_buffer(&gpu, &pass.buffers().roots).unwrap();
+    let drawn: Vec<StrandRoot> = encase::StorageBuffer::new(&bytes[..])
+        .create()
+        .expect("roots decode");
+    assert_eq!(drawn.len(), 8);
+    for root in drawn {
+        assert!(
+            (root.color - red).abs().max_element() < 1e-6,
+            "{}",
+            root.color
+        );
+    }
+}
