@@ -205,7 +205,9 @@ fn the_book_pass_table_is_the_frame_plan() {
     let generated = match generate(&gpu) {
         Ok(page) => page,
         Err(why) => {
-            println!("skipped: this adapter cannot build every method, so the table would differ: {why}");
+            println!(
+                "skipped: this adapter cannot build every method, so the table would differ: {why}"
+            );
             return;
         }
     };
