@@ -290,7 +290,7 @@ impl Transparency {
                 "transparency.pool",
                 pool,
                 MIN_POOL,
-                "1024 references per segment: every segment on screen takes at least one",
+                "1024] references per segment: every segment on screen takes at least one",
             ),
             Self::ABuffer {
                 nodes_per_pixel, ..
@@ -301,7 +301,7 @@ impl Transparency {
                 "transparency.nodes_per_pixel",
                 nodes_per_pixel,
                 MIN_NODES_PER_PIXEL,
-                "4096 nodes per pixel: fewer than one cannot hold one layer of hair over \
+                "4096] nodes per pixel: fewer than one cannot hold one layer of hair over \
                  the screen",
             ),
             _ => return Ok(()),
