@@ -381,8 +381,8 @@ mod tests {
             (&["animate", "--frames", "-1"], "1..=1000000"),
             (&["animate", "--range", "-1..2"], "0 to 1000000"),
             (&["render", "--size", "-5x5"], "from 1 to"),
-            (&["lab", "scattering", "--spp", "-5"], "1..=4096"),
-            (&["lab", "scattering", "--spp", "4294967295"], "1..=4096"),
+            (&["lab", "scattering", "--spp", "-5"], "1..=65536"),
+            (&["lab", "scattering", "--spp", "4294967295"], "1..=65536"),
         ] {
             let e = parse(args).unwrap_err().to_string();
             assert!(
