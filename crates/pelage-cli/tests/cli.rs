@@ -1364,8 +1364,10 @@ fn dropped_work_is_reported_with_the_key_to_raise() {
             &scene,
             "--size",
             "64x48",
+            // Dense enough that the floor of each pool overflows (2 000 strands fit
+            // an A-buffer of one node per pixel).
             "--strands",
-            "2000",
+            "20000",
             "-o",
             &png.to_string_lossy(),
         ]);
@@ -1383,7 +1385,7 @@ fn dropped_work_is_reported_with_the_key_to_raise() {
             "--size",
             "32x24",
             "--strands",
-            "1000",
+            "10000",
             "--frames",
             "2",
             "--out",
