@@ -399,9 +399,10 @@ mod tests {
             density: Some(vec![0.0; mesh.positions.len()]),
             ..Default::default()
         };
-        assert!(matches!(
-            sample_roots(&mesh, &roots, &GrowthParams::default()),
-            Err(crate::StrandsError::NoSurface(_))
-        ));
+        let result = sample_roots(&mesh, &roots, &GrowthParams::default());
+        assert!(
+            matches!(&result, Err(crate::StrandsError::Param(e)) if e.name == "roots.density"),
+            "{result:?}"
+        );
     }
 }
