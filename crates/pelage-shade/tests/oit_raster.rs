@@ -373,32 +373,35 @@ fn methods() -> Vec<(Transparency, Bounds)> {
             },
         ),
         // DBK blends everything within 0.05 of the nearest fragment by weight: the
-        // crossings of distinct colours come out mixed.
+        // crossings of distinct colours come out mixed (measured: largest difference
+        // 0.325, mean FLIP 0.036).
         (
             Transparency::dbk(0.05),
             Bounds {
                 flip: 0.05,
                 mean_abs: 0.008,
-                max_abs: 1.0,
+                max_abs: 0.45,
             },
         ),
-        // Stochastic subsets of 8: noise where pixels are deeper than the subsets.
+        // Stochastic subsets of 8: noise where pixels are deeper than the subsets
+        // (measured: largest difference 0.216, mean FLIP 0.012).
         (
             Transparency::random_subsets(8),
             Bounds {
                 flip: 0.02,
                 mean_abs: 0.0025,
-                max_abs: 1.0,
+                max_abs: 0.3,
             },
         ),
         // Weighted blending ignores order: crossings of distinct colours at opacity
-        // 0.6 are visibly wrong, but bounded.
+        // 0.6 are visibly wrong, but bounded (measured: largest difference 0.291, mean
+        // FLIP 0.018).
         (
             Transparency::wboit(),
             Bounds {
                 flip: 0.03,
                 mean_abs: 0.005,
-                max_abs: 1.0,
+                max_abs: 0.4,
             },
         ),
     ]
