@@ -4,62 +4,8 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-/// A folder of this test's own, removed when dropped.
-struct Scratch(PathBuf);
-
-impl Scratch {
-    fn new(name: &str) -> Self {
-        let dir = std::env::temp_dir().join(format!("pelage-cli-{}-{name}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).expect("create a scratch folder");
-        Self(dir)
-    }
-
-    fn file(&self, name: &str, text: &str) -> PathBuf {
-        let path = self.0.join(name);
-        std::fs::write(&path, text).expect("write a scratch file");
-        path
-    }
-}
-
-impl Drop for Scratch {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
-
-fn pelage(args: &[&str]) -> Output {
-    let runtime = std::env::temp_dir().join(format!("pelage-cli-xdg-{}", std::process::id()));
-    let _ = std::fs::create_dir_all(&runtime);
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::PermissionsExt;
-        let _ = std::fs::set_permissions(&runtime, std::fs::Permissions::from_mode(0o700));
-    }
-    let mut command = Command::new(env!("CARGO_BIN_EXE_pelage"));
-    command.args(args);
-    if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
-        command.env("XDG_RUNTIME_DIR", &runtime);
-    }
-    command.output().expect("run the pelage binary")
-}
-
-fn text(bytes: &[u8]) -> String {
-    String::from_utf8_lossy(bytes).into_owned()
-}
-
-/// Runs `args`, asserts success, returns stdout.
-fn ok(args: &[&str]) -> String {
-    let out = pelage(args);
-    assert!(
-        out.status.success(),
-        "pelage {args:?} failed ({}):\nstdout:\n{}\nstderr:\n{}",
-        out.status,
-        text(&out.stdout),
-        text(&out.stderr)
-    );
-    text(&out.stdout)
-}
+mod common;
+use common::{Scratch, ok, pelage, text};
 
 /// Runs `args`, asserts a clean failure (exit 1 or 2, no panic, no Debug dump), returns stderr.
 fn fails(args: &[&str]) -> String {

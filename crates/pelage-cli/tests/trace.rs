@@ -3,64 +3,10 @@
 //! of `--spp` and `--bounces`, and compare's numbers on images with known answers. The
 //! trace runs need an adapter (lavapipe is enough) to grow the strands.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::path::Path;
 
-/// A folder of this test's own, removed when dropped.
-struct Scratch(PathBuf);
-
-impl Scratch {
-    fn new(name: &str) -> Self {
-        let dir = std::env::temp_dir().join(format!("pelage-trace-{}-{name}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).expect("create a scratch folder");
-        Self(dir)
-    }
-
-    fn path(&self, name: &str) -> PathBuf {
-        self.0.join(name)
-    }
-
-    fn file(&self, name: &str, text: &str) -> PathBuf {
-        let path = self.path(name);
-        std::fs::write(&path, text).expect("write a scratch file");
-        path
-    }
-
-    /// `path` as an argument.
-    fn arg(&self, name: &str) -> String {
-        self.path(name).to_string_lossy().into_owned()
-    }
-}
-
-impl Drop for Scratch {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
-
-fn pelage(args: &[&str]) -> Output {
-    let mut command = Command::new(env!("CARGO_BIN_EXE_pelage"));
-    command.args(args);
-    command.output().expect("run the pelage binary")
-}
-
-fn text(bytes: &[u8]) -> String {
-    String::from_utf8_lossy(bytes).into_owned()
-}
-
-/// Runs `args`, asserts success, returns stdout.
-fn ok(args: &[&str]) -> String {
-    let out = pelage(args);
-    assert!(
-        out.status.success(),
-        "pelage {args:?} failed ({}):\nstdout:\n{}\nstderr:\n{}",
-        out.status,
-        text(&out.stdout),
-        text(&out.stderr)
-    );
-    text(&out.stdout)
-}
+mod common;
+use common::{Scratch, ok, pelage, text};
 
 /// Runs `args`, asserts exit code 2 without a panic, returns stderr.
 fn usage_error(args: &[&str]) -> String {
