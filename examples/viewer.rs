@@ -41,7 +41,7 @@ use pelage::scene::{
     Absorption, ChiangParams, DEFAULT_MELANIN_REDNESS, DynamicsParams, MAX_MELANIN, ShadowParams,
     Transparency, WindParams,
 };
-use pelage::scene::{Camera, HairParams, HairType, Light, ShadeParams, ShadingModel};
+use pelage::scene::{Camera, HairParams, HairType, Light, Named, ShadeParams, ShadingModel};
 use pelage::{FrameStats, Renderer, Scene, Update};
 use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
 use winit::event_loop::{ActiveEventLoop, EventLoop};
@@ -781,6 +781,13 @@ fn pick(ui: &mut egui::Ui, label: &str, names: &[&str], current: usize) -> Optio
     (index != current).then_some(index)
 }
 
+/// A combo box over a method table ([`Named::NAMES`], the names every surface uses): the
+/// method picked, at its defaults, when it changed.
+fn pick_method<T: Named>(ui: &mut egui::Ui, label: &str, current: &T) -> Option<T> {
+    let names: Vec<&str> = T::NAMES.iter().map(|m| m.name).collect();
+    pick(ui, label, &names, current.row()).and_then(T::default_of)
+}
+
 /// The parameter panel on the left and the GPU times top right; returns the panel's right
 /// edge in points.
 fn panels(ui: &mut egui::Ui, c: &mut Controls, v: &mut View) -> f32 {
@@ -945,26 +952,8 @@ fn wind_ui(ui: &mut egui::Ui, c: &mut Controls) {
 }
 
 fn shadow_ui(ui: &mut egui::Ui, c: &mut Controls) {
-    let current = match c.shadow {
-        ShadowParams::None => 0,
-        ShadowParams::Voxel(_) => 1,
-        ShadowParams::DeepOpacity(_) => 2,
-        ShadowParams::ShadowMap(_) => 3,
-        ShadowParams::Adsm(_) => 4,
-    };
-    if let Some(i) = pick(
-        ui,
-        "method",
-        &["none", "voxel", "dom", "map", "adsm"],
-        current,
-    ) {
-        c.shadow = match i {
-            1 => ShadowParams::Voxel(Default::default()),
-            2 => ShadowParams::DeepOpacity(Default::default()),
-            3 => ShadowParams::ShadowMap(Default::default()),
-            4 => ShadowParams::Adsm(Default::default()),
-            _ => ShadowParams::None,
-        };
+    if let Some(method) = pick_method(ui, "method", &c.shadow) {
+        c.shadow = method;
     }
     let size = "map size (texels)";
     match &mut c.shadow {
@@ -983,12 +972,9 @@ fn shadow_ui(ui: &mut egui::Ui, c: &mut Controls) {
 }
 
 fn transparency_ui(ui: &mut egui::Ui, c: &mut Controls) {
-    let methods = Transparency::defaults();
-    let names = methods.each_ref().map(Transparency::name);
     let t = &mut c.shade.transparency;
-    let current = names.iter().position(|n| *n == t.name()).unwrap_or(0);
-    if let Some(method) = pick(ui, "method", &names, current).and_then(|i| methods.get(i)) {
-        *t = method.clone();
+    if let Some(method) = pick_method(ui, "method", t) {
+        *t = method;
     }
     let max_k = pelage::scene::MAX_OIT_K;
     match t {
@@ -1028,29 +1014,16 @@ fn transparency_ui(ui: &mut egui::Ui, c: &mut Controls) {
 }
 
 fn shading_ui(ui: &mut egui::Ui, c: &mut Controls) {
-    let names = [
-        "kajiya_kay",
-        "marschner",
-        "marschner_lut",
-        "sadeghi",
-        "chiang",
-    ];
-    let current = match c.shade.model {
-        ShadingModel::KajiyaKay(_) => 0,
-        ShadingModel::Marschner { lut, .. } => 1 + usize::from(lut),
-        ShadingModel::Sadeghi(_) => 3,
-        ShadingModel::Chiang(_) => 4,
-    };
-    if let Some(i) = pick(ui, "model", &names, current) {
-        let (lut, params) = match &c.shade.model {
-            ShadingModel::Marschner { params, .. } => (i == 2, params.clone()),
-            _ => (i == 2, Default::default()),
-        };
-        c.shade.model = match i {
-            0 => ShadingModel::KajiyaKay(Default::default()),
-            3 => ShadingModel::Sadeghi(Default::default()),
-            4 => ShadingModel::Chiang(Default::default()),
-            _ => ShadingModel::Marschner { params, lut },
+    if let Some(model) = pick_method(ui, "model", &c.shade.model) {
+        // Marschner and its lookup tables share the parameters.
+        c.shade.model = match (model, &c.shade.model) {
+            (ShadingModel::Marschner { lut, .. }, ShadingModel::Marschner { params, .. }) => {
+                ShadingModel::Marschner {
+                    params: params.clone(),
+                    lut,
+                }
+            }
+            (model, _) => model,
         };
     }
     match &mut c.shade.model {

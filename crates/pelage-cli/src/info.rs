@@ -2,6 +2,7 @@
 //! bound what it can render.
 
 use pelage::gpu::{Gpu, wgpu};
+use pelage::scene::Named;
 
 use crate::error::CliError;
 
@@ -171,17 +172,11 @@ pub fn run() -> Result<(), CliError> {
         limits.max_texture_dimension_2d
     );
     let available = pelage::shade::supported_methods(&gpu);
-    let missing: Vec<&str> = [
-        "opaque",
-        "wboit",
-        "k_buffer",
-        "a_buffer",
-        "dbk",
-        "random_subsets",
-    ]
-    .into_iter()
-    .filter(|name| !available.contains(name))
-    .collect();
+    let missing: Vec<&str> = pelage::scene::Transparency::NAMES
+        .iter()
+        .map(|m| m.name)
+        .filter(|name| !available.contains(name))
+        .collect();
     if missing.is_empty() {
         println!("  every transparency method is available");
     } else {

@@ -6,7 +6,7 @@ use std::str::FromStr;
 
 use clap::ValueEnum;
 use pelage::Scene;
-use pelage::scene::{Light, ParamError, ShadingModel, ShadowParams, Transparency};
+use pelage::scene::{Light, Named, ParamError, ShadingModel, ShadowParams, Transparency};
 
 use crate::error::CliError;
 
@@ -46,116 +46,42 @@ impl std::fmt::Display for Size {
     }
 }
 
-/// Stage 2 methods by command-line name.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-#[value(rename_all = "snake_case")]
-pub enum ShadowArg {
-    /// No hair shadows.
-    None,
-    /// Voxel density splatted into a light-space grid, summed along the light (128³).
-    Voxel,
-    /// Deep opacity maps: 3 layers of accumulated opacity (1024²).
-    Dom,
-    /// Hair shadow map with 3x3 PCF (1024²).
-    Map,
-    /// Approximated deep shadow maps (TressFX): fibres in front from a depth map (1024²).
-    Adsm,
+/// A parser of one method table ([`Named::NAMES`]): the table's names and aliases are the
+/// values the command line accepts, their summaries its help. Scene files read the same
+/// table, so `--shadow deep_opacity` and `method = "deep_opacity"` are one method.
+fn method<T>() -> impl clap::builder::TypedValueParser<Value = T>
+where
+    T: Named + Clone + Send + Sync + 'static,
+{
+    use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
+    PossibleValuesParser::new(T::NAMES.iter().map(|m| {
+        PossibleValue::new(m.name)
+            .aliases(m.aliases.iter().copied())
+            .help(m.summary)
+    }))
+    .try_map(|name: String| {
+        T::named(&name).ok_or_else(|| {
+            format!(
+                "unknown method `{name}`; the known ones: {}",
+                T::name_list()
+            )
+        })
+    })
 }
 
-impl ShadowArg {
-    fn params(self) -> ShadowParams {
-        match self {
-            Self::None => ShadowParams::None,
-            Self::Voxel => ShadowParams::Voxel(Default::default()),
-            Self::Dom => ShadowParams::DeepOpacity(Default::default()),
-            Self::Map => ShadowParams::ShadowMap(Default::default()),
-            Self::Adsm => ShadowParams::Adsm(Default::default()),
-        }
-    }
-}
-
-/// Stage 3 compositing methods by command-line name.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-#[value(rename_all = "snake_case")]
-pub enum OitArg {
-    /// Depth-tested ribbons, 4x MSAA.
-    Opaque,
-    /// Weighted blended OIT: 10 bytes per pixel.
-    Wboit,
-    /// The 8 nearest fragments per pixel, the rest blended: 84 bytes per pixel.
-    KBuffer,
-    /// Per-pixel linked lists in a bounded pool, 8 nearest resolved.
-    ABuffer,
-    /// DBK-buffer: the fragments within 0.05 of the nearest hair, opaque behind.
-    Dbk,
-    /// Nearest fragment of each of 8 random strand subsets.
-    RandomSubsets,
-    /// The strand rasterizer: hair drawn in compute, 16-pixel tiles, 64 depth bins,
-    /// analytic coverage, no 64-bit atomics.
-    StrandRaster,
-}
-
-impl OitArg {
-    /// The method at its defaults ([`Transparency::by_name`]: clap's value names are
-    /// the methods' names, which `every_oit_arg_names_a_method` checks).
-    fn params(self) -> Transparency {
-        self.to_possible_value()
-            .and_then(|value| Transparency::by_name(value.get_name()))
-            .unwrap_or(Transparency::Opaque)
-    }
-}
-
-/// Hair shading models by command-line name.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-#[value(rename_all = "snake_case")]
-pub enum ModelArg {
-    /// Kajiya-Kay diffuse and specular cone.
-    KajiyaKay,
-    /// Marschner R, TT and TRT lobes, evaluated analytically.
-    Marschner,
-    /// Marschner read from lookup tables built once on the GPU (8.7 MB).
-    MarschnerLut,
-    /// Sadeghi's artist-friendly model.
-    Sadeghi,
-    /// Chiang et al. 2016's fibres (pbrt-v3's hair), absorption from the hair colour
-    /// unless --melanin, dual scattering on unless --dual-scattering off.
-    Chiang,
-}
-
-impl ModelArg {
-    /// This model at its defaults.
-    fn params(self) -> ShadingModel {
-        match self {
-            Self::KajiyaKay => ShadingModel::default(),
-            Self::Marschner => ShadingModel::Marschner {
-                params: Default::default(),
-                lut: false,
-            },
-            Self::MarschnerLut => ShadingModel::Marschner {
-                params: Default::default(),
-                lut: true,
-            },
-            Self::Sadeghi => ShadingModel::Sadeghi(Default::default()),
-            Self::Chiang => ShadingModel::Chiang(Default::default()),
-        }
-    }
-
-    /// The scene's model switched to this one: a scene that already uses this model
-    /// keeps its parameters (`marschner` and `marschner_lut` share Marschner's, and only
-    /// switch the lookup tables); another model starts from this one's defaults.
-    fn applied_to(self, current: &ShadingModel) -> ShadingModel {
-        match (self, current) {
-            (Self::KajiyaKay, ShadingModel::KajiyaKay(_))
-            | (Self::Sadeghi, ShadingModel::Sadeghi(_))
-            | (Self::Chiang, ShadingModel::Chiang(_)) => current.clone(),
-            (Self::Marschner | Self::MarschnerLut, ShadingModel::Marschner { params, .. }) => {
-                ShadingModel::Marschner {
-                    params: params.clone(),
-                    lut: self == Self::MarschnerLut,
-                }
+/// The scene's model switched to `model`: a scene that already uses this model keeps its
+/// parameters (`marschner` and `marschner_lut` share Marschner's, and only switch the
+/// lookup tables); another model starts from `model`'s defaults.
+fn model_applied_to(model: &ShadingModel, current: &ShadingModel) -> ShadingModel {
+    match (model, current) {
+        (ShadingModel::Marschner { lut, .. }, ShadingModel::Marschner { params, .. }) => {
+            ShadingModel::Marschner {
+                params: params.clone(),
+                lut: *lut,
             }
-            _ => self.params(),
         }
+        _ if model.row() == current.row() => current.clone(),
+        _ => model.clone(),
     }
 }
 
@@ -233,20 +159,20 @@ pub struct SceneOpts {
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     pub strands: Option<u32>,
     /// Shadow method (the scene's by default: voxel).
-    #[arg(long, value_name = "METHOD")]
-    pub shadow: Option<ShadowArg>,
+    #[arg(long, value_name = "METHOD", value_parser = method::<ShadowParams>())]
+    pub shadow: Option<ShadowParams>,
     /// Shadow resolution: voxels per axis for voxel shadows (default 128), texels per
     /// side for dom, map and adsm (default 1024). Applies to --shadow or the scene's method.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     pub shadow_res: Option<u32>,
     /// Transparency (the scene's by default: opaque).
-    #[arg(long, value_name = "METHOD")]
-    pub oit: Option<OitArg>,
+    #[arg(long, value_name = "METHOD", value_parser = method::<Transparency>())]
+    pub oit: Option<Transparency>,
     /// Hair shading model (the scene's by default: kajiya_kay). When the scene already
     /// uses this model its parameters are kept (marschner and marschner_lut share them);
     /// another model starts from its defaults.
-    #[arg(long, value_name = "MODEL")]
-    pub model: Option<ModelArg>,
+    #[arg(long, value_name = "MODEL", value_parser = method::<ShadingModel>())]
+    pub model: Option<ShadingModel>,
     /// Melanin of the chiang model (--model chiang, or a scene that uses it), as
     /// concentrations, dimensionless, each in [0, 50]: eumelanin EU and optionally
     /// pheomelanin PHEO. The absorption per unit fibre radius is
@@ -284,8 +210,8 @@ impl SceneOpts {
             Some(path) => Scene::from_file(path)?,
             None => Scene::default(),
         };
-        if let Some(shadow) = self.shadow {
-            scene.shadow = shadow.params();
+        if let Some(shadow) = &self.shadow {
+            scene.shadow = shadow.clone();
         }
         if let Some(n) = self.shadow_res {
             match &mut scene.shadow {
@@ -303,11 +229,11 @@ impl SceneOpts {
                 }
             }
         }
-        if let Some(oit) = self.oit {
-            scene.shade.transparency = oit.params();
+        if let Some(oit) = &self.oit {
+            scene.shade.transparency = oit.clone();
         }
-        if let Some(model) = self.model {
-            scene.shade.model = model.applied_to(&scene.shade.model);
+        if let Some(model) = &self.model {
+            scene.shade.model = model_applied_to(model, &scene.shade.model);
         }
         self.apply_chiang_options(&mut scene.shade.model)?;
         match self.lights {
@@ -738,13 +664,43 @@ mod tests {
         }
     }
 
+    /// The command line accepts exactly the tables' names and aliases (the names scene
+    /// files write), and each parses to its row's method.
     #[test]
-    fn every_oit_arg_names_a_method() {
-        let args = OitArg::value_variants();
-        assert_eq!(args.len(), Transparency::defaults().len());
-        for arg in args {
-            let name = arg.to_possible_value().map(|v| v.get_name().to_owned());
-            assert_eq!(name.as_deref(), Some(arg.params().name()), "{arg:?}");
+    fn the_options_accept_the_method_tables() {
+        use clap::CommandFactory;
+        #[derive(clap::Parser)]
+        struct Cli {
+            #[command(flatten)]
+            opts: SceneOpts,
         }
+        fn check<T: Named>(cmd: &clap::Command, option: &str) {
+            let arg = cmd
+                .get_arguments()
+                .find(|a| a.get_long() == Some(option))
+                .expect(option);
+            let values = arg.get_possible_values();
+            assert_eq!(values.len(), T::NAMES.len(), "--{option}");
+            for (value, row) in values.iter().zip(T::NAMES) {
+                assert_eq!(value.get_name(), row.name, "--{option}");
+                let aliases: Vec<&str> = value.get_name_and_aliases().skip(1).collect();
+                assert_eq!(aliases, row.aliases, "--{option} {}", row.name);
+            }
+        }
+        let cmd = Cli::command();
+        check::<Transparency>(&cmd, "oit");
+        check::<ShadowParams>(&cmd, "shadow");
+        check::<ShadingModel>(&cmd, "model");
+        let parse = |args: &[&str]| {
+            <Cli as clap::Parser>::try_parse_from(std::iter::once("x").chain(args.iter().copied()))
+                .map(|cli| cli.opts)
+        };
+        for (row, m) in ShadowParams::NAMES.iter().enumerate() {
+            for name in std::iter::once(m.name).chain(m.aliases.iter().copied()) {
+                let opts = parse(&["--shadow", name]).expect(name);
+                assert_eq!(opts.shadow.map(|s| s.row()), Some(row), "{name}");
+            }
+        }
+        assert!(parse(&["--oit", "k-buffer"]).is_err());
     }
 }

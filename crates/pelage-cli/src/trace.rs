@@ -103,9 +103,9 @@ pub fn mask_path(out: &Path) -> PathBuf {
 /// Refuses the scene options the path tracer has no use for (naming them and why).
 fn refuse_renderer_options(opts: &SceneOpts) -> Result<(), CliError> {
     let given: Vec<&str> = [
-        opts.shadow.map(|_| "--shadow"),
+        opts.shadow.as_ref().map(|_| "--shadow"),
         opts.shadow_res.map(|_| "--shadow-res"),
-        opts.oit.map(|_| "--oit"),
+        opts.oit.as_ref().map(|_| "--oit"),
         opts.dual_scattering.map(|_| "--dual-scattering"),
         opts.lod.then_some("--lod"),
     ]

@@ -14,6 +14,7 @@ pub mod light;
 pub mod limits;
 pub mod lod;
 pub mod mesh;
+pub mod names;
 pub mod obj;
 pub mod params;
 pub mod scene_file;
@@ -33,6 +34,7 @@ pub use light::{DirectionalLight, Light, MAX_LIGHTS, MAX_RADIANCE, PointLight, c
 pub use limits::{MAX_EXTENT, MAX_GROOM_FILE_BYTES, MAX_OBJ_FILE_BYTES, MAX_SCENE_FILE_BYTES};
 pub use lod::{LodParams, Transition};
 pub use mesh::{Mesh, MeshError, MeshReport};
+pub use names::{MethodName, Named};
 pub use obj::{ObjError, load_obj, parse_obj};
 pub use params::{
     AdsmParams, Collider, DeepOpacityParams, DynamicsParams, GrowthParams, HairParams, HairType,

@@ -1697,9 +1697,11 @@ pub enum ShadowParams {
     None,
     /// Voxel density with a prefix sum along the light.
     Voxel(VoxelParams),
-    /// Deep opacity maps.
+    /// Deep opacity maps (`deep_opacity`, or `dom` as the command line once said).
+    #[serde(alias = "dom")]
     DeepOpacity(DeepOpacityParams),
-    /// Hair shadow map with PCF.
+    /// Hair shadow map with PCF (`shadow_map`, or `map`).
+    #[serde(alias = "map")]
     ShadowMap(ShadowMapParams),
     /// Approximated deep shadow maps.
     Adsm(AdsmParams),

@@ -773,13 +773,7 @@ impl ShadingModel {
     /// The model's name as the command line and the labs write it: `kajiya_kay`,
     /// `marschner`, `marschner_lut` (Marschner from its lookup tables), `sadeghi`, `chiang`.
     pub fn name(&self) -> &'static str {
-        match self {
-            Self::KajiyaKay(_) => "kajiya_kay",
-            Self::Marschner { lut: false, .. } => "marschner",
-            Self::Marschner { lut: true, .. } => "marschner_lut",
-            Self::Sadeghi(_) => "sadeghi",
-            Self::Chiang(_) => "chiang",
-        }
+        crate::names::Named::method_name(self)
     }
 
     /// Checks the chosen model's parameters; the error names the bad field.

@@ -7,6 +7,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::names::Named;
 use crate::params::{ParamError, positive};
 
 /// The largest k of the bounded methods (k-buffer, random subsets) and of the
@@ -180,22 +181,15 @@ impl Transparency {
     /// shift of 0.05, the others at their constructors' defaults), in the enum's order.
     /// [`Transparency::by_name`] looks them up by name.
     pub fn defaults() -> [Self; 7] {
-        [
-            Self::Opaque,
-            Self::wboit(),
-            Self::k_buffer(8),
-            Self::a_buffer(),
-            Self::dbk(0.05),
-            Self::random_subsets(8),
-            Self::strand_raster(),
-        ]
+        std::array::from_fn(|row| Self::default_of(row).unwrap_or_default())
     }
 
     /// The method called `name` ([`Transparency::name`]: `opaque`, `wboit`, `k_buffer`,
-    /// `a_buffer`, `dbk`, `random_subsets`, `strand_raster`) at its defaults
-    /// ([`Transparency::defaults`]); `None` for any other name.
+    /// `a_buffer`, `dbk`, `random_subsets`, `strand_raster`, or an alias of the table
+    /// [`Named::NAMES`]) at its defaults ([`Transparency::defaults`]); `None` for any
+    /// other name.
     pub fn by_name(name: &str) -> Option<Self> {
-        Self::defaults().into_iter().find(|t| t.name() == name)
+        Self::named(name)
     }
 
     /// Weighted blended OIT with the paper's eq. 7.
@@ -243,17 +237,10 @@ impl Transparency {
         }
     }
 
-    /// Short name, as in file names and the lab's tables (`opaque`, `wboit`, `k_buffer`, ...).
+    /// Short name, as in file names and the lab's tables (`opaque`, `wboit`, `k_buffer`,
+    /// ...): its row of [`Named::NAMES`].
     pub fn name(&self) -> &'static str {
-        match self {
-            Self::Opaque => "opaque",
-            Self::Wboit { .. } => "wboit",
-            Self::KBuffer { .. } => "k_buffer",
-            Self::ABuffer { .. } => "a_buffer",
-            Self::Dbk { .. } => "dbk",
-            Self::RandomSubsets { .. } => "random_subsets",
-            Self::StrandRaster { .. } => "strand_raster",
-        }
+        self.method_name()
     }
 
     /// Name with its parameters, e.g. `k_buffer k=8`.

@@ -16,23 +16,18 @@
 //! offers only those [`pelage::shade::supported_methods`] names.
 
 use pelage::Scene;
-use pelage::scene::Transparency;
+use pelage::scene::{Named, Transparency};
 
 #[cfg(target_arch = "wasm32")]
 mod web;
 #[cfg(target_arch = "wasm32")]
 pub use web::Demo;
 
-/// The transparency methods by [`Transparency::name`], in the order the page lists them.
-pub const METHODS: [&str; 7] = [
-    "strand_raster",
-    "opaque",
-    "wboit",
-    "a_buffer",
-    "dbk",
-    "k_buffer",
-    "random_subsets",
-];
+/// The transparency methods by [`Transparency::name`], in the order the page lists them:
+/// the table every surface reads ([`pelage::scene::Named::NAMES`]).
+pub fn methods() -> impl Iterator<Item = &'static str> {
+    Transparency::NAMES.iter().map(|m| m.name)
+}
 
 /// The most strands the page asks for (its slider's end).
 pub const MAX_STRANDS: u32 = 200_000;
@@ -67,7 +62,7 @@ impl Default for Settings {
 #[derive(Debug, thiserror::Error)]
 pub enum DemoError {
     /// A transparency method name pelage does not know.
-    #[error("unknown transparency method '{0}'; the known ones: {list}", list = METHODS.join(", "))]
+    #[error("unknown transparency method '{0}'; the known ones: {list}", list = Transparency::name_list())]
     UnknownMethod(String),
     /// A control's value outside what the page offers.
     #[error("{what} = {value} is out of range: {range}")]
@@ -126,7 +121,7 @@ mod tests {
 
     #[test]
     fn every_method_name_round_trips() {
-        for name in METHODS {
+        for name in methods() {
             assert_eq!(transparency(name).unwrap().name(), name);
         }
         let e = transparency("fancy").unwrap_err().to_string();

@@ -136,7 +136,7 @@ impl Demo {
     pub fn refusals(&self) -> String {
         let supported = pelage::shade::supported_methods(&self.gpu);
         let mut lines = Vec::new();
-        for name in crate::METHODS {
+        for name in crate::methods() {
             if supported.contains(&name) {
                 continue;
             }

@@ -181,28 +181,23 @@ const SLICED_DOWNLEVEL: wgpu::DownlevelFlags = wgpu::DownlevelFlags::READ_ONLY_D
 pub fn supported_methods(gpu: &Gpu) -> Vec<&'static str> {
     let sliced = gpu.downlevel_flags().contains(SLICED_DOWNLEVEL);
     let has = |f| gpu.features().contains(f);
-    [
-        ("opaque", true),
-        ("wboit", true),
-        (
-            "k_buffer",
-            sliced && has(wgpu::Features::SHADER_INT64_ATOMIC_ALL_OPS),
-        ),
-        ("a_buffer", sliced),
-        ("dbk", sliced),
-        (
-            "random_subsets",
-            sliced && has(wgpu::Features::SHADER_INT64_ATOMIC_MIN_MAX),
-        ),
-        (
-            "strand_raster",
-            gpu.downlevel_flags()
+    Transparency::defaults()
+        .iter()
+        .filter(|method| match method {
+            Transparency::Opaque | Transparency::Wboit { .. } => true,
+            Transparency::KBuffer { .. } => {
+                sliced && has(wgpu::Features::SHADER_INT64_ATOMIC_ALL_OPS)
+            }
+            Transparency::ABuffer { .. } | Transparency::Dbk { .. } => sliced,
+            Transparency::RandomSubsets { .. } => {
+                sliced && has(wgpu::Features::SHADER_INT64_ATOMIC_MIN_MAX)
+            }
+            Transparency::StrandRaster { .. } => gpu
+                .downlevel_flags()
                 .contains(wgpu::DownlevelFlags::COMPUTE_SHADERS),
-        ),
-    ]
-    .into_iter()
-    .filter_map(|(name, ok)| ok.then_some(name))
-    .collect()
+        })
+        .map(Transparency::name)
+        .collect()
 }
 
 /// Errors, before anything is built, unless the device has `feature` and what every
