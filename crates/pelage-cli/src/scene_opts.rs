@@ -162,7 +162,7 @@ pub struct SceneOpts {
     #[arg(long, value_name = "METHOD", value_parser = method::<ShadowParams>())]
     pub shadow: Option<ShadowParams>,
     /// Shadow resolution: voxels per axis for voxel shadows (default 128), texels per
-    /// side for dom, map and adsm (default 1024). Applies to --shadow or the scene's method.
+    /// side for deep_opacity, shadow_map and adsm (default 1024). Applies to --shadow or the scene's method.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     pub shadow_res: Option<u32>,
     /// Transparency (the scene's by default: opaque).
