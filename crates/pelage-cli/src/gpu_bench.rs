@@ -394,13 +394,18 @@ mod tests {
         // 3 sizes x 2 sources + 2 anchors, 9 configurations each.
         assert_eq!(all.len(), 8 * 9);
         for t in Transparency::defaults() {
-            assert!(all.iter().any(|c| c.transparency == t && c.strands == 200_000));
+            assert!(
+                all.iter()
+                    .any(|c| c.transparency == t && c.strands == 200_000)
+            );
         }
         for shadow in ["voxel", "deep_opacity", "shadow_map"] {
             assert!(all.iter().any(|c| c.shadow_name() == shadow));
         }
-        assert!(all.iter().all(|c| c.case != "grid"
-            || (c.width, c.height, c.segments) == (1920, 1080, 16)));
+        assert!(
+            all.iter()
+                .all(|c| c.case != "grid" || (c.width, c.height, c.segments) == (1920, 1080, 16))
+        );
         assert!(
             all.iter()
                 .any(|c| c.case == "frostbite anchor" && c.segments == 23 && c.height == 900)
