@@ -4,7 +4,10 @@
 //!
 //! ```text
 //! pelage bench [--quick] [--out DIR]
+//! pelage bench --gpu [--quick] [--allow-cpu] [--out DIR]
 //! ```
+//!
+//! `--gpu` runs the real-GPU bench instead (`gpu_bench.rs`, docs/src/gpu_bench.md).
 //!
 //! Writes `DIR/bench.csv` (default `out/bench`), `DIR/scaling.png|svg` (stage time
 //! against strand count, log-log) and prints the tables. `--quick` uses small scenes
@@ -44,6 +47,31 @@ static SHADERS: ShaderSources =
     pelage::gpu::wgsl_sources!("bench/copy.wgsl", "bench/strand_writes.wgsl",);
 
 type Error = Box<dyn std::error::Error>;
+
+/// The options of `pelage bench`.
+#[derive(Clone, Debug, clap::Args)]
+pub struct BenchOpts {
+    /// `--quick` and `--out`, as the labs take them.
+    #[command(flatten)]
+    pub lab: LabOpts,
+    /// The real-GPU bench: GPU time per stage of whole frames at 1920x1080, every
+    /// transparency method and shadow, the anchors; writes gpu_bench.csv and gpu_bench.md.
+    #[arg(long)]
+    pub gpu: bool,
+    /// With --gpu: run on a CPU adapter (lavapipe) too (a smoke run; not GPU figures).
+    #[arg(long, requires = "gpu")]
+    pub allow_cpu: bool,
+}
+
+/// Runs `pelage bench` as `opts` asks: the lavapipe report ([`run`]) or, with `--gpu`,
+/// the real-GPU bench.
+pub fn run_command(opts: &BenchOpts) -> Result<(), Error> {
+    if opts.gpu {
+        crate::gpu_bench::run(&opts.lab, opts.allow_cpu)
+    } else {
+        run(&opts.lab)
+    }
+}
 
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);

@@ -15,6 +15,7 @@ mod auto;
 mod bench;
 mod compare;
 mod error;
+mod gpu_bench;
 mod hair_timing;
 mod info;
 mod lab;
@@ -143,13 +144,21 @@ enum Command {
                       memory per strand and per pixel, and the cost of shadows plus transparency \
                       over the bare lit strand pass. Writes DIR/bench.csv and \
                       DIR/scaling.png|svg and prints the tables. About 4 minutes on 2 CPU cores; \
-                      --quick: small scenes, few frames.",
+                      --quick: small scenes, few frames.\n\n\
+                      --gpu: the real-GPU bench instead (docs/src/gpu_bench.md): GPU time per \
+                      stage of whole frames at 1920x1080 for 10k, 50k and 200k strands of 16 \
+                      segments, grown and as a groom, every transparency method, voxel, deep \
+                      opacity and shadow-map shadows, and the Frostbite and vkhr anchors; writes \
+                      DIR/gpu_bench.csv and DIR/gpu_bench.md. Refuses a CPU adapter unless \
+                      --allow-cpu; with --quick, tiny sizes (a smoke run).",
         after_help = "Examples:\n  \
                       pelage bench\n  \
-                      pelage bench --quick --out /tmp/bench",
+                      pelage bench --quick --out /tmp/bench\n  \
+                      pelage bench --gpu --out out/gpu_bench\n  \
+                      pelage bench --gpu --quick --allow-cpu --out /tmp/gpu_bench",
         mut_arg("out", |arg| arg.default_value("out/bench"))
     )]
-    Bench(lab::LabOpts),
+    Bench(bench::BenchOpts),
     /// Show the adapter, the features pelage uses and the limits that bound a scene.
     #[command(
         long_about = "Show the adapter pelage would render on (name, backend, driver, device \
@@ -172,7 +181,7 @@ fn run(command: &Command) -> Result<(), CliError> {
         Command::Lab(lab) => lab.run().map_err(CliError::Lab),
         Command::Trace(opts) => trace::run(opts),
         Command::Compare(opts) => compare::run(opts),
-        Command::Bench(opts) => bench::run(opts).map_err(CliError::Lab),
+        Command::Bench(opts) => bench::run_command(opts).map_err(CliError::Lab),
         Command::Info => info::run(),
     }
 }
