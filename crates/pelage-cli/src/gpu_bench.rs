@@ -31,7 +31,7 @@ use std::time::Instant;
 
 use pelage::gpu::{Gpu, wgpu};
 use pelage::scene::{DeepOpacityParams, ShadowMapParams, ShadowParams, Transparency, VoxelParams};
-use pelage::scene::{Resampled, WindParams};
+use pelage::scene::{Named, Resampled, WindParams};
 use pelage::strands::{GrowStrands, MeshBuffers, StrandStage};
 use pelage::{Renderer, Scene};
 use pelage_lab::Table;
@@ -60,13 +60,7 @@ struct Case {
 
 impl Case {
     fn shadow_name(&self) -> &'static str {
-        match self.shadow {
-            ShadowParams::None => "none",
-            ShadowParams::Voxel(_) => "voxel",
-            ShadowParams::DeepOpacity(_) => "deep_opacity",
-            ShadowParams::ShadowMap(_) => "shadow_map",
-            ShadowParams::Adsm(_) => "adsm",
-        }
+        self.shadow.method_name()
     }
 
     fn describe(&self) -> String {
