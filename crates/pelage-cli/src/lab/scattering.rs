@@ -33,14 +33,17 @@ use std::time::Instant;
 use glam::{DVec3, Vec3};
 use image::RgbaImage;
 use pelage::gpu::Gpu;
+use pelage::gpu::read_buffer;
 use pelage::scene::{
-    Camera, ChiangParams, DirectionalLight, HairType, Light, Mesh, ShadingModel, Transparency,
-    WindParams, chiang_color_scale, sigma_a_from_melanin,
+    AdsmParams, Camera, ChiangParams, DeepOpacityParams, DirectionalLight, HairType, Light, Mesh,
+    ShadingModel, ShadowMapParams, ShadowParams, Transparency, VoxelParams, WindParams,
+    chiang_color_scale, sigma_a_from_melanin,
 };
 use pelage::{Renderer, Scene};
 use pelage_lab::{ScatterChart, ScatterPoint, Table, contact_sheet};
 use pelage_reference::flip::{DEFAULT_PIXELS_PER_DEGREE, LinearImage, flip};
 use pelage_reference::path_tracer::{PathTracedImage, PathTracerSettings};
+use pelage_reference::transmittance::SegmentBvh;
 
 use super::LabOpts;
 use crate::path_trace::{TracedScene, hair_luminance, heat, masked_mean};
@@ -275,6 +278,163 @@ fn srgb_image(image: &PathTracedImage) -> Result<RgbaImage, Box<dyn std::error::
         .ok_or_else(|| "path-traced image has the wrong size".into())
 }
 
+/// The shadow methods whose fibre counts [`fibre_counts`] measures, at their defaults.
+fn shadow_methods() -> [(&'static str, ShadowParams); 4] {
+    [
+        ("voxel", ShadowParams::Voxel(VoxelParams::default())),
+        (
+            "deep_opacity",
+            ShadowParams::DeepOpacity(DeepOpacityParams::default()),
+        ),
+        (
+            "shadow_map",
+            ShadowParams::ShadowMap(ShadowMapParams::default()),
+        ),
+        ("adsm", ShadowParams::Adsm(AdsmParams::default())),
+    ]
+}
+
+/// Whether the ray from `origin` along `dir` (unit) hits triangle `t` beyond a small offset
+/// (Möller-Trumbore).
+fn ray_hits_triangle(origin: Vec3, dir: Vec3, t: &[Vec3; 3]) -> bool {
+    let e1 = t[1] - t[0];
+    let e2 = t[2] - t[0];
+    let p = dir.cross(e2);
+    let det = e1.dot(p);
+    if det.abs() < 1e-12 {
+        return false;
+    }
+    let inv = 1.0 / det;
+    let s = origin - t[0];
+    let u = s.dot(p) * inv;
+    if !(0.0..=1.0).contains(&u) {
+        return false;
+    }
+    let q = s.cross(e1);
+    let v = dir.dot(q) * inv;
+    if v < 0.0 || u + v > 1.0 {
+        return false;
+    }
+    e2.dot(q) * inv > 1e-4
+}
+
+/// Deepest optical depth read from a visibility (V = 1e-6).
+const MAX_TAU: f64 = 13.8;
+
+/// Calibration of dual scattering's fibre count: at every strand vertex of `groom` (opaque
+/// fibres, the lab's sun), the optical depth `τ = -ln V` each shadow method hands the
+/// shading stage (an opaque fibre counts 1 in every method's convention, so `τ` is the
+/// fibre count the model uses) against the number of fibres the path tracer's shadow ray
+/// from that vertex toward the light crosses (ray against the real cylinders, the vertex's
+/// own strand excluded). Adds one row per method to `table` and returns the printed lines.
+fn fibre_counts(
+    groom: &str,
+    quick: bool,
+    size: u32,
+    table: &mut Table,
+) -> Result<String, Box<dyn std::error::Error>> {
+    let mut text = String::new();
+    let mut truth: Option<Vec<(usize, f64)>> = None;
+    for (method, shadow) in shadow_methods() {
+        let mut s = scene(groom, 1.3, 0.0, quick, METHODS[0].1)?;
+        s.shadow = shadow;
+        let gpu = Gpu::headless()?;
+        let mut renderer = Renderer::new(&gpu, &s, size, size)?;
+        renderer.render(&gpu, 0.0, &s.camera)?;
+        let visibility = renderer
+            .light_visibility(&gpu)?
+            .into_iter()
+            .next()
+            .ok_or("the lab's scene has no shadows")?;
+        if truth.is_none() {
+            let traced = TracedScene::from_renderer(&s, &renderer, &gpu)?;
+            let to_light = match s.lights.first() {
+                Some(Light::Directional(d)) => d.to_light()?,
+                _ => return Err("the lab's key light is directional".into()),
+            };
+            let strands = renderer.strands();
+            let per = (strands.buffers().segments + 1) as usize;
+            let bytes = read_buffer(&gpu, &strands.buffers().vertices)?;
+            let floats: &[f32] =
+                bytemuck::try_cast_slice(&bytes).map_err(|e| format!("strand vertices: {e:?}"))?;
+            let bvh = SegmentBvh::build(traced.segments.clone());
+            let triangles: Vec<[Vec3; 3]> = traced
+                .mesh_triangles
+                .iter()
+                .filter_map(|t| {
+                    let p = |k: u32| traced.mesh_positions.get(k as usize).copied();
+                    Some([p(t[0])?, p(t[1])?, p(t[2])?])
+                })
+                .collect();
+            // Every `step`-th vertex (at most ~8 000), those the mesh does not shadow: the
+            // shadow methods' visibility includes the mesh, the crossings count fibres.
+            let step = (visibility.len() / 8_000).max(1);
+            truth = Some(
+                floats
+                    .chunks_exact(4)
+                    .take(visibility.len())
+                    .enumerate()
+                    .step_by(step)
+                    .filter_map(|(i, v)| {
+                        let p = Vec3::new(v[0], v[1], v[2]);
+                        if triangles.iter().any(|t| ray_hits_triangle(p, to_light, t)) {
+                            return None;
+                        }
+                        let own = Some((i / per) as u32);
+                        Some((i, f64::from(bvh.hit_count(p, to_light, f32::INFINITY, own))))
+                    })
+                    .collect(),
+            );
+        }
+        let (counts, taus): (Vec<f64>, Vec<f64>) = truth
+            .as_deref()
+            .unwrap_or_default()
+            .iter()
+            .filter_map(|&(i, count)| {
+                let v = f64::from(*visibility.get(i)?);
+                Some((count, (-v.max((-MAX_TAU).exp()).ln()).min(MAX_TAU)))
+            })
+            .unzip();
+        let counts = &counts[..];
+        let n = taus.len().min(counts.len()).max(1) as f64;
+        let mean_tau = taus.iter().sum::<f64>() / n;
+        let mean_count = counts.iter().sum::<f64>() / n;
+        let diffs: Vec<f64> = taus.iter().zip(counts).map(|(t, c)| t - c).collect();
+        let mean_diff = diffs.iter().sum::<f64>() / n;
+        let spread = (diffs.iter().map(|d| (d - mean_diff).powi(2)).sum::<f64>() / n).sqrt();
+        let (st, sc) = (
+            (taus.iter().map(|t| (t - mean_tau).powi(2)).sum::<f64>() / n).sqrt(),
+            (counts.iter().map(|c| (c - mean_count).powi(2)).sum::<f64>() / n).sqrt(),
+        );
+        let correlation = taus
+            .iter()
+            .zip(counts)
+            .map(|(t, c)| (t - mean_tau) * (c - mean_count))
+            .sum::<f64>()
+            / n
+            / (st * sc).max(1e-12);
+        // The least-squares scale that maps the method's tau to the crossings.
+        let scale = taus.iter().zip(counts).map(|(t, c)| t * c).sum::<f64>()
+            / taus.iter().map(|t| t * t).sum::<f64>().max(1e-12);
+        table.push(vec![
+            groom.into(),
+            method.into(),
+            format!("{n:.0}"),
+            format!("{mean_count:.3}"),
+            format!("{mean_tau:.3}"),
+            format!("{:.3}", mean_tau / mean_count.max(1e-12)),
+            format!("{spread:.3}"),
+            format!("{correlation:.3}"),
+            format!("{scale:.3}"),
+        ])?;
+        text.push_str(&format!(
+            "{groom:<9} {method:<12} fibres crossed {mean_count:.2}, tau {mean_tau:.2} (x{:.2}), spread of tau - fibres {spread:.2}, correlation {correlation:.2}, best scale {scale:.2}\n",
+            mean_tau / mean_count.max(1e-12)
+        ));
+    }
+    Ok(text)
+}
+
 /// Runs the lab (see the module docs); `spp` overrides the path tracer's samples per pixel.
 pub fn run(opts: &LabOpts, spp: Option<u32>) -> Result<(), Box<dyn std::error::Error>> {
     let started = Instant::now();
@@ -315,6 +475,25 @@ pub fn run(opts: &LabOpts, spp: Option<u32>) -> Result<(), Box<dyn std::error::E
     let mut points = Vec::new();
     let mut cells = Vec::new();
     let mut orders_text = String::new();
+    // The fibre counts first: the shadow methods' optical depth against the crossings.
+    let mut counts = Table::new(&[
+        "groom",
+        "shadow",
+        "vertices",
+        "mean_fibres_crossed",
+        "mean_tau",
+        "tau_over_fibres",
+        "spread_tau_minus_fibres",
+        "correlation",
+        "best_scale",
+    ]);
+    let mut counts_text = String::new();
+    for &groom in grooms {
+        counts_text.push_str(&fibre_counts(groom, quick, size, &mut counts)?);
+    }
+    counts.write_csv(&opts.out.join("scattering_fibre_counts.csv"))?;
+    println!("fibre counts (dual scattering's n) against the path tracer's shadow rays:");
+    print!("{counts_text}");
     let bar = progress::bar((grooms.len() * hair.len()) as u64, "scenes")?;
     for &groom in grooms {
         for &(name, eu, pheo) in hair {
