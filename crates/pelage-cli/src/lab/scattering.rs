@@ -60,9 +60,12 @@ const HAIR: [(&str, f32, f32); 4] = [
     ("red", 0.3, 1.2),
 ];
 
+/// A pelage variant: its name and how it sets up the scene's Chiang parameters.
+type Method = (&'static str, fn(&mut ChiangParams));
+
 /// The pelage variants measured against the path tracer: name, and how the variant sets
 /// up the scene's Chiang parameters. A new multiple-scattering method adds a row.
-const METHODS: [(&str, fn(&mut ChiangParams)); 2] = [
+const METHODS: [Method; 2] = [
     ("single", |p| p.dual_scattering = false),
     ("dual", |p| p.dual_scattering = true),
 ];
