@@ -19,6 +19,7 @@
 //! equal the GPU's exactly and its composite matches within 1/255.
 
 pub mod chiang;
+pub mod dual;
 pub mod flip;
 pub mod guides;
 pub mod noise;

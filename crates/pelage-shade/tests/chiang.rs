@@ -66,6 +66,15 @@ fn tables(gpu: &Gpu, params: &ChiangParams) -> ChiangTables {
 
 /// Evaluates every case in `mode` with `tables` and reads back the radiances.
 fn eval(gpu: &Gpu, tables: &ChiangTables, mode: u32, cases: &[Case]) -> Vec<Vec3> {
+    eval_raw(gpu, tables, mode, cases)
+        .iter()
+        .map(|v| v.truncate())
+        .collect()
+}
+
+/// Evaluates every case in `mode` with `tables` and reads back the four components of each
+/// result.
+fn eval_raw(gpu: &Gpu, tables: &ChiangTables, mode: u32, cases: &[Case]) -> Vec<glam::Vec4> {
     let module = pelage_shade::SHADERS
         .library()
         .module(gpu, "shade/models/chiang_eval.wgsl")
@@ -132,7 +141,7 @@ fn eval(gpu: &Gpu, tables: &ChiangTables, mode: u32, cases: &[Case]) -> Vec<Vec3
     let bytes = read_buffer(gpu, &results).unwrap();
     bytemuck::cast_slice::<u8, [f32; 4]>(&bytes)
         .iter()
-        .map(|v| Vec3::new(v[0], v[1], v[2]))
+        .map(|v| glam::Vec4::from_array(*v))
         .collect()
 }
 
@@ -365,4 +374,238 @@ fn gpu_matches_cpu_twin() {
         worst_p99 = worst_p99.max(at(0.99));
     }
     assert!(worst_p99 < 0.03, "p99 relative error {worst_p99}");
+}
+
+/// Modes of `chiang_eval.wgsl` that read the dual-scattering energies back.
+const FORWARD_ENERGIES: u32 = 2;
+const BACKWARD_ENERGIES: u32 = 3;
+
+/// A case that asks `chiang_eval.wgsl` for the energies at `|θ|` and absorption coordinate
+/// `x = σ / (σ + 1)`.
+fn energy_case(theta: f32, x: f32) -> Case {
+    Case {
+        t: Vec3::new(theta, x, 0.0),
+        l: Vec3::ZERO,
+        v: Vec3::ZERO,
+        color: Vec3::ZERO,
+        visibility: 0.0,
+    }
+}
+
+/// Reads the GPU's forward and backward lobe energies back, as `chiang_dual_at` samples them.
+fn gpu_energies(
+    gpu: &Gpu,
+    tab: &ChiangTables,
+    cases: &[Case],
+) -> (Vec<glam::Vec4>, Vec<glam::Vec4>) {
+    (
+        eval_raw(gpu, tab, FORWARD_ENERGIES, cases),
+        eval_raw(gpu, tab, BACKWARD_ENERGIES, cases),
+    )
+}
+
+/// Dual scattering's energies (the audit of Zinke's a_f and a_b): with no absorption the
+/// forward and backward energies of all lobes add up to the fibre's albedo, 1, at every
+/// `θ` (pbrt's `∫ f |cos θ| dω`, no factor of π), and each lobe's energy in the GPU's table
+/// equals the CPU twin's, whose `φ` integral is the logistic's CDF in closed form.
+#[test]
+fn dual_energies_conserve_and_match_cpu_twin() {
+    let gpu = gpu();
+    let thetas: Vec<f32> = (0..ChiangTables::THETA)
+        .map(|j| 0.5 * std::f32::consts::PI * j as f32 / (ChiangTables::THETA - 1) as f32)
+        .collect();
+    let xs = [0.0f32, 0.1, 0.3, 0.5, 0.75];
+    let mut worst_sum: f64 = 0.0;
+    let mut worst_lobe: f64 = 0.0;
+    for (beta_m, beta_n) in [(0.3, 0.3), (0.5, 0.6), (0.25, 0.2)] {
+        let params = ChiangParams {
+            beta_m,
+            beta_n,
+            sigma_a: Some(Vec3::ZERO),
+            ..Default::default()
+        };
+        let tab = tables(&gpu, &params);
+        let cases: Vec<Case> = xs
+            .iter()
+            .flat_map(|&x| thetas.iter().map(move |&th| energy_case(th, x)))
+            .collect();
+        let (fwd, bwd) = gpu_energies(&gpu, &tab, &cases);
+        for (k, case) in cases.iter().enumerate() {
+            let (theta, x) = (f64::from(case.t.x), f64::from(case.t.y));
+            let sigma = x / (1.0 - x);
+            let cpu = twin(&params, Vec3::splat(sigma as f32)).lobe_energies(theta);
+            let (f, b) = (fwd[k].as_dvec4(), bwd[k].as_dvec4());
+            if x == 0.0 {
+                let sum = f.element_sum() + b.element_sum();
+                worst_sum = worst_sum.max((sum - 1.0).abs());
+                assert!(
+                    (sum - 1.0).abs() < 0.005,
+                    "beta_m {beta_m} beta_n {beta_n} theta {theta:.3}: a_f + a_b = {sum:.5} (forward {f:.4}, backward {b:.4})"
+                );
+            }
+            for (p, (g, c)) in [f.x, f.y, f.z, f.w]
+                .iter()
+                .zip(cpu.forward.iter().map(|v| v.x))
+                .chain(
+                    [b.x, b.y, b.z, b.w]
+                        .iter()
+                        .zip(cpu.backward.iter().map(|v| v.x)),
+                )
+                .enumerate()
+            {
+                let err = (g - c).abs();
+                worst_lobe = worst_lobe.max(err);
+                assert!(
+                    err < 0.01,
+                    "beta_m {beta_m} beta_n {beta_n} theta {theta:.3} x {x}: energy {p} GPU {g:.5} CPU {c:.5}"
+                );
+            }
+        }
+    }
+    println!("largest |a_f + a_b - 1| {worst_sum:.5}, largest lobe energy error {worst_lobe:.5}");
+}
+
+/// The GPU's dual scattering against the CPU twin `pelage_reference::dual` (Zinke et al.
+/// 2008 term by term: forward transmittance `d_f a_f^n` per channel, `f_s^scatter` with each
+/// lobe widened by `σ_f²`, `A_b`, `Δ_b`, `σ_b` of eqs. 13 to 15, no clamp), over tangents,
+/// lights, eyes and visibilities from lit to deep shadow, for blond, brown and rough hair.
+/// The error is relative to the larger of the value and 5% of the sweep's mean.
+#[test]
+fn dual_matches_cpu_twin() {
+    let gpu = gpu();
+    let dirs = fibonacci(10);
+    let tangents = [Vec3::X, Vec3::new(0.3, -0.2, 0.93).normalize()];
+    let configs = [
+        ("blond", ChiangParams::melanin(0.3, 0.0)),
+        ("brown", ChiangParams::melanin(1.3, 0.0)),
+        (
+            "rough red, no tilt",
+            ChiangParams {
+                beta_m: 0.6,
+                beta_n: 0.5,
+                alpha_deg: 0.0,
+                ..ChiangParams::melanin(0.3, 0.8)
+            },
+        ),
+    ];
+    let color = Vec3::ONE;
+    let mut worst_p99: f64 = 0.0;
+    for (name, params) in configs {
+        let sigma = params.sigma_a_for(color);
+        let fibre = twin(&params, sigma);
+        let tab = tables(&gpu, &params);
+        let mut cases = Vec::new();
+        for &visibility in &[1.0f32, 0.6, 0.1, 3e-3] {
+            for &t in &tangents {
+                for &l in &dirs {
+                    for &v in &dirs {
+                        cases.push(Case {
+                            t,
+                            l,
+                            v,
+                            color,
+                            visibility,
+                        });
+                    }
+                }
+            }
+        }
+        let gpu_out = eval(&gpu, &tab, LIGHT, &cases);
+        let cpu_out: Vec<DVec3> = cases
+            .iter()
+            .map(|c| fibre.dual_radiance(c.t, c.l, c.v, f64::from(c.visibility)))
+            .collect();
+        let per = cases.len() / 4;
+        for (block, vis) in [1.0, 0.6, 0.1, 3e-3].iter().enumerate() {
+            let range = block * per..(block + 1) * per;
+            let mean = |x: &mut dyn Iterator<Item = DVec3>| x.sum::<DVec3>() / per as f64;
+            println!(
+                "{name}: visibility {vis}: mean GPU {:.5} CPU {:.5}",
+                mean(&mut gpu_out[range.clone()].iter().map(|v| v.as_dvec3())),
+                mean(&mut cpu_out[range].iter().copied())
+            );
+        }
+        let mean = cpu_out.iter().map(|c| c.element_sum() / 3.0).sum::<f64>() / cases.len() as f64;
+        let floor = 0.05 * mean;
+        let mut errors: Vec<f64> = gpu_out
+            .iter()
+            .zip(&cpu_out)
+            .map(|(g, c)| {
+                let g = g.as_dvec3();
+                ((g - *c).abs() / c.abs().max(DVec3::splat(floor))).max_element()
+            })
+            .collect();
+        errors.sort_by(f64::total_cmp);
+        let at = |q: f64| errors[((errors.len() - 1) as f64 * q) as usize];
+        println!(
+            "{name}: sigma_a {sigma:.3}: dual relative error median {:.4}, p90 {:.4}, p99 {:.4}, max {:.4} ({} cases)",
+            at(0.5),
+            at(0.9),
+            at(0.99),
+            at(1.0),
+            errors.len()
+        );
+        assert!(
+            gpu_out
+                .iter()
+                .all(|c| c.is_finite() && c.min_element() >= 0.0)
+        );
+        worst_p99 = worst_p99.max(at(0.99));
+    }
+    assert!(worst_p99 < 0.03, "dual p99 relative error {worst_p99}");
+}
+
+/// Zinke's forward transmittance is `d_f a_f^n` of each colour channel, `n` the fibres
+/// crossed: with lobes so rough that widening them changes little, the scattered part
+/// `F(V) - V F(1)` (per unit of the light that crossed fibres, `1 - V`) falls by `a_f` per
+/// fibre in each channel (a grey opacity, or the Poisson mean `exp(-τ (1 - a_f))`, scales
+/// the channels otherwise).
+#[test]
+fn dual_forward_transmittance_is_af_to_the_n() {
+    let gpu = gpu();
+    let params = ChiangParams {
+        beta_m: 1.0,
+        beta_n: 0.3,
+        alpha_deg: 0.0,
+        ..ChiangParams::melanin(0.3, 0.0)
+    };
+    let tab = tables(&gpu, &params);
+    let sigma = params.sigma_a_for(Vec3::ONE);
+    let fibre = twin(&params, sigma);
+    let t = Vec3::X;
+    let v = eye_at(20.0);
+    let l = Vec3::new(-0.4, -0.8, 0.3).normalize();
+    let (tau1, tau2) = (4.0f64, 8.0f64);
+    let cases: Vec<Case> = [0.0, tau1, tau2]
+        .iter()
+        .map(|&tau: &f64| Case {
+            t,
+            l,
+            v,
+            color: Vec3::ONE,
+            visibility: (-tau).exp() as f32,
+        })
+        .collect();
+    let out: Vec<DVec3> = eval(&gpu, &tab, LIGHT, &cases)
+        .iter()
+        .map(|c| c.as_dvec3())
+        .collect();
+    let scattered = |k: usize, tau: f64| {
+        let vis = (-tau).exp();
+        (out[k] - out[0] * vis) / (1.0 - vis)
+    };
+    let n = |tau: f64| tau / (1.0 - (-tau).exp());
+    let theta_i = f64::from(t.dot(l)).abs().asin();
+    let a_f = fibre.lobe_energies(theta_i).a_f();
+    let measured = scattered(2, tau2) / scattered(1, tau1);
+    let dn = n(tau2) - n(tau1);
+    let expected = DVec3::new(a_f.x.powf(dn), a_f.y.powf(dn), a_f.z.powf(dn));
+    println!(
+        "a_f {a_f:.4}: scattered light at tau {tau2} over tau {tau1} = {measured:.5}, a_f^dn = {expected:.5}"
+    );
+    let rel = ((measured - expected) / expected).abs().max_element();
+    assert!(
+        rel < 0.05,
+        "ratio {measured} against a_f^dn {expected}: {rel}"
+    );
 }

@@ -87,19 +87,22 @@ pub enum Lab {
     Lod(LabOpts),
     /// Chiang fibres, single and dual scattering, against a path tracer.
     #[command(
-        long_about = "Black, brown and blond hair (eumelanin 8, 1.3, 0.3) as fur on the creature \
-                      and long hair on a head, 256x256, lit by a sun and a sky: pelage's Chiang \
-                      model with dual scattering off and on (k-buffer k = 8, voxel shadows) \
-                      against an independent path tracer of the same strands (real cylinders, \
-                      Chiang's BSDF at the true fibre offset, 16 bounces, the mesh a diffuse \
-                      occluder), the mean of two seeds; their difference is the reference's \
-                      noise floor.\n\n\
+        long_about = "Black, brown, blond and red hair as fur on the creature, long hair \
+                      from a groom file (scenes/long_hair.hair) and a dense curly groom on a head, \
+                      256x256, lit by a sun and a sky: pelage's Chiang model with dual scattering \
+                      off and on (k-buffer k = 8, voxel shadows) against an independent path \
+                      tracer of the same strands (real cylinders, Chiang's BSDF at the true fibre \
+                      offset, 16 bounces, the mesh a diffuse occluder), the mean of two seeds; \
+                      their difference is the reference's noise floor. The path tracer is also \
+                      run capped at 1, 2, 4, 8 and 64 bounces: the table splits the hair's light \
+                      by bounce order and says which orders each method carries.\n\n\
                       Writes DIR/scattering.csv (mean FLIP over the image and over the hair, the \
-                      hair's luminance against the reference's, the shade stage's wall clock, the \
-                      noise floor), DIR/scattering.png|svg (FLIP against time), \
-                      DIR/scattering_sheet.png (path tracer | single | dual | FLIP) and the \
-                      path-traced images (HDR and PNG) in DIR/scattering/. About 15 minutes on 2 \
-                      CPU cores at 64 spp; --quick: 64x64, fur, brown and blond, 16 spp."
+                      hair's luminance against the reference's and against orders 1..K, the shade \
+                      stage's wall clock, the noise floor), DIR/scattering.png|svg (FLIP against \
+                      time), DIR/scattering_sheet.png (path tracer | single | dual | FLIP) and the \
+                      path-traced images (HDR and PNG) in DIR/scattering/. Most of an hour on 2 \
+                      CPU cores at 64 spp; --quick: 64x64, fur and the curly groom, brown and \
+                      blond, 16 spp (under 2 minutes)."
     )]
     Scattering(ScatteringOpts),
     /// Simulated hair against the stateless wind while the head turns and nods.

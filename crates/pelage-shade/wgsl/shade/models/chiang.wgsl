@@ -17,21 +17,23 @@
 // The azimuthal terms depend on sigma_a per channel, so each channel reads the table at its
 // own sigma_a: the colour (and with it sigma_a) may change from strand to strand.
 //
-// Dual scattering (chiang_dual_radiance): stage 2's visibility V of the light at the strand
-// vertex is read as its own model of the hair in front: V = exp(-tau), tau = a E[N] the
-// expected number of fibre crossings times the fibre opacity (the voxel grid's and the deep
-// opacity maps' optical depth, eq. of shadow/voxel_splat.wgsl). Under the same Poisson
-// model a crossing scatters a fraction af forward (Zinke's a_f bar), so light reaches the
-// strand with T = E[(1 - a + a af)^N] = exp(-tau (1 - af)) = V^(1 - af) in all, V of it
-// unscattered. Then, per channel:
-//   F_direct  = V (f_s + d_b f_back(sigma_b^2))
-//   F_scatter = (T - V) d_f (M_f(beta_f^2 + sigma_f^2) af / pi + pi d_b f_back(sigma_b^2 + sigma_f^2))
-//   sigma_f^2 = tau beta_f^2 (the spread of tau scatterings on average), M_f the lobe of the
-//   forward energy's mean shift alpha_f (Zinke's M^G with its lobes merged),
-//   f_back    = A_b M_b / pi, M_b the longitudinal lobe shifted by Delta_b,
-// with A_b, Delta_b and sigma_b from Zinke's eqs. 13 to 15 and d_f = d_b = 0.7 (Zinke's
-// density factors). Longitudinal lobes are pbrt's Mp with the shift and variance in its
-// units (twice the theta_h shift, four times the theta_h variance).
+// Dual scattering (chiang_dual_radiance), Zinke et al. 2008 with pbrt's lobes; CPU twin
+// `pelage_reference::dual` (crates/pelage-reference/src/dual.rs), which states the model in
+// full. Stage 2's visibility V = exp(-tau) of the light at the strand vertex, tau the
+// opacity times the expected number of fibres crossed (an opaque fibre counts 1; the voxel
+// grid's and the deep opacity maps' optical depth, shadow/voxel_splat.wgsl). V is the light
+// that crossed no fibre; the rest crossed n = tau / (1 - V) fibres on average (a Poisson
+// count given that it is at least one). Per channel, with a_f^X, a_b^X each lobe's forward
+// and backward energy for light at theta_i (pbrt's int f |cos theta| d omega; they add up
+// to 1 without absorption):
+//   F = V (f_s + d_b f_back(sigma_b^2))
+//     + (1 - V) d_f a_f^n (f_s^scatter + pi d_b f_back(sigma_b^2 + sigma_f^2)),
+//   f_s^scatter = sum_X M_X(v_X + 4 sigma_f^2) a_f^X / pi (the fibre's lobes widened by
+//   sigma_f^2 = n beta_f^2, times Zinke's N^G_X = (2/pi) int_{pi/2}^{pi} N_X dphi),
+//   f_back(s2) = A_b M_b(Delta_b, s2) / pi,
+// with A_b, Delta_b and sigma_b from Zinke's eqs. 13 to 15 (no clamp) and d_f = d_b = 0.7
+// (Zinke's density factors). Longitudinal lobes are pbrt's Mp with the shift and variance
+// in its units (twice the theta_h shift, four times the theta_h variance).
 
 #import shared/math.wgsl
 #import shade/models/fibre.wgsl
@@ -239,7 +241,7 @@ fn chiang_mp_shifted(a: ChiangAngles, shift: f32, var_h: f32) -> f32 {
     let c2 = cos(2.0 * shift);
     let so = a.sin_o * c2 - a.cos_o * s2;
     let co = a.cos_o * c2 + a.sin_o * s2;
-    return chiang_mp(a.cos_i, abs(co), a.sin_i, so, max(4.0 * var_h, 1e-4));
+    return chiang_mp(a.cos_i, abs(co), a.sin_i, so, 4.0 * var_h);
 }
 
 // Single scattering: the radiance toward v for a light of unit irradiance from l.
@@ -275,31 +277,43 @@ fn chiang_radiance(
     return chiang_single(m, chiang_angles(t, l, v), chiang_sigma_a(m, base_color));
 }
 
+// The mean number of fibres crossed by the light that crossed any: n = tau / (1 - V) for
+// V = exp(-tau) (the mean of a Poisson count given that it is at least one), 1 as V -> 1.
+fn chiang_crossings(visibility: f32, tau: f32) -> f32 {
+    if (tau < 1e-4) {
+        // tau / (1 - exp(-tau)) = 1 + tau / 2 + O(tau^2), without the cancellation.
+        return 1.0 + 0.5 * tau;
+    }
+    return tau / (1.0 - visibility);
+}
+
 // One channel of dual scattering (see the file's comment): energies e of the fibre for
-// light at theta_i, f_s the single scattering of this channel.
+// light at theta_i, f_s the single scattering of this channel, n the fibres crossed.
 fn chiang_dual_channel(
     m: ChiangModel,
     a: ChiangAngles,
     e: ChiangEnergies,
     f_s: f32,
     visibility: f32,
-    tau: f32,
+    n: f32,
 ) -> f32 {
     // Lobe shifts and variances in theta_h: R at alpha, TT at -alpha/2, TRT at -2 alpha,
     // the residual at 0; variances v_p / 4.
     let alpha = asin(clamp(m.sin_2k_alpha.x, -1.0, 1.0));
     let shift = vec4<f32>(alpha, -0.5 * alpha, -2.0 * alpha, 0.0);
     let var_h = 0.25 * vec4<f32>(m.v.x, m.v.y, m.v.z, m.v.z);
-    let af = max(dot(e.forward, vec4<f32>(1.0)), 1e-6);
-    let ab = max(dot(e.backward, vec4<f32>(1.0)), 1e-6);
+    // a_f, a_b > 0: Fresnel sends some light each way at every angle and absorption.
+    let af = dot(e.forward, vec4<f32>(1.0));
+    let ab = dot(e.backward, vec4<f32>(1.0));
     let alpha_f = dot(e.forward, shift) / af;
     let alpha_b = dot(e.backward, shift) / ab;
     let beta_f2 = dot(e.forward, var_h) / af;
     let beta_b2 = dot(e.backward, var_h) / ab;
     let beta_f = sqrt(beta_f2);
     let beta_b = sqrt(beta_b2);
-    // Zinke eqs. 13 to 15: back scattering in the neighbourhood of the shading point.
-    let af2 = min(af * af, 0.999);
+    // Zinke eqs. 13 to 15: back scattering in the neighbourhood of the shading point
+    // (a_f < 1 always: a_f + a_b <= 1 with a_b > 0).
+    let af2 = af * af;
     let af_inv = 1.0 - af2;
     let ab2 = ab * ab;
     let ab3 = ab2 * ab;
@@ -310,22 +324,24 @@ fn chiang_dual_channel(
         * (ab * sqrt(2.0 * beta_f2 + beta_b2) + ab3 * sqrt(2.0 * beta_f2 + 3.0 * beta_b2))
         / (ab + ab3 * (2.0 * beta_f + 3.0 * beta_b));
     let sigma_b2 = sigma_b * sigma_b;
-    // Global scattering: what crossed the fibres in front, and its spread.
-    let total = exp(-tau * (1.0 - min(af, 1.0)));
-    let scattered = max(total - visibility, 0.0);
-    let sigma_f2 = tau * beta_f2;
     let back_direct = a_b * chiang_mp_shifted(a, delta_b, sigma_b2) * INV_PI;
     let f_direct = visibility * (f_s + CHIANG_DB * back_direct);
-    if (scattered <= 0.0) {
+    if (visibility >= 1.0) {
         return f_direct;
     }
+    // The light that crossed fibres: Zinke's forward transmittance d_f a_f^n of this
+    // channel, spread by n scatterings (sigma_f^2 = n beta_f^2).
+    let t_f = CHIANG_DF * pow(af, n);
+    let sigma_f2 = n * beta_f2;
     let back_scatter = a_b * chiang_mp_shifted(a, delta_b, sigma_b2 + sigma_f2) * INV_PI;
-    // The forward-scattered light's last scattering: one lobe of the forward energy's mean
-    // shift and variance (Zinke's alpha_f, beta_f) widened by the spread, times the
-    // azimuthally averaged N^G = af / pi (the lobes of Zinke's M^G merged: at the spreads
-    // that matter they overlap, and one lobe costs a quarter).
-    let spread = chiang_mp_shifted(a, alpha_f, beta_f2 + sigma_f2) * af * INV_PI;
-    return f_direct + scattered * CHIANG_DF * (spread + PI * CHIANG_DB * back_scatter);
+    // Zinke's f_s^scatter: each lobe widened by sigma_f^2 (4 sigma_f^2 in pbrt's variance)
+    // times N^G_X = (2/pi) int_{pi/2}^{pi} N_X dphi = a_f^X / pi.
+    let widen = 4.0 * sigma_f2;
+    let fs_scatter = (chiang_mp_lobe(m, a, 0u, m.v.x + widen) * e.forward.x
+        + chiang_mp_lobe(m, a, 1u, m.v.y + widen) * e.forward.y
+        + chiang_mp_lobe(m, a, 2u, m.v.z + widen) * e.forward.z
+        + chiang_mp_lobe(m, a, 3u, m.v.z + widen) * e.forward.w) * INV_PI;
+    return f_direct + (1.0 - visibility) * t_f * (fs_scatter + PI * CHIANG_DB * back_scatter);
 }
 
 // Dual scattering: the radiance toward v for a light of unit irradiance from l that stage 2
@@ -344,6 +360,7 @@ fn chiang_dual_radiance(
     let vis = clamp(visibility, 0.0, 1.0);
     // Optical depth of the hair in front: V = exp(-tau) (at most 69, V = 1e-30).
     let tau = -log(max(vis, 1e-30));
+    let n = chiang_crossings(vis, tau);
     let x = vec3<f32>(
         chiang_sigma_coordinate(sigma.x),
         chiang_sigma_coordinate(sigma.y),
@@ -353,9 +370,9 @@ fn chiang_dual_radiance(
     let eg = chiang_dual_at(a.theta_i, x.y);
     let eb = chiang_dual_at(a.theta_i, x.z);
     return vec3<f32>(
-        chiang_dual_channel(m, a, er, f_s.x, vis, tau),
-        chiang_dual_channel(m, a, eg, f_s.y, vis, tau),
-        chiang_dual_channel(m, a, eb, f_s.z, vis, tau),
+        chiang_dual_channel(m, a, er, f_s.x, vis, n),
+        chiang_dual_channel(m, a, eg, f_s.y, vis, n),
+        chiang_dual_channel(m, a, eb, f_s.z, vis, n),
     );
 }
 

@@ -8,7 +8,9 @@
 // Dispatch: workgroups of 64 over the cases, flattened as
 //         gid.y * num_workgroups.x * 64 + gid.x (pelage_gpu::dispatch_size).
 // Modes: 0 = single scattering (chiang_radiance), 1 = chiang_light (single or dual as the
-//        model says, times or through the visibility).
+//        model says, times or through the visibility), 2 and 3 = the dual-scattering
+//        energies as chiang_dual_at reads them, forward (2) or backward (3), per lobe
+//        (R, TT, TRT, residual) at |theta| = t.x and absorption coordinate t.y.
 
 #import shared/math.wgsl
 #import shade/models/chiang.wgsl
@@ -39,6 +41,11 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
         return;
     }
     let c = cases[i];
+    if (settings.mode >= 2u) {
+        let e = chiang_dual_at(c.t.x, c.t.y);
+        results[i] = select(e.backward, e.forward, settings.mode == 2u);
+        return;
+    }
     var out = vec3<f32>(0.0);
     if (settings.mode == 0u) {
         out = chiang_radiance(chiang, c.t.xyz, c.l.xyz, c.v.xyz, c.color.xyz, 0.0);
