@@ -20,9 +20,11 @@
 //!    tip as a point;
 //! 5. reads the HDR target back and tone maps it (Reinhard, then sRGB) on the CPU.
 //!
-//! Each pelage stage is prepared (per-frame uniforms) and recorded with the
-//! `StrandFrame` stage 1 returns, and the order of every pass, pelage's and the
-//! engine's, is declared once in a `FramePlan` and checked.
+//! pelage's stages are one `pelage::Frame` built from a `Scene` (the engine's mesh as
+//! the rest pose, grown fur, a voxel shadow, `draw_mesh = false`) on the engine's mesh
+//! buffers; it is prepared with the engine's matrices and recorded in two parts around
+//! the engine's mesh pass, and the order of every pass, pelage's and the engine's, is
+//! the frame's plan with the engine's pass inserted, checked once.
 //!
 //! Writes `DIR/embed_NNNN.png` (default `out/embed`) and checks the last frame.
 //! `tests/embed.rs` renders frame 0 without the tips and compares it with the facade's
@@ -31,13 +33,13 @@
 use std::path::PathBuf;
 
 use glam::Vec3;
-use pelage::gpu::{FramePlan, Gpu, PassInfo, ShaderSources, wgpu};
-use pelage::scene::{CameraMatrices, HairParams, Light, Mesh, ShadeParams, VoxelParams};
-use pelage::shade::{
-    HairInputs, HairPass, TARGET_COLOR, TARGET_DEPTH, TargetFormat, TargetViews, Visibility,
+use pelage::gpu::{Gpu, PassInfo, ShaderSources, wgpu};
+use pelage::scene::{
+    CameraMatrices, HairParams, Light, Mesh, ShadeParams, ShadowParams, VoxelParams,
 };
-use pelage::shadow::{LightVisibility, ShadowMethod, VoxelShadow};
-use pelage::strands::{GrowStrands, MESH, MeshBuffers, StrandStage};
+use pelage::shade::{TARGET_COLOR, TARGET_DEPTH, TargetFormat, TargetViews};
+use pelage::strands::{MESH, MeshBuffers};
+use pelage::{Frame, FrameTarget, Scene};
 use wgpu::util::DeviceExt;
 
 type Result<T> = std::result::Result<T, Box<dyn std::error::Error>>;
@@ -196,10 +198,8 @@ pub struct Engine {
     positions: wgpu::Buffer,
     normals: wgpu::Buffer,
     indices: wgpu::Buffer,
-    strands: GrowStrands,
-    voxel: VoxelShadow,
-    hand_over: LightVisibility,
-    hair: Box<dyn HairPass>,
+    /// pelage's stages.
+    pelage: Frame,
     color: wgpu::Texture,
     depth: wgpu::Texture,
     uniforms: wgpu::Buffer,
@@ -245,49 +245,32 @@ impl Engine {
             rest.bounds(),
         )?;
 
-        // pelage's stages, one by one, on the engine's device. Everything later stages
-        // need to know about the strands (counts, widths, reach) travels with them.
-        let strands = GrowStrands::new(gpu, &rest, &mesh, &hair())?;
-        let b = strands.buffers();
-        let reach = pelage::shadow::reach(b, &mesh);
-        let voxel = VoxelShadow::new(gpu, &VoxelParams::default(), b, &mesh, reach)?;
-        let stride =
-            LightVisibility::stride_for(u64::from(b.strand_count) * u64::from(b.segments + 1))?;
-        let visibility = LightVisibility::buffer(gpu, 1, stride)?;
-        let hand_over = LightVisibility::new(gpu, &voxel.binding(), b, &visibility, 0, stride)?;
-        let hair = pelage::shade::build(
-            gpu,
-            &HairInputs {
-                params: &shade(),
-                mesh: &mesh,
-                strands: b,
-                shadow: Some(&voxel.binding()),
-                visibility: Some(Visibility {
-                    buffer: &visibility,
-                    stride,
-                }),
-                target: TARGET,
-                // The engine draws the mesh itself.
-                draw_mesh: false,
-            },
-            WIDTH,
-            HEIGHT,
-        )?;
+        // pelage's stages on the engine's device and mesh buffers: its mesh as the rest
+        // pose, grown fur, a voxel shadow; the engine draws the mesh itself.
+        let scene = Scene {
+            mesh: rest.clone(),
+            hair: hair(),
+            groom: None,
+            guides: None,
+            dynamics: None,
+            motion: None,
+            shadow: ShadowParams::Voxel(VoxelParams::default()),
+            shade: shade(),
+            camera: Default::default(),
+            lights: lights(),
+        };
+        let target = FrameTarget {
+            draw_mesh: false,
+            ..FrameTarget::new(TARGET, WIDTH, HEIGHT)
+        };
+        let pelage = Frame::with_mesh_buffers(gpu, &scene, mesh, &target)?;
 
-        // The frame's passes in order, pelage's declared by its stages and the engine's
-        // own beside them, checked once: the engine's mesh samples the shadow, so it
-        // comes after the shadow's passes, and pelage's hair after the mesh.
-        let lookup = voxel.lookup();
-        let mut plan = FramePlan::new([MESH, TARGET_COLOR, TARGET_DEPTH]);
-        plan.push(strands.passes());
-        plan.push(voxel.passes());
-        plan.push(hand_over.passes(&lookup));
-        plan.push([PassInfo::new("engine mesh")
+        // The frame's passes in order, with the engine's own mesh pass between pelage's
+        // shadows (which it samples) and pelage's hair (drawn over it), checked once.
+        pelage.plan_with_passes_before_shade([PassInfo::new("engine mesh")
             .reads([MESH.to_string()])
-            .reads(lookup.iter().cloned())
-            .writes([TARGET_COLOR, TARGET_DEPTH])]);
-        plan.push(hair.passes(&lookup));
-        plan.validate()?;
+            .reads(pelage.key_lookup())
+            .writes([TARGET_COLOR, TARGET_DEPTH])])?;
 
         // The engine's targets.
         let target = |format, usage| {
@@ -312,7 +295,7 @@ impl Engine {
 
         // The engine's pipelines. Its shader imports pelage's shadow contract, read as
         // the voxel method's lookup, whose resources the method hands over.
-        let shadow = voxel.binding();
+        let shadow = pelage.shadow_binding().ok_or("the scene has no shadow")?;
         let module = ENGINE_SHADERS.library().module_redirected(
             gpu,
             "embed/engine.wgsl",
@@ -411,6 +394,7 @@ impl Engine {
                     .ok_or("the voxel shadow binds no resources")?,
             ),
         ];
+        let b = pelage.strands().buffers();
         let tip_group = group(
             "engine tips",
             &tip_pipeline.get_bind_group_layout(0),
@@ -422,10 +406,7 @@ impl Engine {
             positions,
             normals,
             indices,
-            strands,
-            voxel,
-            hand_over,
-            hair,
+            pelage,
             color,
             depth,
             uniforms,
@@ -450,16 +431,11 @@ impl Engine {
         queue.write_buffer(&self.positions, 0, &floats(&skinned));
         queue.write_buffer(&self.normals, 0, &floats(&self.rest.normals));
 
-        // Per-frame uniforms. Stage 1 first: the frame it returns prepares and records
-        // every later stage.
+        // Per-frame uniforms: every pelage stage, with the engine's matrices.
         let (camera, lights, shade) = (camera(), lights(), shade());
-        let frame = self.strands.prepare(queue, t)?;
+        self.pelage.prepare_matrices(queue, t, &camera)?;
         let key = lights[0].as_directional(Vec3::ZERO);
-        self.voxel.prepare(queue, &frame, &key)?;
-        self.hand_over.prepare(&frame);
-        self.hair
-            .prepare(queue, &frame, &camera, &lights, WIDTH, HEIGHT)?;
-        let b = self.strands.buffers();
+        let b = self.pelage.strands().buffers();
         let uniforms = EngineUniforms {
             view_proj: camera.view_projection().to_cols_array(),
             to_light: (-key.direction.normalize()).extend(0.0).to_array(),
@@ -481,9 +457,8 @@ impl Engine {
         });
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         // 1. pelage's strands and shadow (the engine's mesh pass samples the shadow).
-        self.strands.encode(&mut encoder, &frame, None)?;
-        self.voxel.encode(&mut encoder, &frame, None)?;
-        self.hand_over.encode(&mut encoder, &frame, None)?;
+        self.pelage.record_strands(&mut encoder, None)?;
+        self.pelage.record_shadows(&mut encoder, None)?;
         // 2. The engine's mesh, into its cleared targets.
         {
             let bg = shade.background.as_dvec3();
@@ -532,7 +507,7 @@ impl Engine {
             height: HEIGHT,
             load: true,
         };
-        self.hair.encode(gpu, &mut encoder, &frame, &views, None)?;
+        self.pelage.record_shade(&mut encoder, &views, None)?;
         // 4. The engine reads pelage's strand buffer in a pass of its own.
         if tips {
             let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -548,6 +523,7 @@ impl Engine {
             rp.draw(0..self.tip_count, 0..1);
         }
         gpu.submit_and_wait([encoder.finish()])?;
+        self.pelage.after_submit(gpu)?;
         read_hdr(gpu, &self.color)
     }
 }

@@ -46,13 +46,15 @@ pub use pelage_shade as shade;
 pub use pelage_shadow as shadow;
 pub use pelage_strands as strands;
 
+mod frame;
 mod output;
 mod renderer;
 
+pub use frame::{Frame, FrameTarget, frame_plan};
 #[cfg(feature = "png")]
 pub use output::save_png;
 pub use output::{AtomicFile, OutputError, remove_pending_temporaries, write_atomically};
-pub use renderer::{Change, FRAMES_IN_FLIGHT, FrameStats, Renderer, Scene, Update, frame_plan};
+pub use renderer::{Change, FRAMES_IN_FLIGHT, FrameStats, Renderer, Scene, Update};
 
 /// Any error of the frame pipeline.
 #[derive(Debug, thiserror::Error)]

@@ -11,13 +11,12 @@ use pelage_scene::{
 };
 #[cfg(not(target_arch = "wasm32"))]
 use pelage_shade::TargetViews;
-use pelage_shade::{
-    HairInputs, HairPass, OitStats, TargetFormat, TargetViewSet, Targets, Visibility,
-};
-use pelage_shadow::{LightVisibility, ShadowMethod};
+use pelage_shade::{HairPass, OitStats, TargetFormat, TargetViewSet, Targets};
 use pelage_strands::{
-    GroomStrands, GrowStrands, GuideStrands, MeshBuffers, SimulateStrands, StrandFrame, StrandStage,
+    GroomStrands, GrowStrands, GuideStrands, MeshBuffers, StrandFrame, StrandStage,
 };
+
+use crate::frame::{Frame, FrameTarget, StrandSource};
 
 /// Everything a frame is made of.
 #[derive(Clone, Debug)]
@@ -126,20 +125,22 @@ impl Scene {
             let (a, b) = groom.bounds();
             (a - glam::Vec3::splat(pad), b + glam::Vec3::splat(pad))
         };
-        let (glo, ghi) = match (&self.groom, &self.guides, &self.dynamics) {
-            (Some(groom), Some(guides), None) => {
+        let (glo, ghi) = match StrandSource::of(self) {
+            StrandSource::Guides(groom, guides) => {
                 GuideStrands::reach_of(groom, (lo, hi), &self.hair, guides)
                     .unwrap_or_else(|_| groom.bounds())
             }
-            (Some(groom), Some(guides), Some(_)) => {
+            StrandSource::SimulatedGuides(groom, guides, _) => {
                 GuideStrands::reach_around(simulated(groom), (lo, hi), groom, &self.hair, guides)
                     .unwrap_or_else(|_| groom.bounds())
             }
-            (Some(groom), None, None) => {
+            StrandSource::Groom(groom) => {
                 GroomStrands::reach_of(groom, &self.hair).unwrap_or_else(|_| groom.bounds())
             }
-            (Some(groom), None, Some(_)) => simulated(groom),
-            (None, _, _) => GrowStrands::reach_of(&self.mesh, &self.hair),
+            StrandSource::Simulated(Some(groom), _) => simulated(groom),
+            StrandSource::Simulated(None, _) | StrandSource::Grown => {
+                GrowStrands::reach_of(&self.mesh, &self.hair)
+            }
         };
         // A groom-only scene: the hair's reach alone.
         if self.groom.is_some() && self.mesh.indices.is_empty() {
@@ -164,39 +165,23 @@ impl FrameStats {
     }
 }
 
-/// Stages 1, 2 and 3 chained, rendering into its own offscreen targets.
+/// A [`Frame`] rendering into its own offscreen targets, with its timer, readback and
+/// frames in flight.
 #[derive(Debug)]
 pub struct Renderer {
-    mesh_buffers: MeshBuffers,
-    strands: Box<dyn StrandStage>,
-    /// One shadow per light, with the pass that hands it to the hair.
-    shadows: Vec<(Box<dyn ShadowMethod>, LightVisibility)>,
-    hair: Box<dyn HairPass>,
+    /// The stages.
+    frame: Frame,
     targets: Targets,
     timer: Option<GpuTimer>,
-    lights: Vec<Light>,
-    /// Where point lights aim their shadows (the centre of the hair's reach).
-    shadow_target: glam::Vec3,
-    /// The world box the hair can reach: its size on screen sets the level of detail.
-    reach: (glam::Vec3, glam::Vec3),
-    /// Per-vertex light visibility, `stride` floats per light (none without shadows).
-    visibility: Option<wgpu::Buffer>,
-    stride: u32,
-    /// The frame stage 1 last prepared, which every stage records.
-    frame: Option<StrandFrame>,
     /// The targets' views, made once (methods that sample the depth keep bind groups
     /// built for them).
     views: TargetViewSet,
     /// The timings of the newest frame read back.
     last_stats: FrameStats,
-    /// The passes a frame records, checked at construction.
-    plan: FramePlan,
     /// Frames submitted by `render` the GPU may not have finished.
     in_flight: std::collections::VecDeque<wgpu::SubmissionIndex>,
     /// What the renderer draws, for [`Renderer::update`] to compare a scene with.
     built: update::Built,
-    /// The mesh's motion and its rest pose, written into the mesh buffers every frame.
-    motion: Option<(MeshMotion, Mesh)>,
 }
 
 /// Frames [`Renderer::render`] lets the GPU fall behind by before it waits.
@@ -226,257 +211,20 @@ impl Renderer {
         height: u32,
         format: &TargetFormat,
     ) -> crate::Result<Self> {
-        // A groom with an empty mesh is a groom-only scene: nothing of the mesh is drawn
-        // or shadowed, and nothing moves it or binds roots to it.
-        let draw_mesh = !(scene.groom.is_some() && scene.mesh.indices.is_empty());
-        if !draw_mesh {
-            let refuse = |name: &str, what: &str| {
-                pelage_scene::ParamError::new(
-                    name,
-                    "set",
-                    &format!(
-                        "a groom-only scene (an empty mesh, [mesh] kind = \"none\") has no mesh {what}; give the scene a mesh or leave it out"
-                    ),
-                )
-            };
-            if scene.dynamics.is_some() {
-                return Err(refuse("dynamics", "to bind the simulated roots to").into());
-            }
-            if scene.motion.is_some() {
-                return Err(refuse("motion", "to move").into());
-            }
-            if scene.guides.is_some() {
-                return Err(refuse("guides", "to root the render strands on").into());
-            }
-        }
-        // A simulation sizes itself from the mesh buffers' box: the mesh's, grown to
-        // wherever the motion takes it (the simulated hair follows the mesh).
-        let moving_mesh = || -> crate::Result<MeshBuffers> {
-            let mut mesh = MeshBuffers::upload(gpu, &scene.mesh)?;
-            if let Some(motion) = &scene.motion {
-                motion.validate()?;
-                mesh.bounds = motion.reach(mesh.bounds);
-            }
-            Ok(mesh)
-        };
-        let (mut mesh_buffers, strands): (MeshBuffers, Box<dyn StrandStage>) =
-            match (&scene.groom, &scene.guides, &scene.dynamics, draw_mesh) {
-                (Some(groom), Some(guides), None, _) => {
-                    let mesh = MeshBuffers::upload(gpu, &scene.mesh)?;
-                    let strands =
-                        GuideStrands::new(gpu, &scene.mesh, &mesh, groom, &scene.hair, guides)?;
-                    (mesh, Box::new(strands))
-                }
-                // The guides simulated, the render strands interpolated from them.
-                (Some(groom), Some(guides), Some(dynamics), _) => {
-                    let mesh = moving_mesh()?;
-                    let strands = GuideStrands::simulated(
-                        gpu,
-                        &scene.mesh,
-                        &mesh,
-                        groom,
-                        &scene.hair,
-                        guides,
-                        dynamics,
-                    )?;
-                    (mesh, Box::new(strands))
-                }
-                (Some(groom), _, None, false) => {
-                    let strands = GroomStrands::new(gpu, groom, &scene.hair)?;
-                    let mesh = no_mesh(gpu, strands.buffers().reach)?;
-                    (mesh, Box::new(strands))
-                }
-                (Some(groom), _, None, true) => (
-                    MeshBuffers::upload(gpu, &scene.mesh)?,
-                    Box::new(GroomStrands::new(gpu, groom, &scene.hair)?),
-                ),
-                (None, _, None, _) => {
-                    let mesh = MeshBuffers::upload(gpu, &scene.mesh)?;
-                    let strands = GrowStrands::new(gpu, &scene.mesh, &mesh, &scene.hair)?;
-                    (mesh, Box::new(strands))
-                }
-                (groom, _, Some(dynamics), _) => {
-                    let mesh = moving_mesh()?;
-                    let strands = match groom {
-                        Some(groom) => SimulateStrands::groom(
-                            gpu,
-                            groom,
-                            &scene.mesh,
-                            &mesh,
-                            &scene.hair,
-                            dynamics,
-                        )?,
-                        None => {
-                            SimulateStrands::grown(gpu, &scene.mesh, &mesh, &scene.hair, dynamics)?
-                        }
-                    };
-                    (mesh, Box::new(strands))
-                }
-            };
-        // The stateless methods: the mesh's box is wherever the motion takes it (the
-        // simulation's above already is).
-        if let (Some(motion), None) = (&scene.motion, &scene.dynamics) {
-            motion.validate()?;
-            mesh_buffers.bounds = motion.reach(mesh_buffers.bounds);
-        }
-        Light::validate_all(&scene.lights).map_err(pelage_shade::ShadeError::from)?;
-        // Every later stage sizes itself from what stage 1 hands over: the strand
-        // buffers carry their counts, widths and reach.
-        let reach = pelage_shadow::reach(strands.buffers(), &mesh_buffers);
-        let vertices =
-            u64::from(strands.buffers().strand_count) * u64::from(strands.buffers().segments + 1);
-        let stride = LightVisibility::stride_for(vertices)?;
-        // Without a shadow method every vertex is lit: no visibility buffer at all.
-        let visibility = match scene.shadow {
-            ShadowParams::None => None,
-            _ => Some(LightVisibility::buffer(
-                gpu,
-                scene.lights.len() as u32,
-                stride,
-            )?),
-        };
-        let mut shadows = Vec::new();
-        for index in 0..scene.lights.len() as u32 {
-            let Some(buffer) = &visibility else {
-                break;
-            };
-            let Some(shadow) =
-                pelage_shadow::build(gpu, &scene.shadow, strands.buffers(), &mesh_buffers)?
-            else {
-                break;
-            };
-            let hand_over = LightVisibility::new(
-                gpu,
-                &shadow.binding(),
-                strands.buffers(),
-                buffer,
-                index,
-                stride,
-            )?;
-            shadows.push((shadow, hand_over));
-        }
-        let binding = shadows.first().map(|(s, _)| s.binding());
-        scene
-            .shade
-            .validate()
-            .map_err(pelage_shade::ShadeError::from)?;
+        // The stages first: a scene they refuse allocates no target.
+        let frame = Frame::new(gpu, scene, &FrameTarget::new(*format, width, height))?;
         let targets = Targets::with_format(gpu, width, height, format)?;
-        let hair = pelage_shade::build(
-            gpu,
-            &HairInputs {
-                params: &scene.shade,
-                mesh: &mesh_buffers,
-                strands: strands.buffers(),
-                shadow: binding.as_ref(),
-                visibility: visibility
-                    .as_ref()
-                    .map(|buffer| Visibility { buffer, stride }),
-                target: targets.format,
-                draw_mesh,
-            },
-            width,
-            height,
-        )?;
-        let plan = frame_plan(strands.as_ref(), &shadows, hair.as_ref());
-        plan.validate()?;
-        // A point light at the centre the shadows are fitted around has no direction.
-        let shadow_target = (reach.0 + reach.1) * 0.5;
-        for (i, light) in scene.lights.iter().enumerate() {
-            light.shadow_light(i, shadow_target)?;
-        }
         let timer = GpuTimer::new(gpu, 64)?;
         let views = targets.view_set();
         Ok(Self {
-            motion: scene.motion.clone().map(|m| (m, scene.mesh.clone())),
-            mesh_buffers,
-            strands,
-            shadows,
-            hair,
+            frame,
             targets,
             timer,
-            lights: scene.lights.clone(),
-            shadow_target,
-            reach,
-            visibility,
-            stride,
-            frame: None,
             views,
             in_flight: Default::default(),
             last_stats: FrameStats::default(),
-            plan,
             built: update::Built::of(scene),
         })
-    }
-
-    /// Picks the level of detail for `camera` (see [`LodLevel::for_view`]) and writes the
-    /// per-frame uniforms of every stage for time `t` and `camera`: stage 1 first, whose
-    /// [`StrandFrame`] every later stage is prepared and recorded with.
-    fn prepare(&mut self, gpu: &Gpu, t: f32, camera: &Camera) -> crate::Result<StrandFrame> {
-        let frame = self.prepare_strands(gpu, t, camera)?;
-        self.prepare_later_stages(gpu, &frame, camera)?;
-        Ok(frame)
-    }
-
-    /// The first half of [`Renderer::prepare`]: the mesh's motion, the colliders, the
-    /// level of detail and stage 1's uniforms for time `t`.
-    fn prepare_strands(
-        &mut self,
-        gpu: &Gpu,
-        t: f32,
-        camera: &Camera,
-    ) -> crate::Result<StrandFrame> {
-        camera.validate()?;
-        if let Some((motion, rest)) = &self.motion {
-            self.mesh_buffers
-                .update(&gpu.queue, &motion.apply(rest, t))?;
-            if let Some(sim) = self.strands.as_simulation_mut() {
-                let moved: Vec<_> = (sim.dynamics().colliders.iter())
-                    .map(|c| c.moved(|p| motion.point(p, t)))
-                    .collect();
-                sim.set_colliders(&moved)?;
-            }
-        }
-        let (width, height) = (self.targets.width, self.targets.height);
-        let level = self
-            .strands
-            .level_for_view(self.reach, camera, width, height);
-        self.strands.set_lod(level)?;
-        let frame = self.strands.prepare(&gpu.queue, t)?;
-        self.frame = Some(frame);
-        Ok(frame)
-    }
-
-    /// The second half of [`Renderer::prepare`]: every later stage's uniforms for
-    /// stage 1's `frame` and `camera`.
-    fn prepare_later_stages(
-        &mut self,
-        gpu: &Gpu,
-        frame: &StrandFrame,
-        camera: &Camera,
-    ) -> crate::Result<()> {
-        let frame = *frame;
-        let (width, height) = (self.targets.width, self.targets.height);
-        for (i, ((shadow, hand_over), light)) in self.shadows.iter().zip(&self.lights).enumerate() {
-            shadow.prepare(
-                &gpu.queue,
-                &frame,
-                &light.shadow_light(i, self.shadow_target)?,
-            )?;
-            hand_over.prepare(&frame);
-        }
-        self.hair.prepare(
-            &gpu.queue,
-            &frame,
-            &if self.targets.format.reverse_z {
-                camera.matrices_reverse_z(width, height)
-            } else {
-                camera.matrices(width, height)
-            },
-            &self.lights,
-            width,
-            height,
-        )?;
-        Ok(())
     }
 
     /// Advances stage 1 to time `t` without drawing: the mesh's motion, the colliders
@@ -488,9 +236,9 @@ impl Renderer {
     /// methods it is wasted work. Like `render`, it returns without waiting for the GPU
     /// (at most [`FRAMES_IN_FLIGHT`] frames queued).
     pub fn advance(&mut self, gpu: &Gpu, t: f32, camera: &Camera) -> crate::Result<()> {
-        let frame = self.prepare_strands(gpu, t, camera)?;
+        self.frame.prepare_strands(&gpu.queue, t, Some(camera))?;
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
-        self.strands.encode(&mut encoder, &frame, None)?;
+        self.frame.record_strands(&mut encoder, None)?;
         let index = gpu.submit([encoder.finish()])?;
         self.queue_frame(gpu, index)
     }
@@ -513,11 +261,11 @@ impl Renderer {
     }
 
     /// Records a whole frame into `encoder`: prepares every stage for time `t` and
-    /// `camera` (stage 1 first, whose [`StrandFrame`] every later stage is prepared and
-    /// recorded with), then records stage 1, each light's shadow and its hand-over, and
-    /// stage 3 into the renderer's targets. Creates no buffer or bind group in steady
-    /// state and never waits for the GPU; submitting is the caller's. (Untimed: the
-    /// caller's own timestamp queries, if any, go around it.)
+    /// `camera` ([`Frame::prepare`]), then records stage 1, each light's shadow and its
+    /// hand-over, and stage 3 into the renderer's targets. Creates no buffer or bind
+    /// group in steady state and never waits for the GPU; submitting is the caller's,
+    /// then [`Renderer::after_submit`]. (Untimed: the caller's own timestamp queries, if
+    /// any, go around it.)
     pub fn record(
         &mut self,
         gpu: &Gpu,
@@ -526,6 +274,13 @@ impl Renderer {
         camera: &Camera,
     ) -> crate::Result<StrandFrame> {
         self.record_timed(gpu, encoder, t, camera, false)
+    }
+
+    /// The step after submitting what [`Renderer::record`] recorded
+    /// ([`Frame::after_submit`]: readbacks taken, pools grown; never waits).
+    /// [`Renderer::render`] takes it itself.
+    pub fn after_submit(&mut self, gpu: &Gpu) -> crate::Result<()> {
+        self.frame.after_submit(gpu)
     }
 
     /// [`Renderer::record`], with the renderer's timestamp queries when `timed`.
@@ -537,23 +292,18 @@ impl Renderer {
         camera: &Camera,
         timed: bool,
     ) -> crate::Result<StrandFrame> {
-        let frame = self.prepare(gpu, t, camera)?;
-        let mut timer = self.timer.as_mut().filter(|_| timed);
-        self.strands.encode(encoder, &frame, timer.as_deref_mut())?;
-        for (shadow, hand_over) in &self.shadows {
-            shadow.encode(encoder, &frame, timer.as_deref_mut())?;
-            hand_over.encode(encoder, &frame, timer.as_deref_mut())?;
-        }
-        self.hair
-            .encode(gpu, encoder, &frame, &self.views.views(), timer)?;
+        let frame = self.frame.prepare(&gpu.queue, t, camera)?;
+        let timer = self.timer.as_mut().filter(|_| timed);
+        self.frame.record(encoder, &self.views.views(), timer)?;
         Ok(frame)
     }
 
     /// Grows the strands for time `t`, shadows them and draws them from `camera`:
-    /// records the frame ([`Renderer::record`]), submits it and returns without waiting
-    /// for the GPU. The [`FrameStats`] returned are those of the newest earlier frame
-    /// the GPU has finished since the last call (read back a frame or more late; empty
-    /// when none has finished yet); [`Renderer::finish`] waits for this frame's.
+    /// records the frame ([`Renderer::record`]), submits it, takes the frame's
+    /// after-submit step and returns without waiting for the GPU. The [`FrameStats`]
+    /// returned are those of the newest earlier frame the GPU has finished since the
+    /// last call (read back a frame or more late; empty when none has finished yet);
+    /// [`Renderer::finish`] waits for this frame's.
     pub fn render(&mut self, gpu: &Gpu, t: f32, camera: &Camera) -> crate::Result<FrameStats> {
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         self.record_timed(gpu, &mut encoder, t, camera, true)?;
@@ -561,6 +311,7 @@ impl Renderer {
             timer.resolve(&mut encoder);
         }
         let index = gpu.submit([encoder.finish()])?;
+        self.frame.after_submit(gpu)?;
         // At most FRAMES_IN_FLIGHT frames queued: beyond that the CPU waits for the
         // oldest, as a swap chain would hold it back.
         self.queue_frame(gpu, index)?;
@@ -612,23 +363,16 @@ impl Renderer {
         camera: &Camera,
         repeats: usize,
     ) -> crate::Result<Vec<(String, f64)>> {
-        let frame = self.prepare(gpu, t, camera)?;
+        self.frame.prepare(&gpu.queue, t, camera)?;
         let (color, resolve) = self.targets.color_views();
         let depth = self.targets.depth_view();
+        let frame = &self.frame;
         let mut stages = vec![(
             "strands".to_string(),
-            time_alone(gpu, repeats, |e| {
-                Ok(self.strands.encode(e, &frame, None)?)
-            })?,
+            time_alone(gpu, repeats, |e| frame.record_strands(e, None))?,
         )];
-        if !self.shadows.is_empty() {
-            let ms = time_alone(gpu, repeats, |e| {
-                for (shadow, hand_over) in &self.shadows {
-                    shadow.encode(e, &frame, None)?;
-                    hand_over.encode(e, &frame, None)?;
-                }
-                Ok(())
-            })?;
+        if frame.shadowed_lights() > 0 {
+            let ms = time_alone(gpu, repeats, |e| frame.record_shadows(e, None))?;
             stages.push(("shadow".to_string(), ms));
         }
         let depth_sampled = self.targets.depth_sampled_view();
@@ -636,9 +380,7 @@ impl Renderer {
             depth_sampled: depth_sampled.as_ref(),
             ..self.targets.views(&color, resolve.as_ref(), &depth)
         };
-        let shade = time_alone(gpu, repeats, |e| {
-            Ok(self.hair.encode(gpu, e, &frame, &views, None)?)
-        })?;
+        let shade = time_alone(gpu, repeats, |e| frame.record_shade(e, &views, None))?;
         stages.push(("shade".to_string(), shade));
         Ok(stages)
     }
@@ -705,15 +447,21 @@ impl Renderer {
         Ok((data.width, data.height, data.data))
     }
 
+    /// The stages, for an engine that records them itself into its own targets (see
+    /// [`Frame`]).
+    pub fn frame(&self) -> &Frame {
+        &self.frame
+    }
+
     /// Stage 1, for binding its buffers or reading its roots.
     pub fn strands(&self) -> &dyn StrandStage {
-        self.strands.as_ref()
+        self.frame.strands()
     }
 
     /// Light visibility at every strand vertex after the last frame, one `Vec` per light
     /// (empty without shadows); waits for the GPU.
     pub fn light_visibility(&self, gpu: &Gpu) -> crate::Result<Vec<Vec<f32>>> {
-        let Some(buffer) = &self.visibility else {
+        let Some((buffer, stride)) = self.frame.visibility() else {
             return Ok(Vec::new());
         };
         let bytes = pelage_gpu::read_buffer(gpu, buffer)?;
@@ -723,35 +471,36 @@ impl Renderer {
             .collect();
         let vertices = self
             .frame
-            .map_or_else(|| self.strands.buffers().full_layout(), |f| f.layout)
+            .strand_frame()
+            .map_or_else(|| self.strands().buffers().full_layout(), |f| f.layout)
             .vertices() as usize;
         Ok(floats
-            .chunks(self.stride as usize)
-            .take(self.shadows.len())
+            .chunks(stride as usize)
+            .take(self.frame.shadowed_lights())
             .map(|c| c[..vertices.min(c.len())].to_vec())
             .collect())
     }
 
     /// The level of detail of the last frame: strands and segments grown, and why.
     pub fn lod(&self) -> &pelage_strands::LodLevel {
-        self.strands.lod()
+        self.strands().lod()
     }
 
     /// The passes [`Renderer::record`] records, in order, with the named resources each
     /// reads and writes (validated when the renderer was built): what an engine splicing
     /// the stages into its own render graph must keep in order.
     pub fn plan(&self) -> &FramePlan {
-        &self.plan
+        self.frame.plan()
     }
 
     /// Stage 3's method.
     pub fn hair_pass(&self) -> &dyn HairPass {
-        self.hair.as_ref()
+        self.frame.hair_pass()
     }
 
     /// Counters of stage 3's node pool (linked-list methods); waits for the GPU.
     pub fn oit_stats(&self, gpu: &Gpu) -> crate::Result<OitStats> {
-        Ok(self.hair.stats(gpu)?)
+        Ok(self.hair_pass().stats(gpu)?)
     }
 
     /// The formats of the renderer's targets.
@@ -761,7 +510,7 @@ impl Renderer {
 
     /// The mesh buffers every stage reads.
     pub fn mesh_buffers(&self) -> &MeshBuffers {
-        &self.mesh_buffers
+        self.frame.mesh_buffers()
     }
 
     /// The final single-sample colour target (the renderer's [`TargetFormat`], width x height, usable as `TEXTURE_BINDING` and `COPY_SRC`): bind it to
@@ -769,72 +518,6 @@ impl Renderer {
     pub fn color_texture(&self) -> &wgpu::Texture {
         &self.targets.color
     }
-}
-
-/// The plan of a frame of `strands`, one shadow and hand-over per light (light `i`'s
-/// resources renamed `shadow{i}.*`), and `hair`, over the mesh and the targets.
-pub fn frame_plan(
-    strands: &dyn StrandStage,
-    shadows: &[(Box<dyn ShadowMethod>, LightVisibility)],
-    hair: &dyn HairPass,
-) -> FramePlan {
-    let mut plan = FramePlan::new([
-        pelage_strands::MESH,
-        pelage_shade::TARGET_COLOR,
-        pelage_shade::TARGET_DEPTH,
-    ]);
-    plan.push(strands.passes());
-    let mut key_lookup = Vec::new();
-    for (index, (shadow, hand_over)) in shadows.iter().enumerate() {
-        let name = format!("shadow{index}");
-        plan.push(
-            shadow
-                .passes()
-                .into_iter()
-                .map(|p| p.renamed("shadow", &name)),
-        );
-        let lookup: Vec<String> = shadow
-            .lookup()
-            .iter()
-            .map(|r| match r.strip_prefix("shadow.") {
-                Some(rest) => format!("{name}.{rest}"),
-                None => r.clone(),
-            })
-            .collect();
-        plan.push(hand_over.passes(&lookup));
-        if index == 0 {
-            key_lookup = lookup;
-        }
-    }
-    plan.push(hair.passes(&key_lookup));
-    plan
-}
-
-/// The mesh buffers of a groom-only scene: no triangles (so stage 2's mesh shadow map
-/// and stage 3's mesh draw draw nothing), one zero vertex so that every binding has a
-/// size, and the hair's reach as bounds (so that the shadow fits and
-/// [`pelage_shadow::reach`] are the hair's alone).
-fn no_mesh(gpu: &Gpu, reach: (glam::Vec3, glam::Vec3)) -> crate::Result<MeshBuffers> {
-    let usage =
-        wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC;
-    let make = |label: &str| {
-        pelage_gpu::create_buffer_init(
-            &gpu.device,
-            &wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents: &[0u8; 12],
-                usage,
-            },
-        )
-    };
-    Ok(MeshBuffers::from_buffers(
-        make("pelage no mesh: positions"),
-        make("pelage no mesh: normals"),
-        make("pelage no mesh: indices"),
-        1,
-        0,
-        reach,
-    )?)
 }
 
 /// Linear light in [0, 1] as an 8-bit sRGB value (the sRGB transfer function).

@@ -78,7 +78,7 @@ fn a_stage_recorded_for_another_frame_than_it_was_prepared_for_is_an_error() {
     let err = voxel.encode(&mut encoder, &second, None).unwrap_err();
     assert!(err.to_string().contains("prepare stage 1 first"), "{err}");
     let err = pass
-        .encode(&gpu, &mut encoder, &second, &views, None)
+        .encode(&mut encoder, &second, &views, None)
         .unwrap_err();
     assert!(
         matches!(
@@ -92,7 +92,6 @@ fn a_stage_recorded_for_another_frame_than_it_was_prepared_for_is_an_error() {
     pass.prepare(&gpu.queue, &second, &camera, &lights, W, H)
         .unwrap();
     voxel.encode(&mut encoder, &second, None).unwrap();
-    pass.encode(&gpu, &mut encoder, &second, &views, None)
-        .unwrap();
+    pass.encode(&mut encoder, &second, &views, None).unwrap();
     gpu.submit_and_wait([encoder.finish()]).unwrap();
 }

@@ -174,7 +174,7 @@ impl Renderer {
         if scene.motion != built.motion {
             return Ok(Update::Rebuild("motion".into()));
         }
-        if let Err(why) = self.lights_in_place(&scene.lights) {
+        if let Err(why) = self.frame.lights_in_place(&scene.lights) {
             return Ok(Update::Rebuild(why));
         }
         let wind_changed = scene.hair.wind != built.hair.wind;
@@ -220,7 +220,7 @@ impl Renderer {
     /// detail) the new wind changes. Nothing changes on an error.
     pub fn set_wind(&mut self, wind: WindParams) -> crate::Result<()> {
         self.wind_in_place(&wind)?.map_err(rebuild)?;
-        self.strands.set_wind(wind.clone())?;
+        self.frame.strands_mut().set_wind(wind.clone())?;
         self.built.hair.wind = wind;
         Ok(())
     }
@@ -236,7 +236,9 @@ impl Renderer {
         color: Vec3,
         color_jitter: f32,
     ) -> crate::Result<()> {
-        self.strands.set_color(&gpu.queue, color, color_jitter)?;
+        self.frame
+            .strands_mut()
+            .set_color(&gpu.queue, color, color_jitter)?;
         self.built.hair.growth.color = color;
         self.built.hair.growth.color_jitter = color_jitter;
         Ok(())
@@ -249,9 +251,7 @@ impl Renderer {
     /// [`Error::NeedsRebuild`](crate::Error::NeedsRebuild). Without shadows any count
     /// from 1 to 4 is taken. Bad lights are an error. Nothing changes on an error.
     pub fn set_lights(&mut self, lights: &[Light]) -> crate::Result<()> {
-        Light::validate_all(lights)?;
-        self.lights_in_place(lights).map_err(rebuild)?;
-        self.lights = lights.to_vec();
+        self.frame.set_lights(lights)?;
         self.built.lights = lights.to_vec();
         Ok(())
     }
@@ -266,7 +266,7 @@ impl Renderer {
     /// [`Error::NeedsRebuild`](crate::Error::NeedsRebuild); bad values are an error.
     /// Nothing changes on an error.
     pub fn set_shading(&mut self, gpu: &pelage_gpu::Gpu, shade: &ShadeParams) -> crate::Result<()> {
-        match self.hair.set_params(gpu, shade) {
+        match self.frame.hair_pass_mut().set_params(gpu, shade) {
             Ok(()) => {}
             Err(pelage_shade::ShadeError::NeedsRebuild(why)) => return Err(rebuild(why)),
             Err(e) => return Err(e.into()),
@@ -275,22 +275,11 @@ impl Renderer {
         Ok(())
     }
 
-    /// `Err(why)` when `lights` cannot replace the renderer's in place.
-    fn lights_in_place(&self, lights: &[Light]) -> Result<(), String> {
-        if self.visibility.is_some() && lights.len() != self.lights.len() {
-            return Err(format!(
-                "the light count ({} to {}: each light has its own shadow passes)",
-                self.lights.len(),
-                lights.len()
-            ));
-        }
-        Ok(())
-    }
-
     /// `Ok(Err(why))` when `wind` changes the strands' reach, which sized the later stages.
     fn wind_in_place(&self, wind: &WindParams) -> crate::Result<Result<(), String>> {
-        let reach = self.strands.reach_with_wind(wind)?;
-        Ok(if reach == self.strands.buffers().reach {
+        let strands = self.frame.strands();
+        let reach = strands.reach_with_wind(wind)?;
+        Ok(if reach == strands.buffers().reach {
             Ok(())
         } else {
             Err("hair.wind (it changes how far the groom can swing, which sizes the shadows and the level of detail)".into())

@@ -35,10 +35,14 @@
 //! - With [`Fur::draw_mesh`] (the default) pelage draws the body itself, shaded as its
 //!   own renders shade it and shadowed by the fur; turn it off when the application
 //!   draws the mesh with a Bevy material.
-//! - Strands are grown and shadowed once per frame and drawn once per camera; pelage's
+//! - Each camera records its own [`pelage::Frame`] of the fur (the stages the facade's
+//!   renderer records, built from a [`pelage::Scene`] of the entity's mesh and [`Fur`]
+//!   with a voxel shadow): strands are grown and shadowed once per camera; pelage's
 //!   level of detail is not used (every strand is drawn).
 //! - Nothing waits for the GPU: every stage only writes uniforms in
-//!   [`RenderSystems::PrepareBindGroups`] and records into Bevy's command encoder.
+//!   [`RenderSystems::PrepareBindGroups`] and records into Bevy's command encoder; the
+//!   frame's after-submit step (readbacks, pool growth; never a wait) runs at the next
+//!   frame's prepare, after Bevy submitted.
 //!
 //! Errors (a mesh without normals, bad parameters, a transparency method that refuses
 //! the camera's targets) are logged once with Bevy's `error!` and the entity is
@@ -65,10 +69,9 @@ use bevy::render::view::{ExtractedView, ViewDepthStencilTexture, ViewTarget};
 use bevy::render::{Extract, ExtractSchedule, Render, RenderApp, RenderSystems};
 
 use pelage::gpu::Gpu;
-use pelage::scene::{CameraMatrices, HairParams, Light, ShadeParams, VoxelParams};
-use pelage::shade::{HairInputs, HairPass, TargetFormat, TargetViews, Visibility};
-use pelage::shadow::{LightVisibility, ShadowMethod, VoxelShadow};
-use pelage::strands::{GrowStrands, MeshBuffers, StrandFrame, StrandStage};
+use pelage::scene::{CameraMatrices, HairParams, Light, ShadeParams, ShadowParams, VoxelParams};
+use pelage::shade::{TargetFormat, TargetViews};
+use pelage::{Frame, FrameTarget, Scene};
 
 /// Why an entity's fur cannot be drawn.
 #[derive(Debug, thiserror::Error)]
@@ -79,12 +82,6 @@ pub enum FurError {
     /// pelage refused the mesh, the parameters or the targets.
     #[error(transparent)]
     Pelage(#[from] pelage::Error),
-}
-
-impl FurError {
-    fn pelage(e: impl Into<pelage::Error>) -> Self {
-        Self::Pelage(e.into())
-    }
 }
 
 /// Fur on the [`Mesh3d`] of the same entity.
@@ -320,28 +317,19 @@ pub struct PelageCpuTime {
 #[derive(Resource)]
 struct PelageGpu(Gpu);
 
-/// An entity's fur in the render world: pelage's stages, one hair pass per camera.
+/// An entity's fur in the render world: one pelage [`Frame`] per camera.
 struct FurInstance {
     generation: u64,
     setup: Arc<(Fur, pelage::scene::Mesh)>,
-    mesh: MeshBuffers,
-    strands: GrowStrands,
-    voxel: VoxelShadow,
-    hand_over: LightVisibility,
-    visibility: pelage::gpu::wgpu::Buffer,
-    stride: u32,
-    /// This frame's strands, and whether a camera has recorded them yet.
-    frame: Option<StrandFrame>,
-    recorded: bool,
-    /// Per view (render-world camera entity): its targets and pelage's hair pass.
-    views: HashMap<Entity, ViewHair>,
+    /// Per view (render-world camera entity): the fur's frame for its targets.
+    views: HashMap<Entity, ViewFur>,
 }
 
-/// A camera's hair pass for one fur, with the targets it was built for.
-struct ViewHair {
+/// A camera's frame of one fur, with the targets it was built for.
+struct ViewFur {
     format: TargetFormat,
     size: (u32, u32),
-    hair: Box<dyn HairPass>,
+    frame: Frame,
     /// Prepared for this frame.
     ready: bool,
 }
@@ -374,70 +362,39 @@ struct FurInstances {
 }
 
 impl FurInstance {
-    fn new(gpu: &Gpu, source: &FurSource) -> Result<Self, FurError> {
-        let (fur, mesh) = &*source.setup;
-        let buffers = MeshBuffers::upload(gpu, mesh).map_err(FurError::pelage)?;
-        let strands = GrowStrands::new(gpu, mesh, &buffers, &fur.hair).map_err(FurError::pelage)?;
-        let b = strands.buffers();
-        let reach = pelage::shadow::reach(b, &buffers);
-        let voxel =
-            VoxelShadow::new(gpu, &fur.voxel, b, &buffers, reach).map_err(FurError::pelage)?;
-        let stride =
-            LightVisibility::stride_for(u64::from(b.strand_count) * u64::from(b.segments + 1))
-                .map_err(FurError::pelage)?;
-        let visibility = LightVisibility::buffer(gpu, 1, stride).map_err(FurError::pelage)?;
-        let hand_over = LightVisibility::new(gpu, &voxel.binding(), b, &visibility, 0, stride)
-            .map_err(FurError::pelage)?;
-        Ok(Self {
-            generation: source.generation,
-            setup: source.setup.clone(),
-            mesh: buffers,
-            strands,
-            voxel,
-            hand_over,
-            visibility,
-            stride,
-            frame: None,
-            recorded: false,
-            views: HashMap::new(),
-        })
-    }
-
-    /// The hair pass for a camera's targets.
-    fn hair_pass(
+    /// The fur's frame for a camera's targets: the scene of the entity's mesh and
+    /// [`Fur`], its voxel shadow, one light (set every frame).
+    fn view_frame(
         &self,
         gpu: &Gpu,
         format: TargetFormat,
         size: (u32, u32),
-    ) -> Result<ViewHair, FurError> {
-        let fur = &self.setup.0;
+    ) -> Result<ViewFur, FurError> {
+        let (fur, mesh) = &*self.setup;
         let mut shade = fur.shade.clone();
         if shade.transparency == pelage::scene::Transparency::Opaque {
             shade.sample_count = format.samples;
         }
-        let binding = self.voxel.binding();
-        let hair = pelage::shade::build(
-            gpu,
-            &HairInputs {
-                params: &shade,
-                mesh: &self.mesh,
-                strands: self.strands.buffers(),
-                shadow: Some(&binding),
-                visibility: Some(Visibility {
-                    buffer: &self.visibility,
-                    stride: self.stride,
-                }),
-                target: format,
-                draw_mesh: fur.draw_mesh,
-            },
-            size.0,
-            size.1,
-        )
-        .map_err(FurError::pelage)?;
-        Ok(ViewHair {
+        let scene = Scene {
+            mesh: mesh.clone(),
+            hair: fur.hair.clone(),
+            groom: None,
+            guides: None,
+            dynamics: None,
+            motion: None,
+            shadow: ShadowParams::Voxel(fur.voxel.clone()),
+            shade,
+            camera: Default::default(),
+            lights: vec![Light::default()],
+        };
+        let target = FrameTarget {
+            draw_mesh: fur.draw_mesh,
+            ..FrameTarget::new(format, size.0, size.1)
+        };
+        Ok(ViewFur {
             format,
             size,
-            hair,
+            frame: Frame::new(gpu, &scene, &target)?,
             ready: false,
         })
     }
@@ -511,17 +468,14 @@ fn prepare_furs(
             .get(&entity)
             .is_none_or(|i| i.generation != generation)
         {
-            instances.remove(&entity);
-            match FurInstance::new(gpu, &fur.source) {
-                Ok(instance) => {
-                    instances.insert(entity, instance);
-                }
-                Err(e) => {
-                    error!("pelage: no fur on {entity}: {e}");
-                    failed.insert(entity, generation);
-                    continue;
-                }
-            }
+            instances.insert(
+                entity,
+                FurInstance {
+                    generation,
+                    setup: fur.source.setup.clone(),
+                    views: HashMap::new(),
+                },
+            );
         }
         let Some(instance) = instances.get_mut(&entity) else {
             continue;
@@ -535,7 +489,8 @@ fn prepare_furs(
     cpu.prepare = start.elapsed();
 }
 
-/// One fur's frame: stage 1 and the shadow once, then each camera's hair pass.
+/// One fur's frame for each camera: the last frame's after-submit step (Bevy has
+/// submitted it), the light in the mesh's space, then every stage's uniforms.
 fn prepare_instance(
     gpu: &Gpu,
     instance: &mut FurInstance,
@@ -544,13 +499,6 @@ fn prepare_instance(
     views: &CameraViews,
     failed_views: &mut FailedViews,
 ) -> Result<(), FurError> {
-    let queue = &gpu.queue;
-    let frame = instance
-        .strands
-        .prepare(queue, extracted.time)
-        .map_err(FurError::pelage)?;
-    instance.frame = Some(frame);
-    instance.recorded = false;
     // The light in the mesh's space (pelage works there).
     let model_from_world = fur.world_from_model.inverse();
     let (direction, color, illuminance) =
@@ -561,19 +509,9 @@ fn prepare_instance(
         .transform_vector3(direction)
         .normalize_or(Vec3::NEG_Y);
     let v3 = |v: Vec3| ::glam::Vec3::from_array(v.to_array());
-    let shadow_light = pelage::scene::DirectionalLight {
-        direction: v3(direction),
-        color: v3(color),
-        intensity: 1.0,
-    };
-    instance
-        .voxel
-        .prepare(queue, &frame, &shadow_light)
-        .map_err(FurError::pelage)?;
-    instance.hand_over.prepare(&frame);
 
-    for hair in instance.views.values_mut() {
-        hair.ready = false;
+    for view in instance.views.values_mut() {
+        view.ready = false;
     }
     for (view_entity, view, camera, target, depth) in views {
         let format = target_format(target, depth);
@@ -591,9 +529,9 @@ fn prepare_instance(
             .is_some_and(|h| h.format == format && h.size == size);
         if !fresh {
             instance.views.remove(&view_entity);
-            match instance.hair_pass(gpu, format, size) {
-                Ok(hair) => {
-                    instance.views.insert(view_entity, hair);
+            match instance.view_frame(gpu, format, size) {
+                Ok(frame) => {
+                    instance.views.insert(view_entity, frame);
                 }
                 Err(e) => {
                     error!(
@@ -605,43 +543,36 @@ fn prepare_instance(
                 }
             }
         }
-        let Some(hair) = instance.views.get_mut(&view_entity) else {
+        let Some(view_fur) = instance.views.get_mut(&view_entity) else {
             continue;
         };
-        let light = Light::Directional(pelage::scene::DirectionalLight {
+        let frame = &mut view_fur.frame;
+        frame.after_submit(gpu)?;
+        frame.set_lights(&[Light::Directional(pelage::scene::DirectionalLight {
+            direction: v3(direction),
+            color: v3(color),
             intensity: illuminance * camera.exposure,
-            ..shadow_light.clone()
-        });
-        hair.hair
-            .prepare(
-                queue,
-                &frame,
-                &camera_matrices(view, fur.world_from_model),
-                &[light],
-                size.0,
-                size.1,
-            )
-            .map_err(FurError::pelage)?;
-        hair.ready = true;
+        })])?;
+        frame.prepare_matrices(
+            &gpu.queue,
+            extracted.time,
+            &camera_matrices(view, fur.world_from_model),
+        )?;
+        view_fur.ready = true;
     }
     instance.views.retain(|v, _| views.contains(*v));
     Ok(())
 }
 
-/// Records the fur into the current camera's targets: each fur's strands and shadow
-/// the first time a camera draws it this frame, then its hair pass.
+/// Records each fur's frame for the current camera into its targets (strands, shadow,
+/// hair; recording only).
 fn draw_fur(
     view: ViewQuery<(&ViewTarget, &ViewDepthStencilTexture)>,
-    gpu: Option<Res<PelageGpu>>,
     mut state: ResMut<FurInstances>,
     mut cpu: ResMut<PelageCpuTime>,
     mut ctx: RenderContext,
 ) {
     let start = std::time::Instant::now();
-    let Some(gpu) = gpu else {
-        return;
-    };
-    let gpu = &gpu.0;
     let view_entity = view.entity();
     let (target, depth): QueryItem<(&ViewTarget, &ViewDepthStencilTexture)> = view.into_inner();
     let color = target.get_color_attachment();
@@ -658,35 +589,15 @@ fn draw_fur(
         load: matches!(color.ops.load, LoadOp::Load),
     };
     let mut failed = Vec::new();
-    for (entity, instance) in &mut state.instances {
-        let (Some(frame), Some(hair)) = (instance.frame, instance.views.get(&view_entity)) else {
+    for (entity, instance) in &state.instances {
+        let Some(view_fur) = instance.views.get(&view_entity) else {
             continue;
         };
-        if !hair.ready {
+        if !view_fur.ready {
             continue;
         }
         let encoder = ctx.command_encoder();
-        let result = (|| -> Result<(), FurError> {
-            if !instance.recorded {
-                instance
-                    .strands
-                    .encode(encoder, &frame, None)
-                    .map_err(FurError::pelage)?;
-                instance
-                    .voxel
-                    .encode(encoder, &frame, None)
-                    .map_err(FurError::pelage)?;
-                instance
-                    .hand_over
-                    .encode(encoder, &frame, None)
-                    .map_err(FurError::pelage)?;
-                instance.recorded = true;
-            }
-            hair.hair
-                .encode(gpu, encoder, &frame, &views, None)
-                .map_err(FurError::pelage)
-        })();
-        if let Err(e) = result {
+        if let Err(e) = view_fur.frame.record(encoder, &views, None) {
             error!("pelage: the fur on {entity} was not drawn: {e}");
             failed.push((*entity, instance.generation));
         }

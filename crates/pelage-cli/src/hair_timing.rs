@@ -67,10 +67,11 @@ pub fn hair_wall_ms(
     let mut times = Vec::new();
     for i in 0..frames + 2 {
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
-        method.encode(gpu, &mut encoder, &frame, &views, None)?;
+        method.encode(&mut encoder, &frame, &views, None)?;
         let commands = encoder.finish();
         let started = Instant::now();
         gpu.submit_and_wait([commands])?;
+        method.after_submit(gpu)?;
         if i >= 2 {
             times.push(started.elapsed().as_secs_f64() * 1e3);
         }

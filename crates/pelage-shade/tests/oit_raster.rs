@@ -257,7 +257,6 @@ fn draw(gpu: &Gpu, f: &Fixture, method: &dyn HairPass) -> Vec<[f32; 3]> {
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
     method
         .encode(
-            gpu,
             &mut encoder,
             &f.frame,
             &targets.views(&color, resolve.as_ref(), &depth),

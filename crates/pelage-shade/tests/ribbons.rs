@@ -87,7 +87,6 @@ fn render(gpu: &Gpu, mesh: &Mesh, hair: &HairParams, camera: &Camera) -> Vec<u8>
     let (color, resolve) = targets.color_views();
     let depth = targets.depth_view();
     pass.encode(
-        gpu,
         &mut encoder,
         &frame,
         &targets.views(&color, resolve.as_ref(), &depth),

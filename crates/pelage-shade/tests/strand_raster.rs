@@ -141,7 +141,6 @@ fn mirror_frame(
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
     raster
         .encode(
-            gpu,
             &mut encoder,
             s.frame,
             &targets.views(&color, resolve.as_ref(), &depth_view),
@@ -588,7 +587,6 @@ fn an_8192_square_target_dispatches_its_tiles_in_two_dimensions() {
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
     raster
         .encode(
-            &gpu,
             &mut encoder,
             &hand.frame,
             &targets.views(&color, resolve.as_ref(), &depth),

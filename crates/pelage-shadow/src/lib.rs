@@ -77,8 +77,9 @@ pub const VISIBILITY: &str = "visibility";
 pub const CONTRACT: &str = "shadow/none.wgsl";
 
 /// One shadow method, as the frame pipeline drives it: each frame `prepare` with stage
-/// 1's [`StrandFrame`], then `encode` with the same frame.
-pub trait ShadowMethod: std::fmt::Debug {
+/// 1's [`StrandFrame`], then `encode` with the same frame. `Send + Sync` on native
+/// targets ([`wgpu::WasmNotSendSync`]), as every stage is.
+pub trait ShadowMethod: std::fmt::Debug + wgpu::WasmNotSendSync {
     /// A short description with its parameters, e.g. `voxel 128x128x128 trilinear`.
     fn name(&self) -> String;
     /// Aims the method along `light` and takes the strands stage 1 grows in `strands`;

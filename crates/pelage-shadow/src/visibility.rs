@@ -138,13 +138,16 @@ impl LightVisibility {
         ]
     }
 
-    /// Takes the strands stage 1 grows in `strands`, for the next `encode`.
-    pub fn prepare(&self, strands: &StrandFrame) {
+    /// Takes the strands stage 1 grows in `strands`, for the next `encode` (the shape of
+    /// every stage's `prepare`: the queue and the frame; this pass has no uniforms, its
+    /// dispatch size is the frame's vertex count).
+    pub fn prepare(&self, _queue: &wgpu::Queue, strands: &StrandFrame) -> crate::Result<()> {
         self.layout.store(
             strands.layout.to_bits(),
             std::sync::atomic::Ordering::Release,
         );
         self.prepared.set(strands);
+        Ok(())
     }
 
     /// Records the evaluation (after the shadow method's own passes) for `strands`,

@@ -656,8 +656,10 @@ pub(crate) enum Input<'a> {
 /// frame's [`StrandFrame`], then [`StrandStage::encode`] with that frame; later passes
 /// bind [`StrandStage::buffers`] and are prepared and recorded with the same frame
 /// (the shape of every stage: `prepare` writes the per-frame uniforms, `encode`
-/// records, both take the [`StrandFrame`]).
-pub trait StrandStage: std::fmt::Debug {
+/// records, both take the [`StrandFrame`]). `Send + Sync` on native targets, as every
+/// stage is, so that an engine keeps a `pelage::Frame` in shared
+/// state.
+pub trait StrandStage: std::fmt::Debug + wgpu::WasmNotSendSync {
     /// The state the method shares with every other.
     fn pass(&self) -> &StrandPass;
 

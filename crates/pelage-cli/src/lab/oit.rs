@@ -225,11 +225,12 @@ fn render_method(
         let depth = targets.depth_view();
         let views = targets.views(&color, resolve.as_ref(), &depth);
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
-        method.encode(gpu, &mut encoder, &grown.frame, &views, timer.as_mut())?;
+        method.encode(&mut encoder, &grown.frame, &views, timer.as_mut())?;
         if let Some(t) = &timer {
             t.resolve(&mut encoder);
         }
         gpu.submit_and_wait([encoder.finish()])?;
+        method.after_submit(gpu)?;
         if let Some(t) = &mut timer {
             let report = t.read(gpu)?;
             times.push(
@@ -669,7 +670,6 @@ fn render_flat(
     let depth = targets.depth_view();
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
     method.encode(
-        gpu,
         &mut encoder,
         &grown.frame,
         &targets.views(&color, resolve.as_ref(), &depth),

@@ -193,7 +193,7 @@ impl ABuffer {
         self.0.common.encode_mesh(&mut encoder, &views, None, None);
         self.0
             .sliced
-            .encode_with(gpu, &mut encoder, &views, None, &mut |encoder, pass| {
+            .encode_with(&mut encoder, &views, None, &mut |encoder, pass| {
                 if pass == 0 {
                     encoder.copy_buffer_to_buffer(heads, 0, &heads_copy, 0, heads.size());
                     encoder.copy_buffer_to_buffer(nodes, 0, &nodes_copy, 0, nodes.size());

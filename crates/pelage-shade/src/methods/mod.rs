@@ -54,8 +54,9 @@ pub struct OitStats {
 }
 
 /// One stage 3 method: draws the mesh and the hair into the caller's targets. Each
-/// frame: [`HairPass::prepare`] with stage 1's [`StrandFrame`], then
-/// [`HairPass::encode`] with the same frame. `Send + Sync` on native targets
+/// frame: [`HairPass::prepare`] with stage 1's [`StrandFrame`] (queue writes), then
+/// [`HairPass::encode`] with the same frame (recording only: no device), and after the
+/// caller's submit [`HairPass::after_submit`] (readbacks and pool growth, never a wait). `Send + Sync` on native targets
 /// ([`wgpu::WasmNotSendSync`]), so that an engine keeps a boxed method in shared state
 /// (a Bevy resource, say) and records it from any thread; on the web wgpu's own types
 /// are neither, and neither is a method.
@@ -79,15 +80,26 @@ pub trait HairPass: std::fmt::Debug + wgpu::WasmNotSendSync {
     /// Records the method's passes into `encoder` for `strands`, the frame of the last
     /// `prepare` (another is a [`ShadeError::FrameOrder`](crate::ShadeError::FrameOrder)):
     /// the mesh (clearing colour and depth unless `target.load`), then the hair. The
-    /// targets must have the size the method was built for.
+    /// targets must have the size the method was built for. Takes no device: the bind
+    /// groups that sample the caller's depth view are built on the first frame (and
+    /// again only when the view changes) on the device the method was built on.
     fn encode(
         &self,
-        gpu: &Gpu,
         encoder: &mut wgpu::CommandEncoder,
         strands: &StrandFrame,
         target: &TargetViews<'_>,
         timer: Option<&mut GpuTimer>,
     ) -> crate::Result<()>;
+
+    /// The one step after the caller submitted the encoder of [`HairPass::encode`]:
+    /// takes the readbacks of frames the GPU has finished (`device.poll(Poll)` and
+    /// mapped buffers, never a wait) and grows per-frame storage that a frame found too
+    /// small, for a later frame (the strand rasterizer's pool). Nothing for most
+    /// methods. Calling it is optional: without it a pool keeps its size and the
+    /// overflow stays counted ([`HairPass::stats`]).
+    fn after_submit(&self, _gpu: &Gpu) -> crate::Result<()> {
+        Ok(())
+    }
 
     /// The passes [`HairPass::encode`] records in order (a pass drawn once per slice of
     /// the screen appears once per slice), with the named resources each reads and

@@ -59,7 +59,6 @@ impl HairPass for Opaque {
 
     fn encode(
         &self,
-        _gpu: &Gpu,
         encoder: &mut wgpu::CommandEncoder,
         strands: &StrandFrame,
         target: &TargetViews<'_>,

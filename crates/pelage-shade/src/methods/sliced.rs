@@ -94,6 +94,9 @@ pub(crate) struct Sliced {
     /// The `@group(3)` bind groups per slice and pass, with the depth view they sample:
     /// built on the first `encode` and again only when the caller's depth view changes.
     groups: std::sync::Mutex<Option<(wgpu::TextureView, Vec<wgpu::BindGroup>)>>,
+    /// The device the groups are (re)built on when the caller's depth view changes:
+    /// recording takes no device, and in steady state builds nothing.
+    gpu: Gpu,
 }
 
 /// Rows per slice so that a per-pixel buffer of `bytes_per_pixel` (the method's
@@ -164,6 +167,7 @@ impl Sliced {
             buffers: Vec::new(),
             passes: Vec::new(),
             groups: std::sync::Mutex::new(None),
+            gpu: gpu.clone(),
         })
     }
 
@@ -377,19 +381,17 @@ impl Sliced {
     /// Records every pass for every slice.
     pub fn encode(
         &self,
-        gpu: &Gpu,
         encoder: &mut wgpu::CommandEncoder,
         target: &TargetViews<'_>,
         timer: Option<&mut GpuTimer>,
     ) -> crate::Result<()> {
-        self.encode_with(gpu, encoder, target, timer, &mut |_, _| {})
+        self.encode_with(encoder, target, timer, &mut |_, _| {})
     }
 
     /// As [`Sliced::encode`], calling `between(encoder, pass index)` after each pass of the
     /// first slice (the lab copies the lists out before the resolve empties them).
     pub fn encode_with(
         &self,
-        gpu: &Gpu,
         encoder: &mut wgpu::CommandEncoder,
         target: &TargetViews<'_>,
         mut timer: Option<&mut GpuTimer>,
@@ -403,7 +405,7 @@ impl Sliced {
             GpuError::Validation("a thread panicked while recording this method".into())
         })?;
         if cache.as_ref().is_none_or(|(view, _)| view != depth) {
-            *cache = Some((depth.clone(), self.bind_groups(gpu, depth)?));
+            *cache = Some((depth.clone(), self.bind_groups(&self.gpu, depth)?));
         }
         let groups = cache
             .as_ref()
@@ -489,7 +491,6 @@ pub(crate) struct SlicedMethod {
 impl SlicedMethod {
     pub fn encode(
         &self,
-        gpu: &Gpu,
         encoder: &mut wgpu::CommandEncoder,
         target: &TargetViews<'_>,
         mut timer: Option<&mut GpuTimer>,
@@ -497,7 +498,7 @@ impl SlicedMethod {
         self.sliced.check_target(target)?;
         self.common
             .encode_mesh(encoder, target, None, timer.as_deref_mut());
-        self.sliced.encode(gpu, encoder, target, timer)
+        self.sliced.encode(encoder, target, timer)
     }
 }
 
@@ -525,14 +526,13 @@ macro_rules! sliced_hair_pass {
 
             fn encode(
                 &self,
-                gpu: &pelage_gpu::Gpu,
                 encoder: &mut pelage_gpu::wgpu::CommandEncoder,
                 strands: &pelage_strands::StrandFrame,
                 target: &$crate::TargetViews<'_>,
                 timer: Option<&mut pelage_gpu::GpuTimer>,
             ) -> $crate::Result<()> {
                 self.0.common.check(self.0.name, strands)?;
-                self.0.encode(gpu, encoder, target, timer)
+                self.0.encode(encoder, target, timer)
             }
 
             fn passes(&self, lookup: &[String]) -> Vec<pelage_gpu::PassInfo> {

@@ -256,6 +256,9 @@ pub struct StrandRaster {
     width: u32,
     height: u32,
     max_pool: u32,
+    /// The device the compute passes' bind groups are built on (the first frame, a new
+    /// depth view, a grown pool): recording takes no device.
+    gpu: Gpu,
 }
 
 impl StrandRaster {
@@ -525,6 +528,7 @@ impl StrandRaster {
             height,
             max_pool,
             common,
+            gpu: gpu.clone(),
         })
     }
 
@@ -634,26 +638,19 @@ impl StrandRaster {
         })?)
     }
 
-    /// The compute passes' bind groups for `target`'s depth, after taking what the
-    /// header readbacks hold (growing the pool when a frame needed more).
-    fn groups(
-        &self,
-        gpu: &Gpu,
-        target: &TargetViews<'_>,
-    ) -> crate::Result<Arc<Vec<wgpu::BindGroup>>> {
+    /// The compute passes' bind groups for `target`'s depth (built again only after the
+    /// pool grew in [`HairPass::after_submit`] or for another depth view).
+    fn groups(&self, target: &TargetViews<'_>) -> crate::Result<Arc<Vec<wgpu::BindGroup>>> {
         let mut pool = self.pool.lock().map_err(|_| {
             GpuError::Validation("a thread panicked while recording this method".into())
         })?;
-        if let Some(needed) = self.collect_readbacks(gpu) {
-            self.grow(gpu, &mut pool, needed)?;
-        }
         let depth = target.depth_to_sample();
         if let Some((view, groups)) = &pool.groups {
             if view == depth {
                 return Ok(groups.clone());
             }
         }
-        let groups = Arc::new(self.bind_groups(gpu, &pool.buffer, depth)?);
+        let groups = Arc::new(self.bind_groups(&self.gpu, &pool.buffer, depth)?);
         pool.groups = Some((depth.clone(), groups.clone()));
         Ok(groups)
     }
@@ -661,7 +658,6 @@ impl StrandRaster {
     /// Records the first `count` compute passes (after clearing the cell counts).
     fn record_compute(
         &self,
-        gpu: &Gpu,
         encoder: &mut wgpu::CommandEncoder,
         groups: &[wgpu::BindGroup],
         count: usize,
@@ -673,7 +669,7 @@ impl StrandRaster {
             strands: u.strands,
             segments: u.segments,
         };
-        let max_dim = gpu.limits().max_compute_workgroups_per_dimension;
+        let max_dim = self.gpu.limits().max_compute_workgroups_per_dimension;
         encoder.clear_buffer(&self.storage.counts, 0, None);
         for (((label, _, _), (pipeline, _)), (group, grid_kind)) in PASSES
             .iter()
@@ -848,7 +844,6 @@ impl HairPass for StrandRaster {
 
     fn encode(
         &self,
-        gpu: &Gpu,
         encoder: &mut wgpu::CommandEncoder,
         strands: &StrandFrame,
         target: &TargetViews<'_>,
@@ -861,13 +856,13 @@ impl HairPass for StrandRaster {
                 given: (target.width, target.height),
             });
         }
-        let groups = self.groups(gpu, target)?;
+        let groups = self.groups(target)?;
         self.common
             .encode_mesh(encoder, target, None, timer.as_deref_mut());
-        self.record_compute(gpu, encoder, &groups, PASSES.len(), timer.as_deref_mut());
+        self.record_compute(encoder, &groups, PASSES.len(), timer.as_deref_mut());
         self.record_resolve(encoder, target, timer);
         // The header goes to an idle readback, mapped once the caller's submission of
-        // this encoder completes; the next frame's encode reads it.
+        // this encoder completes; `after_submit` takes it once the GPU is done.
         if let Some(r) = self
             .readbacks
             .iter()
@@ -884,6 +879,18 @@ impl HairPass for StrandRaster {
             });
         }
         Ok(())
+    }
+
+    fn after_submit(&self, gpu: &Gpu) -> crate::Result<()> {
+        // Never waits: takes the readbacks of frames the GPU has finished and grows the
+        // pool for the next frame when one of them needed more.
+        let Some(needed) = self.collect_readbacks(gpu) else {
+            return Ok(());
+        };
+        let mut pool = self.pool.lock().map_err(|_| {
+            GpuError::Validation("a thread panicked while recording this method".into())
+        })?;
+        self.grow(gpu, &mut pool, needed)
     }
 
     fn passes(&self, lookup: &[String]) -> Vec<PassInfo> {

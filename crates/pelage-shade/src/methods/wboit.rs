@@ -202,7 +202,6 @@ impl HairPass for Wboit {
 
     fn encode(
         &self,
-        _gpu: &Gpu,
         encoder: &mut wgpu::CommandEncoder,
         strands: &StrandFrame,
         target: &TargetViews<'_>,

@@ -112,7 +112,6 @@ pub fn render_with(
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
     method
         .encode(
-            gpu,
             &mut encoder,
             &s.frame,
             &targets.views(&color, resolve.as_ref(), &depth),
@@ -120,6 +119,8 @@ pub fn render_with(
         )
         .unwrap();
     gpu.submit_and_wait([encoder.finish()]).unwrap();
+    // The frame's after-submit step: the pool grows here for the next frame.
+    method.after_submit(gpu).unwrap();
     let stats = method.stats(gpu).unwrap();
     (targets.read_color(gpu).unwrap().data, stats)
 }

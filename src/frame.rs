@@ -1,0 +1,659 @@
+//! The stages wired once: a [`Frame`] owns stage 1 (strands), stage 2 (a shadow and its
+//! hand-over per light) and stage 3 (the hair pass), and none of the targets. The
+//! [`Renderer`](crate::Renderer), the Bevy plugin, the browser demo and an engine all
+//! build this one object from a [`Scene`] and record it into their own encoder and views.
+//!
+//! Every stage has one shape: `prepare` writes its uniforms with the queue, `encode`
+//! records into the caller's encoder (no device), and one step after the caller's submit
+//! ([`Frame::after_submit`]) takes readbacks and grows pools without ever waiting.
+
+use glam::Vec3;
+use pelage_gpu::{FramePlan, Gpu, GpuTimer, PassInfo, ShaderBinding, wgpu};
+use pelage_scene::{
+    Camera, CameraMatrices, DynamicsParams, GuideParams, Light, Mesh, MeshMotion, Resampled,
+    ShadowParams,
+};
+use pelage_shade::{HairInputs, HairPass, TargetFormat, TargetViews, Visibility};
+use pelage_shadow::{LightVisibility, ShadowMethod};
+use pelage_strands::{
+    GroomStrands, GrowStrands, GuideStrands, MeshBuffers, SimulateStrands, StrandFrame, StrandStage,
+};
+
+use crate::Scene;
+
+/// The targets a [`Frame`] records into, as the caller describes them (the views
+/// themselves come at every [`Frame::record`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct FrameTarget {
+    /// Colour and depth formats, sample count, depth direction.
+    pub format: TargetFormat,
+    /// Size in pixels.
+    pub width: u32,
+    /// Size in pixels.
+    pub height: u32,
+    /// pelage draws the scene's mesh (shaded and shadowed as its own renders do);
+    /// `false` when the caller draws the mesh itself (a groom-only scene draws none).
+    pub draw_mesh: bool,
+}
+
+impl FrameTarget {
+    /// A `width` x `height` target in `format`, with the mesh drawn by pelage.
+    pub fn new(format: TargetFormat, width: u32, height: u32) -> Self {
+        Self {
+            format,
+            width,
+            height,
+            draw_mesh: true,
+        }
+    }
+}
+
+/// Where stage 1's strands come from: the one place a scene's groom, guides and dynamics
+/// choose the method.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum StrandSource<'a> {
+    /// Fur grown from the mesh ([`GrowStrands`]).
+    Grown,
+    /// A groom's own strands bent by the wind ([`GroomStrands`]).
+    Groom(&'a Resampled),
+    /// Render strands interpolated from a groom's strands as guides ([`GuideStrands`]).
+    Guides(&'a Resampled, &'a GuideParams),
+    /// The guides simulated, the render strands interpolated from them.
+    SimulatedGuides(&'a Resampled, &'a GuideParams, &'a DynamicsParams),
+    /// Grown fur (`None`) or a groom simulated ([`SimulateStrands`]).
+    Simulated(Option<&'a Resampled>, &'a DynamicsParams),
+}
+
+impl<'a> StrandSource<'a> {
+    /// The source `scene` asks for.
+    pub(crate) fn of(scene: &'a Scene) -> Self {
+        match (&scene.groom, &scene.guides, &scene.dynamics) {
+            (Some(groom), Some(guides), None) => Self::Guides(groom, guides),
+            (Some(groom), Some(guides), Some(d)) => Self::SimulatedGuides(groom, guides, d),
+            (Some(groom), None, None) => Self::Groom(groom),
+            (groom, _, Some(d)) => Self::Simulated(groom.as_ref(), d),
+            (None, _, None) => Self::Grown,
+        }
+    }
+
+    /// Builds the stage on `mesh` (already uploaded, or `None` to upload `scene.mesh`
+    /// here), returning the mesh buffers every stage reads, their box grown to wherever
+    /// `scene.motion` takes the mesh. In a groom-only scene (`groom_only`) the mesh
+    /// buffers are an empty stand-in.
+    fn build(
+        self,
+        gpu: &Gpu,
+        scene: &Scene,
+        mesh: Option<MeshBuffers>,
+        groom_only: bool,
+    ) -> crate::Result<(MeshBuffers, Box<dyn StrandStage>)> {
+        let (hair, rest) = (&scene.hair, &scene.mesh);
+        let upload = |mesh: Option<MeshBuffers>| -> crate::Result<MeshBuffers> {
+            Ok(match mesh {
+                Some(mesh) => mesh,
+                None => MeshBuffers::upload(gpu, rest)?,
+            })
+        };
+        // The mesh's box is wherever the motion takes it: a simulation sizes itself
+        // from it (grown before the stage is built); the stateless methods after.
+        let moved = |mut mesh: MeshBuffers| -> crate::Result<MeshBuffers> {
+            if let Some(motion) = &scene.motion {
+                motion.validate()?;
+                mesh.bounds = motion.reach(mesh.bounds);
+            }
+            Ok(mesh)
+        };
+        let (mesh, strands): (MeshBuffers, Box<dyn StrandStage>) = match self {
+            Self::Grown => {
+                let mesh = upload(mesh)?;
+                let strands = GrowStrands::new(gpu, rest, &mesh, hair)?;
+                (moved(mesh)?, Box::new(strands))
+            }
+            Self::Groom(groom) if groom_only => {
+                let strands = GroomStrands::new(gpu, groom, hair)?;
+                let mesh = match mesh {
+                    Some(mesh) => mesh,
+                    None => no_mesh(gpu, strands.buffers().reach)?,
+                };
+                (mesh, Box::new(strands))
+            }
+            Self::Groom(groom) => {
+                let mesh = upload(mesh)?;
+                let strands = GroomStrands::new(gpu, groom, hair)?;
+                (moved(mesh)?, Box::new(strands))
+            }
+            Self::Guides(groom, guides) => {
+                let mesh = upload(mesh)?;
+                let strands = GuideStrands::new(gpu, rest, &mesh, groom, hair, guides)?;
+                (moved(mesh)?, Box::new(strands))
+            }
+            Self::SimulatedGuides(groom, guides, dynamics) => {
+                let mesh = moved(upload(mesh)?)?;
+                let strands =
+                    GuideStrands::simulated(gpu, rest, &mesh, groom, hair, guides, dynamics)?;
+                (mesh, Box::new(strands))
+            }
+            Self::Simulated(groom, dynamics) => {
+                let mesh = moved(upload(mesh)?)?;
+                let strands = match groom {
+                    Some(groom) => SimulateStrands::groom(gpu, groom, rest, &mesh, hair, dynamics)?,
+                    None => SimulateStrands::grown(gpu, rest, &mesh, hair, dynamics)?,
+                };
+                (mesh, Box::new(strands))
+            }
+        };
+        Ok((mesh, strands))
+    }
+}
+
+/// The stages of a frame built from a [`Scene`], owning no target: prepared with the
+/// time, camera and lights, recorded into the caller's encoder and views.
+///
+/// Each frame: [`Frame::prepare`] (or [`Frame::prepare_matrices`] with an engine's own
+/// view and projection), [`Frame::record`] into the caller's encoder (or its three parts,
+/// [`Frame::record_strands`], [`Frame::record_shadows`] and [`Frame::record_shade`], with
+/// the caller's own passes between them), the caller's submit, then
+/// [`Frame::after_submit`]. Nothing waits for the GPU and nothing is created per frame in
+/// steady state.
+#[derive(Debug)]
+pub struct Frame {
+    mesh: MeshBuffers,
+    strands: Box<dyn StrandStage>,
+    /// One shadow per light, with the pass that hands it to the hair.
+    shadows: Vec<(Box<dyn ShadowMethod>, LightVisibility)>,
+    /// Per-vertex light visibility, `stride` floats per light (none without shadows).
+    visibility: Option<wgpu::Buffer>,
+    stride: u32,
+    hair: Box<dyn HairPass>,
+    lights: Vec<Light>,
+    /// Where point lights aim their shadows (the centre of the hair's reach).
+    shadow_target: Vec3,
+    /// The world box the hair can reach: its size on screen sets the level of detail.
+    reach: (Vec3, Vec3),
+    target: FrameTarget,
+    /// The mesh's motion and its rest pose, written into the mesh buffers every frame.
+    motion: Option<(MeshMotion, Mesh)>,
+    /// The passes a frame records, checked at construction.
+    plan: FramePlan,
+    /// The frame stage 1 last prepared, which every stage records.
+    prepared: Option<StrandFrame>,
+}
+
+impl Frame {
+    /// Uploads `scene`'s mesh, samples the roots (or uploads the groom), builds a shadow
+    /// and its hand-over per light and the hair pass for `target`.
+    pub fn new(gpu: &Gpu, scene: &Scene, target: &FrameTarget) -> crate::Result<Self> {
+        Self::build(gpu, scene, None, target)
+    }
+
+    /// [`Frame::new`] on mesh buffers the caller owns (its vertex and index buffers,
+    /// wrapped with [`MeshBuffers::from_buffers`], that it may rewrite every frame:
+    /// skinning, say); `scene.mesh` is the rest pose the roots are sampled on.
+    pub fn with_mesh_buffers(
+        gpu: &Gpu,
+        scene: &Scene,
+        mesh: MeshBuffers,
+        target: &FrameTarget,
+    ) -> crate::Result<Self> {
+        Self::build(gpu, scene, Some(mesh), target)
+    }
+
+    /// The one sequence that builds the stages: reach, strand source, shadow method per
+    /// light, visibility stride and hand-over per light, hair pass, plan.
+    fn build(
+        gpu: &Gpu,
+        scene: &Scene,
+        mesh: Option<MeshBuffers>,
+        target: &FrameTarget,
+    ) -> crate::Result<Self> {
+        // A groom with an empty mesh is a groom-only scene: nothing of the mesh is drawn
+        // or shadowed, and nothing moves it or binds roots to it.
+        let groom_only = scene.groom.is_some() && scene.mesh.indices.is_empty();
+        if groom_only {
+            let refuse = |name: &str, what: &str| {
+                pelage_scene::ParamError::new(
+                    name,
+                    "set",
+                    &format!(
+                        "a groom-only scene (an empty mesh, [mesh] kind = \"none\") has no mesh {what}; give the scene a mesh or leave it out"
+                    ),
+                )
+            };
+            if scene.dynamics.is_some() {
+                return Err(refuse("dynamics", "to bind the simulated roots to").into());
+            }
+            if scene.motion.is_some() {
+                return Err(refuse("motion", "to move").into());
+            }
+            if scene.guides.is_some() {
+                return Err(refuse("guides", "to root the render strands on").into());
+            }
+        }
+        let draw_mesh = target.draw_mesh && !groom_only;
+        let (mesh, strands) = StrandSource::of(scene).build(gpu, scene, mesh, groom_only)?;
+        Light::validate_all(&scene.lights).map_err(pelage_shade::ShadeError::from)?;
+        // Every later stage sizes itself from what stage 1 hands over: the strand
+        // buffers carry their counts, widths and reach.
+        let reach = pelage_shadow::reach(strands.buffers(), &mesh);
+        let vertices =
+            u64::from(strands.buffers().strand_count) * u64::from(strands.buffers().segments + 1);
+        let stride = LightVisibility::stride_for(vertices)?;
+        // Without a shadow method every vertex is lit: no visibility buffer at all.
+        let visibility = match scene.shadow {
+            ShadowParams::None => None,
+            _ => Some(LightVisibility::buffer(
+                gpu,
+                scene.lights.len() as u32,
+                stride,
+            )?),
+        };
+        let mut shadows = Vec::new();
+        for index in 0..scene.lights.len() as u32 {
+            let Some(buffer) = &visibility else {
+                break;
+            };
+            let Some(shadow) = pelage_shadow::build(gpu, &scene.shadow, strands.buffers(), &mesh)?
+            else {
+                break;
+            };
+            let hand_over = LightVisibility::new(
+                gpu,
+                &shadow.binding(),
+                strands.buffers(),
+                buffer,
+                index,
+                stride,
+            )?;
+            shadows.push((shadow, hand_over));
+        }
+        let binding = shadows.first().map(|(s, _)| s.binding());
+        scene
+            .shade
+            .validate()
+            .map_err(pelage_shade::ShadeError::from)?;
+        let hair = pelage_shade::build(
+            gpu,
+            &HairInputs {
+                params: &scene.shade,
+                mesh: &mesh,
+                strands: strands.buffers(),
+                shadow: binding.as_ref(),
+                visibility: visibility
+                    .as_ref()
+                    .map(|buffer| Visibility { buffer, stride }),
+                target: target.format,
+                draw_mesh,
+            },
+            target.width,
+            target.height,
+        )?;
+        let plan = frame_plan(strands.as_ref(), &shadows, hair.as_ref());
+        plan.validate()?;
+        // A point light at the centre the shadows are fitted around has no direction.
+        let shadow_target = (reach.0 + reach.1) * 0.5;
+        for (i, light) in scene.lights.iter().enumerate() {
+            light.shadow_light(i, shadow_target)?;
+        }
+        Ok(Self {
+            motion: scene.motion.clone().map(|m| (m, scene.mesh.clone())),
+            mesh,
+            strands,
+            shadows,
+            visibility,
+            stride,
+            hair,
+            lights: scene.lights.clone(),
+            shadow_target,
+            reach,
+            target: *target,
+            plan,
+            prepared: None,
+        })
+    }
+
+    /// Writes every stage's uniforms for time `t` seen by `camera`: the mesh's motion and
+    /// the colliders, the level of detail for the hair's size on screen, stage 1 (whose
+    /// [`StrandFrame`] is returned and recorded with), each light's shadow and
+    /// hand-over, and the hair pass (projected as the target's depth direction asks).
+    /// Queue writes only.
+    pub fn prepare(
+        &mut self,
+        queue: &wgpu::Queue,
+        t: f32,
+        camera: &Camera,
+    ) -> crate::Result<StrandFrame> {
+        let frame = self.prepare_strands(queue, t, Some(camera))?;
+        let (width, height) = (self.target.width, self.target.height);
+        let matrices = if self.target.format.reverse_z {
+            camera.matrices_reverse_z(width, height)
+        } else {
+            camera.matrices(width, height)
+        };
+        self.prepare_later_stages(queue, &frame, &matrices)?;
+        Ok(frame)
+    }
+
+    /// [`Frame::prepare`] with the caller's own view and projection (any handedness,
+    /// reverse-Z to match the target, a jitter): the level of detail stays the one last
+    /// set (every strand, unless a [`Frame::prepare`] chose fewer).
+    pub fn prepare_matrices(
+        &mut self,
+        queue: &wgpu::Queue,
+        t: f32,
+        camera: &CameraMatrices,
+    ) -> crate::Result<StrandFrame> {
+        camera.validate()?;
+        let frame = self.prepare_strands(queue, t, None)?;
+        self.prepare_later_stages(queue, &frame, camera)?;
+        Ok(frame)
+    }
+
+    /// The first half of a prepare: the mesh's motion, the colliders, the level of
+    /// detail (for `camera`, when given) and stage 1's uniforms for time `t`.
+    pub(crate) fn prepare_strands(
+        &mut self,
+        queue: &wgpu::Queue,
+        t: f32,
+        camera: Option<&Camera>,
+    ) -> crate::Result<StrandFrame> {
+        if let Some(camera) = camera {
+            camera.validate()?;
+        }
+        if let Some((motion, rest)) = &self.motion {
+            self.mesh.update(queue, &motion.apply(rest, t))?;
+            if let Some(sim) = self.strands.as_simulation_mut() {
+                let moved: Vec<_> = (sim.dynamics().colliders.iter())
+                    .map(|c| c.moved(|p| motion.point(p, t)))
+                    .collect();
+                sim.set_colliders(&moved)?;
+            }
+        }
+        if let Some(camera) = camera {
+            let (width, height) = (self.target.width, self.target.height);
+            let level = self
+                .strands
+                .level_for_view(self.reach, camera, width, height);
+            self.strands.set_lod(level)?;
+        }
+        let frame = self.strands.prepare(queue, t)?;
+        self.prepared = Some(frame);
+        Ok(frame)
+    }
+
+    /// The second half of a prepare: every later stage's uniforms for stage 1's `frame`.
+    fn prepare_later_stages(
+        &mut self,
+        queue: &wgpu::Queue,
+        frame: &StrandFrame,
+        camera: &CameraMatrices,
+    ) -> crate::Result<()> {
+        for (i, ((shadow, hand_over), light)) in self.shadows.iter().zip(&self.lights).enumerate() {
+            shadow.prepare(queue, frame, &light.shadow_light(i, self.shadow_target)?)?;
+            hand_over.prepare(queue, frame)?;
+        }
+        let (width, height) = (self.target.width, self.target.height);
+        self.hair
+            .prepare(queue, frame, camera, &self.lights, width, height)?;
+        Ok(())
+    }
+
+    /// The frame the last prepare returned; recording before any is an error.
+    fn prepared(&self) -> crate::Result<StrandFrame> {
+        self.prepared.ok_or_else(|| {
+            crate::Error::Strands(
+                pelage_strands::FrameOrderError {
+                    stage: "frame (record before any prepare)".into(),
+                    prepared: 0,
+                    given: 0,
+                }
+                .into(),
+            )
+        })
+    }
+
+    /// Records the whole frame into `encoder`: stage 1, each light's shadow and its
+    /// hand-over, then the hair pass into `views` (clearing them unless `views.load`).
+    /// Records only: no device, no wait; submitting is the caller's, followed by
+    /// [`Frame::after_submit`].
+    pub fn record(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        views: &TargetViews<'_>,
+        mut timer: Option<&mut GpuTimer>,
+    ) -> crate::Result<()> {
+        self.record_strands(encoder, timer.as_deref_mut())?;
+        self.record_shadows(encoder, timer.as_deref_mut())?;
+        self.record_shade(encoder, views, timer)
+    }
+
+    /// Stage 1's passes alone (the first part of [`Frame::record`]).
+    pub fn record_strands(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        timer: Option<&mut GpuTimer>,
+    ) -> crate::Result<()> {
+        Ok(self.strands.encode(encoder, &self.prepared()?, timer)?)
+    }
+
+    /// Each light's shadow and hand-over (the second part of [`Frame::record`]): a
+    /// caller's pass sampling the shadow ([`Frame::shadow_binding`]) goes after it.
+    pub fn record_shadows(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        mut timer: Option<&mut GpuTimer>,
+    ) -> crate::Result<()> {
+        let frame = self.prepared()?;
+        for (shadow, hand_over) in &self.shadows {
+            shadow.encode(encoder, &frame, timer.as_deref_mut())?;
+            hand_over.encode(encoder, &frame, timer.as_deref_mut())?;
+        }
+        Ok(())
+    }
+
+    /// The hair pass into `views` (the last part of [`Frame::record`]).
+    pub fn record_shade(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        views: &TargetViews<'_>,
+        timer: Option<&mut GpuTimer>,
+    ) -> crate::Result<()> {
+        Ok(self.hair.encode(encoder, &self.prepared()?, views, timer)?)
+    }
+
+    /// The one step after the caller submitted a recorded frame: takes the readbacks of
+    /// frames the GPU has finished and grows per-frame storage a frame found too small
+    /// (the strand rasterizer's pool), for a later frame. Never waits
+    /// (`device.poll(Poll)` and already mapped buffers only); a frame whose pool
+    /// overflowed stays counted in [`HairPass::stats`].
+    pub fn after_submit(&mut self, gpu: &Gpu) -> crate::Result<()> {
+        Ok(self.hair.after_submit(gpu)?)
+    }
+
+    /// The passes [`Frame::record`] records, in order, with the named resources each
+    /// reads and writes (validated when the frame was built).
+    pub fn plan(&self) -> &FramePlan {
+        &self.plan
+    }
+
+    /// The plan with the caller's `passes` recorded between [`Frame::record_shadows`]
+    /// and [`Frame::record_shade`] (an engine's mesh sampling the shadow, say), validated.
+    pub fn plan_with_passes_before_shade(
+        &self,
+        passes: impl IntoIterator<Item = PassInfo>,
+    ) -> crate::Result<FramePlan> {
+        let shade = self.hair.passes(&self.key_lookup()).len();
+        let all = self.plan.passes();
+        let (before, after) = all.split_at(all.len() - shade.min(all.len()));
+        let mut plan = FramePlan::new(self.plan.inputs().iter().cloned());
+        plan.push(before.iter().cloned());
+        plan.push(passes);
+        plan.push(after.iter().cloned());
+        plan.validate()?;
+        Ok(plan)
+    }
+
+    /// The resources the key light's shadow writes under the frame's names
+    /// (`shadow0.*`): what a pass sampling [`Frame::shadow_binding`] reads.
+    pub fn key_lookup(&self) -> Vec<String> {
+        self.shadows
+            .first()
+            .map(|(shadow, _)| rename_lookup(shadow.as_ref(), "shadow0"))
+            .unwrap_or_default()
+    }
+
+    /// The key light's shadow as the shadow contract's implementation, for a caller's own
+    /// shader (`None` without shadows).
+    pub fn shadow_binding(&self) -> Option<ShaderBinding> {
+        self.shadows.first().map(|(s, _)| s.binding())
+    }
+
+    /// Stage 1, for binding its buffers or reading its roots.
+    pub fn strands(&self) -> &dyn StrandStage {
+        self.strands.as_ref()
+    }
+
+    /// Stage 1, to change (wind, colour).
+    pub(crate) fn strands_mut(&mut self) -> &mut dyn StrandStage {
+        self.strands.as_mut()
+    }
+
+    /// Stage 3's method.
+    pub fn hair_pass(&self) -> &dyn HairPass {
+        self.hair.as_ref()
+    }
+
+    /// Stage 3's method, to change (shading parameters).
+    pub(crate) fn hair_pass_mut(&mut self) -> &mut dyn HairPass {
+        self.hair.as_mut()
+    }
+
+    /// The mesh buffers every stage reads.
+    pub fn mesh_buffers(&self) -> &MeshBuffers {
+        &self.mesh
+    }
+
+    /// The lights the next prepare uses.
+    pub fn lights(&self) -> &[Light] {
+        &self.lights
+    }
+
+    /// Replaces the lights from the next prepare on. With shadows the count must stay
+    /// the one the frame was built with (each light has its own shadow passes and slice
+    /// of the visibility buffer): another count is
+    /// [`Error::NeedsRebuild`](crate::Error::NeedsRebuild). Bad lights are an error.
+    /// Nothing changes on an error.
+    pub fn set_lights(&mut self, lights: &[Light]) -> crate::Result<()> {
+        Light::validate_all(lights)?;
+        self.lights_in_place(lights)
+            .map_err(crate::Error::NeedsRebuild)?;
+        for (i, light) in lights.iter().enumerate() {
+            light.shadow_light(i, self.shadow_target)?;
+        }
+        self.lights = lights.to_vec();
+        Ok(())
+    }
+
+    /// `Err(why)` when `lights` cannot replace the frame's in place.
+    pub(crate) fn lights_in_place(&self, lights: &[Light]) -> Result<(), String> {
+        if self.visibility.is_some() && lights.len() != self.lights.len() {
+            return Err(format!(
+                "the light count ({} to {}: each light has its own shadow passes)",
+                self.lights.len(),
+                lights.len()
+            ));
+        }
+        Ok(())
+    }
+
+    /// The targets the frame was built for.
+    pub fn target(&self) -> &FrameTarget {
+        &self.target
+    }
+
+    /// The frame the last prepare returned (`None` before the first).
+    pub fn strand_frame(&self) -> Option<StrandFrame> {
+        self.prepared
+    }
+
+    /// The per-vertex light visibility buffer and its floats per light (`None` without
+    /// shadows).
+    pub fn visibility(&self) -> Option<(&wgpu::Buffer, u32)> {
+        self.visibility.as_ref().map(|b| (b, self.stride))
+    }
+
+    /// The number of lights with a shadow (0 without shadows).
+    pub fn shadowed_lights(&self) -> usize {
+        self.shadows.len()
+    }
+}
+
+/// `shadow`'s lookup resources under the frame's name `name` for its light.
+fn rename_lookup(shadow: &dyn ShadowMethod, name: &str) -> Vec<String> {
+    shadow
+        .lookup()
+        .iter()
+        .map(|r| match r.strip_prefix("shadow.") {
+            Some(rest) => format!("{name}.{rest}"),
+            None => r.clone(),
+        })
+        .collect()
+}
+
+/// The plan of a frame of `strands`, one shadow and hand-over per light (light `i`'s
+/// resources renamed `shadow{i}.*`), and `hair`, over the mesh and the targets.
+pub fn frame_plan(
+    strands: &dyn StrandStage,
+    shadows: &[(Box<dyn ShadowMethod>, LightVisibility)],
+    hair: &dyn HairPass,
+) -> FramePlan {
+    let mut plan = FramePlan::new([
+        pelage_strands::MESH,
+        pelage_shade::TARGET_COLOR,
+        pelage_shade::TARGET_DEPTH,
+    ]);
+    plan.push(strands.passes());
+    let mut key_lookup = Vec::new();
+    for (index, (shadow, hand_over)) in shadows.iter().enumerate() {
+        let name = format!("shadow{index}");
+        plan.push(
+            shadow
+                .passes()
+                .into_iter()
+                .map(|p| p.renamed("shadow", &name)),
+        );
+        let lookup = rename_lookup(shadow.as_ref(), &name);
+        plan.push(hand_over.passes(&lookup));
+        if index == 0 {
+            key_lookup = lookup;
+        }
+    }
+    plan.push(hair.passes(&key_lookup));
+    plan
+}
+
+/// The mesh buffers of a groom-only scene: no triangles (so stage 2's mesh shadow map
+/// and stage 3's mesh draw draw nothing), one zero vertex so that every binding has a
+/// size, and the hair's reach as bounds (so that the shadow fits and
+/// [`pelage_shadow::reach`] are the hair's alone).
+fn no_mesh(gpu: &Gpu, reach: (Vec3, Vec3)) -> crate::Result<MeshBuffers> {
+    let usage =
+        wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC;
+    let make = |label: &str| {
+        pelage_gpu::create_buffer_init(
+            &gpu.device,
+            &wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents: &[0u8; 12],
+                usage,
+            },
+        )
+    };
+    Ok(MeshBuffers::from_buffers(
+        make("pelage no mesh: positions"),
+        make("pelage no mesh: normals"),
+        make("pelage no mesh: indices"),
+        1,
+        0,
+        reach,
+    )?)
+}
