@@ -95,3 +95,40 @@ fn a_stage_recorded_for_another_frame_than_it_was_prepared_for_is_an_error() {
     pass.encode(&mut encoder, &second, &views, None).unwrap();
     gpu.submit_and_wait([encoder.finish()]).unwrap();
 }
+
+/// A [`pelage::Frame`] recorded into the caller's own targets draws the picture the
+/// [`pelage::Renderer`] (a `Frame` plus its targets) draws, and recording it before any
+/// prepare is an error, never a picture.
+#[test]
+fn a_frame_in_the_callers_targets_is_the_renderers_picture() {
+    use pelage::{Frame, FrameTarget, Renderer, Scene};
+    let gpu = Gpu::headless().unwrap_or_else(|e| panic!("this test needs a GPU adapter: {e}"));
+    let mut scene = Scene::default();
+    scene.hair.roots.count = 2_000;
+    let format = TargetFormat::for_params(&scene.shade);
+    let mut frame = Frame::new(&gpu, &scene, &FrameTarget::new(format, W, H)).unwrap();
+    let targets = Targets::with_format(&gpu, W, H, &format).unwrap();
+    let views = targets.view_set();
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    let early = frame.record(&mut encoder, &views.views(), None);
+    assert!(
+        matches!(early, Err(Error::Strands(StrandsError::FrameOrder(_)))),
+        "recorded before any prepare: {early:?}"
+    );
+    let t = 0.25;
+    frame.prepare(&gpu.queue, t, &scene.camera).unwrap();
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    frame.record(&mut encoder, &views.views(), None).unwrap();
+    gpu.submit_and_wait([encoder.finish()]).unwrap();
+    frame.after_submit(&gpu).unwrap();
+    let ours = targets.read_color(&gpu).unwrap().data;
+
+    let mut renderer = Renderer::new(&gpu, &scene, W, H).unwrap();
+    renderer.render(&gpu, t, &scene.camera).unwrap();
+    renderer.finish(&gpu).unwrap();
+    let (_, _, theirs) = renderer.rgba8(&gpu).unwrap();
+    let differing = ours.iter().zip(&theirs).filter(|(a, b)| a != b).count();
+    println!("{differing} of {} bytes differ", ours.len());
+    assert_eq!(ours.len(), theirs.len());
+    assert_eq!(differing, 0, "the frame in the caller's targets differs");
+}

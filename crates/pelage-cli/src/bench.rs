@@ -737,6 +737,7 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
                 created.bind_groups += c.bind_groups;
             }
             gpu.submit_and_wait([commands])?;
+            renderer.after_submit(&gpu)?;
         }
         let ms = median(cpu.clone());
         cpu.sort_by(f64::total_cmp);
