@@ -88,5 +88,14 @@ fn bevy_frames_hold_moving_fur_equal_to_pelages_own() {
         bevy_frame.save(dir.join("bevy.png")).unwrap();
         own.save(dir.join("pelage.png")).unwrap();
     }
-    assert!(map.mean() <= 0.02, "mean FLIP {} > 0.02", map.mean());
+    // Bevy records the same `Frame` as the facade, so the bound is the embed test's
+    // (tests/embed.rs): mean FLIP <= 0.01 and at most 1% of the pixels differing. Measured:
+    // 0.00002, 9 of 76 800 pixels. A mean alone would let a near miss through (a mesh
+    // drawn without the fur's shadow changes 3.4% of the pixels and scores 0.0077).
+    assert!(map.mean() <= 0.01, "mean FLIP {} > 0.01", map.mean());
+    let differing = differing(&own, &bevy_frame);
+    assert!(
+        differing * 100 <= pixels,
+        "{differing} of {pixels} pixels differ (more than 1%)"
+    );
 }
