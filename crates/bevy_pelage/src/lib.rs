@@ -382,6 +382,7 @@ impl FurInstance {
             guides: None,
             dynamics: None,
             motion: None,
+            skin: None,
             shadow: ShadowParams::Voxel(fur.voxel.clone()),
             shade,
             camera: Default::default(),
