@@ -18,7 +18,8 @@ fn gpu() -> Gpu {
 
 /// `scenes/creature_skinned.toml` with 1 000 strands.
 fn skinned_scene() -> Scene {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/creature_skinned.toml");
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/creature_skinned.toml");
     let mut scene = Scene::from_file(&path).unwrap();
     scene.hair.roots.count = 1000;
     scene
@@ -30,7 +31,12 @@ fn a_skinned_scene_skins_before_stage_1_and_its_roots_follow_the_skin() {
     let scene = skinned_scene();
     let rig = scene.skin.clone().unwrap();
     let mut renderer = Renderer::new(&gpu, &scene, 64, 48).unwrap();
-    let labels: Vec<&str> = renderer.plan().passes().iter().map(|p| p.label.as_str()).collect();
+    let labels: Vec<&str> = renderer
+        .plan()
+        .passes()
+        .iter()
+        .map(|p| p.label.as_str())
+        .collect();
     println!("{labels:?}");
     assert_eq!(labels[0], SKIN_LABEL);
     assert_eq!(labels[1], "strands: grow");
@@ -50,7 +56,10 @@ fn a_skinned_scene_skins_before_stage_1_and_its_roots_follow_the_skin() {
             worst = worst.max(Vec3::from_slice(&strand[0][..3]).distance(on));
         }
     }
-    println!("roots at most {:.2e} of the mesh size from the mirror's skinned surface", worst / size);
+    println!(
+        "roots at most {:.2e} of the mesh size from the mirror's skinned surface",
+        worst / size
+    );
     assert!(worst <= 1e-5 * size, "{worst}");
     // The rig's box holds the mesh in every pose: the scene's reach grew.
     let mut still = scene.clone();
@@ -74,7 +83,9 @@ fn a_callers_skin_takes_its_matrices_and_bad_ones_are_refused_by_name() {
         other => panic!("not a parameter error: {other}"),
     };
     let mut frame = Frame::with_skin(&gpu, &scene, &skin, reach, &target).unwrap();
-    frame.set_joint_matrices(&gpu.queue, &rig.joint_matrices(0.5)).unwrap();
+    frame
+        .set_joint_matrices(&gpu.queue, &rig.joint_matrices(0.5))
+        .unwrap();
     let mut bad = rig.joint_matrices(0.5);
     bad[1].y_axis.z = f32::INFINITY;
     assert_eq!(
@@ -82,20 +93,32 @@ fn a_callers_skin_takes_its_matrices_and_bad_ones_are_refused_by_name() {
         "skin.joint_matrices[1]"
     );
     assert_eq!(
-        name(frame.set_joint_matrices(&gpu.queue, &[Mat4::IDENTITY]).unwrap_err()),
+        name(
+            frame
+                .set_joint_matrices(&gpu.queue, &[Mat4::IDENTITY])
+                .unwrap_err()
+        ),
         "skin.joint_matrices"
     );
     frame.prepare(&gpu.queue, 0.5, &scene.camera).unwrap();
     // A rig's frame sets its own matrices; a frame without a skin has none to set.
     let rigged = Frame::new(&gpu, &skinned_scene(), &target).unwrap();
     assert_eq!(
-        name(rigged.set_joint_matrices(&gpu.queue, &[Mat4::IDENTITY; 2]).unwrap_err()),
+        name(
+            rigged
+                .set_joint_matrices(&gpu.queue, &[Mat4::IDENTITY; 2])
+                .unwrap_err()
+        ),
         "skin"
     );
     let plain = Frame::new(&gpu, &scene, &target).unwrap();
     assert!(plain.skin().is_none());
     assert_eq!(
-        name(plain.set_joint_matrices(&gpu.queue, &[Mat4::IDENTITY; 2]).unwrap_err()),
+        name(
+            plain
+                .set_joint_matrices(&gpu.queue, &[Mat4::IDENTITY; 2])
+                .unwrap_err()
+        ),
         "skin"
     );
     // Refused: a skin and a motion, a rig and a caller's skin, a box that is not one.
@@ -118,9 +141,7 @@ fn a_callers_skin_takes_its_matrices_and_bad_ones_are_refused_by_name() {
         "skin"
     );
     assert_eq!(
-        name(
-            Frame::with_skin(&gpu, &scene, &skin, (Vec3::ONE, Vec3::ZERO), &target).unwrap_err()
-        ),
+        name(Frame::with_skin(&gpu, &scene, &skin, (Vec3::ONE, Vec3::ZERO), &target).unwrap_err()),
         "skin.reach"
     );
     let mut bad_skin = skin.clone();

@@ -53,7 +53,10 @@ fn the_rig_holds_one_side_bends_the_other_and_stays_in_its_reach() {
         assert!(m1.transform_point3(rig.origin).distance(rig.origin) <= 1e-5);
         for (p, w) in mesh.positions.iter().zip(&skin.weights) {
             let q = (m0 * w[0] + m1 * w[1]).transform_point3(*p);
-            assert!(q.cmpge(reach.0).all() && q.cmple(reach.1).all(), "{q} outside {reach:?}");
+            assert!(
+                q.cmpge(reach.0).all() && q.cmple(reach.1).all(),
+                "{q} outside {reach:?}"
+            );
             if w[1] == 1.0 {
                 let d = (q - rig.origin).length() - (*p - rig.origin).length();
                 assert!(d.abs() <= 1e-5, "{d}");
@@ -81,8 +84,14 @@ fn skins_are_validated_field_by_field() {
     assert_eq!(name(&|_| {}, 4), "skin.joints");
     assert_eq!(name(&|s| s.joints[2][3] = 3, 3), "skin.joints[2][3]");
     assert_eq!(name(&|s| s.weights[1][1] = -0.1, 3), "skin.weights[1][1]");
-    assert_eq!(name(&|s| s.weights[0][0] = f32::INFINITY, 3), "skin.weights[0][0]");
-    assert_eq!(name(&|s| s.weights[2] = [0.2, 0.3, 0.4, 0.0], 3), "skin.weights[2]");
+    assert_eq!(
+        name(&|s| s.weights[0][0] = f32::INFINITY, 3),
+        "skin.weights[0][0]"
+    );
+    assert_eq!(
+        name(&|s| s.weights[2] = [0.2, 0.3, 0.4, 0.0], 3),
+        "skin.weights[2]"
+    );
     assert_eq!(name(&|s| s.joint_count = 2000, 3), "skin.joint_count");
     // Within the tolerance: accepted, and normalised to sum to 1.
     let mut near = good.clone();

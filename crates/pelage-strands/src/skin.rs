@@ -71,13 +71,13 @@ impl MeshSkin {
         let weights: Vec<Vec4> = (skin.normalized_weights().iter())
             .map(|w| Vec4::from_array(*w))
             .collect();
-        let bind_positions = storage_buffer(gpu, "pelage skin bind positions", &positions, storage)?;
+        let bind_positions =
+            storage_buffer(gpu, "pelage skin bind positions", &positions, storage)?;
         let bind_normals = storage_buffer(gpu, "pelage skin bind normals", &normals, storage)?;
         let joints = storage_buffer(gpu, "pelage skin joints", &joints, storage)?;
         let weights = storage_buffer(gpu, "pelage skin weights", &weights, storage)?;
         let identity = vec![Mat4::IDENTITY; skin.joint_count as usize];
-        let joint_matrices =
-            storage_buffer(gpu, "pelage skin joint matrices", &identity, storage)?;
+        let joint_matrices = storage_buffer(gpu, "pelage skin joint matrices", &identity, storage)?;
         let non_finite = zeroed_storage(gpu, "pelage skin non-finite vertices", 4, storage)?;
         let uniforms = UniformBuffer::new(
             gpu,

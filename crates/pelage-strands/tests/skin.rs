@@ -150,7 +150,11 @@ fn grown_roots_ride_the_skinned_surface_over_an_animation() {
         for (a, b) in gpu_vertices.iter().zip(&expected) {
             worst_vertex = worst_vertex.max(a.truncate().distance(b.truncate()));
         }
-        for (a, b) in gpu_vertices.iter().step_by(per).zip(rest.iter().step_by(per)) {
+        for (a, b) in gpu_vertices
+            .iter()
+            .step_by(per)
+            .zip(rest.iter().step_by(per))
+        {
             moved = moved.max(a.truncate().distance(b.truncate()));
         }
     }
@@ -159,7 +163,10 @@ fn grown_roots_ride_the_skinned_surface_over_an_animation() {
         worst_root / size,
         worst_vertex / size
     );
-    assert!(moved > 0.1 * size, "the rig did not move the roots: {moved}");
+    assert!(
+        moved > 0.1 * size,
+        "the rig did not move the roots: {moved}"
+    );
     assert!(worst_root <= 1e-5 * size, "{worst_root}");
     assert!(worst_vertex <= 1e-5 * size, "{worst_vertex}");
 }
@@ -237,17 +244,35 @@ fn bad_joints_weights_and_matrices_are_refused_naming_the_field() {
         MeshSkin::new(&gpu, &bind, &s, &buffers)
     };
     assert_eq!(refused(with(&|s| s.joints[7][1] = 2)), "skin.joints[7][1]");
-    assert_eq!(refused(with(&|s| s.weights[3][0] = -0.5)), "skin.weights[3][0]");
-    assert_eq!(refused(with(&|s| s.weights[4][2] = f32::NAN)), "skin.weights[4][2]");
-    assert_eq!(refused(with(&|s| s.weights[5] = [0.5, 0.6, 0.0, 0.0])), "skin.weights[5]");
-    assert_eq!(refused(with(&|s| s.weights[5] = [0.0; 4])), "skin.weights[5]");
+    assert_eq!(
+        refused(with(&|s| s.weights[3][0] = -0.5)),
+        "skin.weights[3][0]"
+    );
+    assert_eq!(
+        refused(with(&|s| s.weights[4][2] = f32::NAN)),
+        "skin.weights[4][2]"
+    );
+    assert_eq!(
+        refused(with(&|s| s.weights[5] = [0.5, 0.6, 0.0, 0.0])),
+        "skin.weights[5]"
+    );
+    assert_eq!(
+        refused(with(&|s| s.weights[5] = [0.0; 4])),
+        "skin.weights[5]"
+    );
     assert_eq!(refused(with(&|s| s.joint_count = 0)), "skin.joint_count");
-    assert_eq!(refused(with(&|s| {
-        s.joints.pop();
-    })), "skin.joints");
-    assert_eq!(refused(with(&|s| {
-        s.weights.push([1.0, 0.0, 0.0, 0.0]);
-    })), "skin.weights");
+    assert_eq!(
+        refused(with(&|s| {
+            s.joints.pop();
+        })),
+        "skin.joints"
+    );
+    assert_eq!(
+        refused(with(&|s| {
+            s.weights.push([1.0, 0.0, 0.0, 0.0]);
+        })),
+        "skin.weights"
+    );
     // A mesh of another vertex count than the buffers.
     let other = Mesh::icosphere(1.0, 2).unwrap();
     assert!(matches!(
@@ -286,7 +311,13 @@ fn a_nan_matrix_written_straight_into_the_buffer_leaves_its_vertices_at_the_bind
         joints: vec![[0, 1, 0, 0]; bind.positions.len()],
         weights: on_one
             .iter()
-            .map(|&one| if one { [0.0, 1.0, 0.0, 0.0] } else { [1.0, 0.0, 0.0, 0.0] })
+            .map(|&one| {
+                if one {
+                    [0.0, 1.0, 0.0, 0.0]
+                } else {
+                    [1.0, 0.0, 0.0, 0.0]
+                }
+            })
             .collect(),
         joint_count: 2,
     };
@@ -302,15 +333,22 @@ fn a_nan_matrix_written_straight_into_the_buffer_leaves_its_vertices_at_the_bind
     let positions = read_vec3(&gpu, &buffers.positions);
     let expected = on_one.iter().filter(|b| **b).count() as u32;
     let counted = pass.non_finite_vertices(&gpu).unwrap();
-    println!("NaN in joint 1: {counted} vertices held at the bind pose ({expected} weighted on it)");
+    println!(
+        "NaN in joint 1: {counted} vertices held at the bind pose ({expected} weighted on it)"
+    );
     assert_eq!(counted, expected);
     for ((p, b), one) in positions.iter().zip(&bind.positions).zip(&on_one) {
         assert!(p.is_finite());
-        let want = if *one { *b } else { *b + Vec3::new(0.5, 0.0, 0.0) };
+        let want = if *one {
+            *b
+        } else {
+            *b + Vec3::new(0.5, 0.0, 0.0)
+        };
         assert!(p.distance(want) <= 1e-6, "{p} {want}");
     }
     // Fixed matrices: nothing counted.
-    pass.set_joint_matrices(&gpu.queue, &[shift, shift]).unwrap();
+    pass.set_joint_matrices(&gpu.queue, &[shift, shift])
+        .unwrap();
     skin_frame(&gpu, &pass);
     assert_eq!(pass.non_finite_vertices(&gpu).unwrap(), 0);
 }
