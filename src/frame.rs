@@ -206,6 +206,8 @@ impl Frame {
         mesh: Option<MeshBuffers>,
         target: &FrameTarget,
     ) -> crate::Result<Self> {
+        // The targets' size first: every method would refuse it in its own words.
+        pelage_shade::check_image_size(gpu, target.width, target.height)?;
         // A groom with an empty mesh is a groom-only scene: nothing of the mesh is drawn
         // or shadowed, and nothing moves it or binds roots to it.
         let groom_only = scene.groom.is_some() && scene.mesh.indices.is_empty();
