@@ -252,6 +252,8 @@ impl Frame {
         target: &FrameTarget,
         skin: Option<&Skin>,
     ) -> crate::Result<Self> {
+        // The targets' size first: every method would refuse it in its own words.
+        pelage_shade::check_image_size(gpu, target.width, target.height)?;
         // The scene's rig, or the caller's skin: either skins the mesh every frame.
         let rig = scene.skin.as_ref().map(|bend| bend.skin(&scene.mesh));
         let skin = skin.or(rig.as_ref());
