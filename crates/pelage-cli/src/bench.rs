@@ -28,7 +28,8 @@ use std::time::Instant;
 
 use pelage::gpu::{Gpu, GpuTimer, ShaderSources, compute_pipeline, dispatch_size, wgpu};
 use pelage::scene::{
-    ChiangParams, DirectionalLight, DynamicsParams, ShadingModel, ShadowParams, Transparency,
+    ChiangParams, DirectionalLight, DynamicsParams, MultipleScattering, ShadingModel, ShadowParams,
+    Transparency,
     VoxelParams, WindParams,
 };
 use pelage::scene::{GuideParams, Resampled};
@@ -666,13 +667,20 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
         (
             "chiang single scattering",
             ShadingModel::Chiang(ChiangParams {
-                dual_scattering: false,
+                multiple_scattering: MultipleScattering::None,
                 ..ChiangParams::default()
             }),
         ),
         (
             "chiang dual scattering",
             ShadingModel::Chiang(ChiangParams::default()),
+        ),
+        (
+            "chiang volume scattering",
+            ShadingModel::Chiang(ChiangParams {
+                multiple_scattering: MultipleScattering::Volume,
+                ..ChiangParams::default()
+            }),
         ),
     ];
     let mut model_ms = Vec::new();

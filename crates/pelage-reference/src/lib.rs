@@ -32,3 +32,4 @@ pub mod strand_raster;
 pub mod strands;
 pub mod transmittance;
 pub mod voxel;
+pub mod volume;

@@ -857,6 +857,7 @@ impl HairPass for StrandRaster {
             });
         }
         let groups = self.groups(target)?;
+        self.common.encode_volume(encoder, timer.as_deref_mut());
         self.common
             .encode_mesh(encoder, target, None, timer.as_deref_mut());
         self.record_compute(encoder, &groups, PASSES.len(), timer.as_deref_mut());
@@ -907,8 +908,9 @@ impl HairPass for StrandRaster {
             .reads([OIT_STORAGE, TARGET_COLOR])
             .writes([TARGET_COLOR]);
         self.common
-            .mesh_pass(lookup)
+            .volume_pass()
             .into_iter()
+            .chain(self.common.mesh_pass(lookup))
             .chain([shade])
             .chain(middle)
             .chain([fine, resolve])
