@@ -31,5 +31,5 @@ pub mod simulate;
 pub mod strand_raster;
 pub mod strands;
 pub mod transmittance;
-pub mod voxel;
 pub mod volume;
+pub mod voxel;

@@ -184,7 +184,7 @@ pub fn volume_grid(input: &VolumeInput<'_>) -> VolumeGridCpu {
     }
     let mut centre = 0.5 * (lo + hi);
     let mut extent = (hi - lo).max_element();
-    if vertices.is_empty() || !(extent >= 0.0 && extent < 1e30 && centre.abs().max_element() < 1e30)
+    if vertices.is_empty() || !((0.0..1e30).contains(&extent) && centre.abs().max_element() < 1e30)
     {
         centre = DVec3::ZERO;
         extent = 1.0;
@@ -292,11 +292,7 @@ pub fn volume_grid(input: &VolumeInput<'_>) -> VolumeGridCpu {
         if meet <= 0.0 {
             continue;
         }
-        let xyz = IVec3::new(
-            (c % n) as i32,
-            ((c / n) % n) as i32,
-            (c / (n * n)) as i32,
-        );
+        let xyz = IVec3::new((c % n) as i32, ((c / n) % n) as i32, (c / (n * n)) as i32);
         let pos = origin + (xyz.as_dvec3() + 0.5) * cell;
         let (t, s) = (medium_t[c], medium_s[c]);
         let table = &tables[&keys[c]];
@@ -350,11 +346,7 @@ pub fn volume_grid(input: &VolumeInput<'_>) -> VolumeGridCpu {
     for _ in 0..p.volume_iterations {
         let mut next = vec![[DVec4::ZERO; 3]; cells];
         for c in 0..cells {
-            let xyz = IVec3::new(
-                (c % n) as i32,
-                ((c / n) % n) as i32,
-                (c / (n * n)) as i32,
-            );
+            let xyz = IVec3::new((c % n) as i32, ((c / n) % n) as i32, (c / (n * n)) as i32);
             let mut arrive = [DVec4::ZERO; 3];
             for d in FACES {
                 let y = xyz - d;
@@ -379,7 +371,8 @@ pub fn volume_grid(input: &VolumeInput<'_>) -> VolumeGridCpu {
                 let a = arrive[ch];
                 let scatter = (1.0 - keep) * iso[c].albedo[ch];
                 let flux = DVec3::new(a.y, a.z, a.w);
-                let f = keep * flux + scatter * scatter_direction(flux, t, s, iso[c].g[ch], iso[c].g[ch]);
+                let f = keep * flux
+                    + scatter * scatter_direction(flux, t, s, iso[c].g[ch], iso[c].g[ch]);
                 let out = DVec4::new((keep + scatter) * a.x, f.x, f.y, f.z);
                 next[c][ch] = out;
                 fluence[c][ch] += half * (a + out);

@@ -50,8 +50,7 @@ pub use shading::{
     DEFAULT_MELANIN_REDNESS, DEFAULT_VOLUME_GRID, DEFAULT_VOLUME_ITERATIONS, EUMELANIN_SIGMA_A,
     KajiyaKayParams, MAX_MELANIN, MAX_VOLUME_GRID, MAX_VOLUME_ITERATIONS, MIN_VOLUME_GRID,
     MarschnerParams, MultipleScattering, PHEOMELANIN_SIGMA_A, SadeghiParams, ShadingModel,
-    chiang_color_scale,
-    sigma_a_from_artist_melanin, sigma_a_from_color, sigma_a_from_melanin,
+    chiang_color_scale, sigma_a_from_artist_melanin, sigma_a_from_color, sigma_a_from_melanin,
     sigma_a_from_reflectance,
 };
 pub use surface_map::{MAX_MAP_FILE_BYTES, MAX_MAP_SIZE, MapError, MapImage, TextureMap};

@@ -245,15 +245,10 @@ pub(crate) fn normalize(doc: &mut Spanned<DeTable<'_>>) -> Result<Normalized, Lo
             Ok(())
         })?;
     }
-    for_tables_at(
-        root,
-        root_span,
-        &["shade", "model"],
-        &mut |table, span| {
-            rename_dual_scattering(table)?;
-            gather_marschner_params(table, span)
-        },
-    )?;
+    for_tables_at(root, root_span, &["shade", "model"], &mut |table, span| {
+        rename_dual_scattering(table)?;
+        gather_marschner_params(table, span)
+    })?;
     Ok(normalized)
 }
 

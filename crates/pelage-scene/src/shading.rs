@@ -467,8 +467,9 @@ pub const MAX_VOLUME_GRID: u32 = 128;
 pub const DEFAULT_VOLUME_GRID: u32 = 32;
 /// Largest `volume_iterations`.
 pub const MAX_VOLUME_ITERATIONS: u32 = 256;
-/// Default `volume_iterations`.
-pub const DEFAULT_VOLUME_ITERATIONS: u32 = 16;
+/// Default `volume_iterations` (the scattering lab's choice: at 32³ blond hair gains 10 to 18
+/// points of luminance from 16 steps to 64; see docs/src/path-tracer.md).
+pub const DEFAULT_VOLUME_ITERATIONS: u32 = 64;
 
 /// How Chiang's fibres carry light scattered by other fibres (the orders the single
 /// scattering term leaves out). Names in [`crate::names`]: `none`, `dual`, `volume`.
@@ -512,7 +513,7 @@ impl<'de> Deserialize<'de> for MultipleScattering {
 
 impl Default for ChiangParams {
     /// pbrt-v3's defaults (β_m = β_n = 0.3, α = 2°, η = 1.55), absorption from the hair's
-    /// colour, dual scattering (the volume grid's defaults: 32³ cells, 16 steps).
+    /// colour, dual scattering (the volume grid's defaults: 32³ cells, 64 steps).
     fn default() -> Self {
         Self {
             beta_m: 0.3,
@@ -1112,7 +1113,7 @@ mod tests {
             p.validate().map_err(|e| (e.name, e.reason))
         };
         type Spoil = fn(&mut ChiangParams);
-        let cases: [(Spoil, &str); 10] = [
+        let cases: [(Spoil, &str); 14] = [
             (|p| p.melanin = Some(1.01), "melanin"),
             (|p| p.melanin = Some(-0.01), "melanin"),
             (|p| p.melanin = Some(f32::NAN), "melanin"),
@@ -1261,7 +1262,10 @@ mod tests {
         );
         // The method's names, and dual_scattering's old spelling both ways.
         for (text, want) in [
-            ("multiple_scattering = \"volume\"", MultipleScattering::Volume),
+            (
+                "multiple_scattering = \"volume\"",
+                MultipleScattering::Volume,
+            ),
             ("multiple_scattering = \"dual\"", MultipleScattering::Dual),
             ("multiple_scattering = \"none\"", MultipleScattering::None),
             ("dual_scattering = true", MultipleScattering::Dual),

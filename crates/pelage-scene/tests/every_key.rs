@@ -6,9 +6,8 @@ use glam::Vec3;
 use pelage_scene::{
     AdsmParams, ChiangParams, DeepOpacityParams, DirectionalLight, GroomSource, GuideParams,
     HairType, KajiyaKayParams, LayerSpacing, Light, MarschnerParams, MeshSource,
-    MultipleScattering, PointLight,
-    SadeghiParams, SceneFile, SceneFileError, ShadingModel, ShadowMapParams, ShadowParams,
-    Transparency, VoxelParams, WboitWeight,
+    MultipleScattering, PointLight, SadeghiParams, SceneFile, SceneFileError, ShadingModel,
+    ShadowMapParams, ShadowParams, Transparency, VoxelParams, WboitWeight,
 };
 
 /// Parses `text`, which must fail with a TOML error naming `key` at `line`.

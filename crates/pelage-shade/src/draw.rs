@@ -12,9 +12,9 @@ use pelage_scene::{CameraMatrices, Light, ParamError, ShadeParams};
 use pelage_strands::{MeshBuffers, PreparedFrame, StrandBuffers, StrandFrame, StrandLayout};
 
 use crate::hair_model::HairModel;
-use crate::volume::{VOLUME_FLUENCE, VolumeGrid};
 use crate::ribbons::{FrameUniforms, MeshStyle, RibbonStyle};
 use crate::targets::TargetFormat;
+use crate::volume::{VOLUME_FLUENCE, VolumeGrid};
 
 /// The frame resource naming the colour target a method draws into.
 pub const TARGET_COLOR: &str = "target.color";
@@ -278,13 +278,9 @@ impl Common {
         };
         let model = HairModel::new(gpu, &params.model)?;
         let volume = match (model.volume(), model.chiang()) {
-            (Some(field), Some(tables)) => Some(VolumeGrid::new(
-                gpu,
-                field,
-                tables,
-                &frame.buffer,
-                strands,
-            )?),
+            (Some(field), Some(tables)) => {
+                Some(VolumeGrid::new(gpu, field, tables, &frame.buffer, strands)?)
+            }
             _ => None,
         };
         let redirects: Vec<Redirect> = shadow

@@ -32,9 +32,7 @@ pub use models::{
 pub use pelage_scene::ShadeParams;
 pub use ribbons::{FrameLight, FrameUniforms, MeshStyle, RibbonStyle};
 pub use targets::{COLOR_FORMAT, DEPTH_FORMAT, TargetFormat, TargetViewSet, Targets};
-pub use volume::{
-    VOLUME_FIXED_SCALE, VOLUME_FLUENCE, VolumeField, VolumeGrid, VolumeUniforms,
-};
+pub use volume::{VOLUME_FIXED_SCALE, VOLUME_FLUENCE, VolumeField, VolumeGrid, VolumeUniforms};
 
 /// The shaders of stage 3 (`wgsl/shade/*.wgsl`), importing pelage-gpu's (the shared
 /// files and the shadow contract `shadow/none.wgsl`). A shadow method's lookup comes in

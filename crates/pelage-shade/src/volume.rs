@@ -441,6 +441,16 @@ impl VolumeGrid {
         }
     }
 
+    /// Bytes of GPU memory a grid of `resolution`³ cells holds (what
+    /// [`VolumeGrid::memory_bytes`] reports): 224 bytes per cell and 88 more.
+    pub fn bytes_for(resolution: u32) -> u64 {
+        let n = cells(resolution);
+        24 + n * ACCUM_U32 * 4
+            + 3 * n * CELL_BYTES
+            + (16 + n * CELL_BYTES)
+            + VolumeUniforms::min_size().get()
+    }
+
     /// Bytes of GPU memory (every buffer of the grid, the fluence included).
     pub fn memory_bytes(&self) -> u64 {
         self.bytes

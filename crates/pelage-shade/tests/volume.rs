@@ -41,7 +41,7 @@ fn wavy(count: u32, segments: u32, size: f32, width: f32) -> Hair {
     let mut vertices = Vec::new();
     for i in 0..count {
         let root = Vec3::new(hash(i, 1) - 0.5, 0.5, hash(i, 2) - 0.5) * size;
-        let phase = hash(i, 3) * 6.283;
+        let phase = hash(i, 3) * std::f32::consts::TAU;
         for k in 0..=segments {
             let f = k as f32 / segments as f32;
             let wave = Vec3::new((phase + 9.0 * f).sin(), 0.0, (phase + 7.0 * f).cos()) * 0.12;
@@ -141,6 +141,11 @@ fn run_gpu(
         style.tip_width,
     )
     .unwrap();
+    assert_eq!(
+        grid.memory_bytes(),
+        VolumeGrid::bytes_for(params.volume_grid),
+        "memory"
+    );
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
     grid.encode(&mut encoder, gpu.limits(), None);
     gpu.submit_and_wait([encoder.finish()]).unwrap();
@@ -291,10 +296,7 @@ fn volume_degenerate_hair_is_finite() {
             fluence.iter().chain(&medium).all(|x| x.is_finite()),
             "{name}: a non-finite value"
         );
-        let negative = fluence[4..]
-            .chunks_exact(4)
-            .filter(|c| c[0] < 0.0)
-            .count();
+        let negative = fluence[4..].chunks_exact(4).filter(|c| c[0] < 0.0).count();
         assert_eq!(negative, 0, "{name}: negative fluence");
         let total: f32 = fluence[4..].chunks_exact(4).map(|c| c[0]).sum();
         println!("{name}: cell {:.3e}, total fluence {total:.4e}", fluence[3]);
@@ -310,7 +312,11 @@ fn volume_degenerate_hair_is_finite() {
 fn volume_bad_sizes_are_refused() {
     let gpu = gpu();
     let max = VolumeField::max_resolution(&gpu);
-    println!("largest volume_grid on this device: {max}");
+    println!(
+        "largest volume_grid on this device: {max}; the default 32³ grid holds {} bytes",
+        VolumeGrid::bytes_for(32)
+    );
+    assert!(VolumeGrid::bytes_for(32) <= 8_000_000);
     assert!(max >= 32, "the default grid must fit: {max}");
     let params = volume_params(0, 4, Vec3::ONE);
     let e = HairModel::new(&gpu, &ShadingModel::Chiang(params)).unwrap_err();

@@ -36,8 +36,8 @@ use pelage::gpu::Gpu;
 use pelage::gpu::read_buffer;
 use pelage::scene::{
     AdsmParams, Camera, ChiangParams, DeepOpacityParams, DirectionalLight, HairType, Light, Mesh,
-    MultipleScattering, ShadingModel, ShadowMapParams, ShadowParams, Transparency, VoxelParams, WindParams,
-    chiang_color_scale, sigma_a_from_melanin,
+    MultipleScattering, ShadingModel, ShadowMapParams, ShadowParams, Transparency, VoxelParams,
+    WindParams, chiang_color_scale, sigma_a_from_melanin,
 };
 use pelage::{Renderer, Scene};
 use pelage_lab::{ScatterChart, ScatterPoint, Table, contact_sheet};
@@ -65,10 +65,25 @@ type Method = (&'static str, fn(&mut ChiangParams));
 
 /// The pelage variants measured against the path tracer: name, and how the variant sets
 /// up the scene's Chiang parameters. A new multiple-scattering method adds a row.
-const METHODS: [Method; 3] = [
-    ("single", |p| p.multiple_scattering = MultipleScattering::None),
+const METHODS: [Method; 5] = [
+    ("single", |p| {
+        p.multiple_scattering = MultipleScattering::None
+    }),
     ("dual", |p| p.multiple_scattering = MultipleScattering::Dual),
-    ("volume", |p| p.multiple_scattering = MultipleScattering::Volume),
+    // The volume method beside its defaults (32³ cells, 64 steps): a coarser grid, and
+    // fewer steps (light still in flight after the last step is lost).
+    ("volume_g16", |p| {
+        p.multiple_scattering = MultipleScattering::Volume;
+        p.volume_grid = 16;
+    }),
+    ("volume_s16", |p| {
+        p.multiple_scattering = MultipleScattering::Volume;
+        p.volume_iterations = 16;
+    }),
+    // The defaults last: the sheet shows its FLIP.
+    ("volume", |p| {
+        p.multiple_scattering = MultipleScattering::Volume
+    }),
 ];
 
 /// Bounce caps of the bounce-order split below the reference's 16 (one seed each).

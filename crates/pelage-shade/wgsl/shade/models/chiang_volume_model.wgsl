@@ -13,8 +13,10 @@
 // Response: with L(w) = (phi + 3 Phi . w) / (4 pi) the radiance travelling along w, read
 // trilinearly at p, the light leaving toward v is, by reciprocity, the light the fibre
 // would scatter from v weighed by the incoming radiance:
-//   L_o = A(theta_v) / (4 pi) max(0, phi + 3 Phi . q),  q = t (t.v) + g(theta_v) (v - t (t.v))
-// per channel (A and g of the fibre's own sigma_a, volume_common.wgsl).
+//   L_o = A(theta_v) / (4 pi) (phi + 3 Phi' . q),  q = t (t.v) + g(theta_v) (v - t (t.v))
+// per channel (A and g of the fibre's own sigma_a, volume_common.wgsl), Phi' the flux
+// shortened to |Phi'| <= phi / 3 (volume_response: order-1 harmonics ring negative
+// beyond that, and a clamp at zero would lose the light the fibre scatters backward).
 
 #import shade/models/chiang.wgsl
 #import shade/models/volume_common.wgsl
@@ -79,9 +81,20 @@ fn hair_scattered(t: vec3<f32>, v: vec3<f32>, p: vec3<f32>, base_color: vec3<f32
     let qg = along + fibre.g.y * across;
     let qb = along + fibre.g.z * across;
     let radiance = vec3<f32>(
-        max(0.0, s.r.x + 3.0 * dot(s.r.yzw, qr)),
-        max(0.0, s.g.x + 3.0 * dot(s.g.yzw, qg)),
-        max(0.0, s.b.x + 3.0 * dot(s.b.yzw, qb)),
+        volume_response(s.r, qr),
+        volume_response(s.g, qg),
+        volume_response(s.b, qb),
     );
     return fibre.albedo * radiance * (0.25 * INV_PI);
+}
+
+// phi + 3 Phi' . q, with Phi' the flux shortened to at most phi / 3 where it is longer:
+// the longest flux an order-1 radiance (phi + 3 Phi . w) / (4 pi) has without going
+// negative in some direction. Energy (phi) is kept; only the direction is softened, so
+// the response is never clamped (|q| <= 1).
+fn volume_response(c: vec4<f32>, q: vec3<f32>) -> f32 {
+    let phi = max(c.x, 0.0);
+    let len = length(c.yzw);
+    let flux = select(c.yzw, c.yzw * (phi / (3.0 * len)), 3.0 * len > phi);
+    return max(0.0, phi + 3.0 * dot(flux, q));
 }
