@@ -57,9 +57,13 @@ pub struct VolumeGridCpu {
     pub depth: Vec<f64>,
     /// Per cell and channel: fluence and flux vector `(φ, Φ)`.
     pub fluence: Vec<[DVec4; 3]>,
-    /// Total energy leaving the cells at each step (index 0: the injection), per channel
+    /// Total energy leaving the cells at each step (index 0: the injection), channels
     /// summed: the energy test watches it.
     pub step_energy: Vec<f64>,
+    /// Total energy arriving at the cells at each propagation step (one fewer than
+    /// `step_energy`): step `k`'s arrivals are step `k`'s departures less what left the
+    /// grid, and its departures are its arrivals less what the fibres absorbed.
+    pub step_arrivals: Vec<f64>,
 }
 
 /// Energy `A` and forward bias `g` per channel, as `volume_fibre_at`.
@@ -342,9 +346,11 @@ pub fn volume_grid(input: &VolumeInput<'_>) -> VolumeGridCpu {
     }
     let energy = |st: &[[DVec4; 3]]| st.iter().map(|c| c[0].x + c[1].x + c[2].x).sum::<f64>();
     let mut step_energy = vec![energy(&state)];
+    let mut step_arrivals = Vec::new();
     // Propagate.
     for _ in 0..p.volume_iterations {
         let mut next = vec![[DVec4::ZERO; 3]; cells];
+        let mut arrived = 0.0;
         for c in 0..cells {
             let xyz = IVec3::new((c % n) as i32, ((c / n) % n) as i32, (c / (n * n)) as i32);
             let mut arrive = [DVec4::ZERO; 3];
@@ -365,6 +371,7 @@ pub fn volume_grid(input: &VolumeInput<'_>) -> VolumeGridCpu {
                     }
                 }
             }
+            arrived += arrive[0].x + arrive[1].x + arrive[2].x;
             let keep = (-CHORD * depth[c]).exp();
             let (t, s) = (medium_t[c], medium_s[c]);
             for ch in 0..3 {
@@ -380,6 +387,7 @@ pub fn volume_grid(input: &VolumeInput<'_>) -> VolumeGridCpu {
         }
         state = next;
         step_energy.push(energy(&state));
+        step_arrivals.push(arrived);
     }
     VolumeGridCpu {
         resolution: n as u32,
@@ -388,5 +396,6 @@ pub fn volume_grid(input: &VolumeInput<'_>) -> VolumeGridCpu {
         depth,
         fluence,
         step_energy,
+        step_arrivals,
     }
 }
