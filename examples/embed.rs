@@ -254,6 +254,7 @@ impl Engine {
             guides: None,
             dynamics: None,
             motion: None,
+            skin: None,
             shadow: ShadowParams::Voxel(VoxelParams::default()),
             shade: shade(),
             camera: Default::default(),

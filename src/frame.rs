@@ -11,12 +11,13 @@ use glam::Vec3;
 use pelage_gpu::{FramePlan, Gpu, GpuTimer, PassInfo, ShaderBinding, wgpu};
 use pelage_scene::{
     Camera, CameraMatrices, DynamicsParams, GuideParams, Light, Mesh, MeshMotion, Resampled,
-    ShadowParams,
+    ShadowParams, Skin, SkinBend,
 };
 use pelage_shade::{HairInputs, HairPass, TargetFormat, TargetViews, Visibility};
 use pelage_shadow::{LightVisibility, ShadowMethod};
 use pelage_strands::{
-    GroomStrands, GrowStrands, GuideStrands, MeshBuffers, SimulateStrands, StrandFrame, StrandStage,
+    GroomStrands, GrowStrands, GuideStrands, MeshBuffers, MeshSkin, SimulateStrands, StrandFrame,
+    StrandStage,
 };
 
 use crate::Scene;
@@ -101,6 +102,10 @@ impl<'a> StrandSource<'a> {
                 motion.validate()?;
                 mesh.bounds = motion.reach(mesh.bounds);
             }
+            if let Some(skin) = &scene.skin {
+                skin.validate()?;
+                mesh.bounds = skin.reach(mesh.bounds);
+            }
             Ok(mesh)
         };
         let (mesh, strands): (MeshBuffers, Box<dyn StrandStage>) = match self {
@@ -173,6 +178,9 @@ pub struct Frame {
     target: FrameTarget,
     /// The mesh's motion and its rest pose, written into the mesh buffers every frame.
     motion: Option<(MeshMotion, Mesh)>,
+    /// The skinning pass writing the mesh buffers before stage 1, and the scene's rig
+    /// that sets its joint matrices every prepare (`None`: the caller sets them).
+    skin: Option<(MeshSkin, Option<SkinBend>)>,
     /// The passes a frame records, checked at construction.
     plan: FramePlan,
     /// The frame stage 1 last prepared, which every stage records.
@@ -183,7 +191,7 @@ impl Frame {
     /// Uploads `scene`'s mesh, samples the roots (or uploads the groom), builds a shadow
     /// and its hand-over per light and the hair pass for `target`.
     pub fn new(gpu: &Gpu, scene: &Scene, target: &FrameTarget) -> crate::Result<Self> {
-        Self::build(gpu, scene, None, target)
+        Self::build(gpu, scene, None, target, None)
     }
 
     /// [`Frame::new`] on mesh buffers the caller owns (its vertex and index buffers,
@@ -195,7 +203,44 @@ impl Frame {
         mesh: MeshBuffers,
         target: &FrameTarget,
     ) -> crate::Result<Self> {
-        Self::build(gpu, scene, Some(mesh), target)
+        Self::build(gpu, scene, Some(mesh), target, None)
+    }
+
+    /// [`Frame::new`] with `scene.mesh` skinned on the GPU by `skin` every frame (a
+    /// [`MeshSkin`] recorded before stage 1): `scene.mesh` is the bind pose the roots are
+    /// sampled on, the caller sets the joint matrices before each prepare
+    /// ([`Frame::set_joint_matrices`], or its own writes into
+    /// [`MeshSkin::joint_matrices`] of [`Frame::skin`]), and `reach` is a world box the
+    /// skinned mesh stays in, in every pose (shadow maps of the mesh and a simulation's
+    /// grid size themselves from it). Until the first matrices the mesh is in its bind
+    /// pose (every joint the identity). Refused with `scene.skin` or `scene.motion` set,
+    /// and in a groom-only scene.
+    pub fn with_skin(
+        gpu: &Gpu,
+        scene: &Scene,
+        skin: &Skin,
+        reach: (Vec3, Vec3),
+        target: &FrameTarget,
+    ) -> crate::Result<Self> {
+        if scene.skin.is_some() {
+            return Err(pelage_scene::ParamError::new(
+                "skin",
+                "a [skin] rig and a caller's skin",
+                "give the frame one skin: the scene's rig or the caller's, not both",
+            )
+            .into());
+        }
+        if !(reach.0.is_finite() && reach.1.is_finite() && reach.0.cmple(reach.1).all()) {
+            return Err(pelage_scene::ParamError::new(
+                "skin.reach",
+                reach,
+                "must be a finite box with min <= max",
+            )
+            .into());
+        }
+        let mut mesh = MeshBuffers::upload(gpu, &scene.mesh)?;
+        mesh.bounds = (reach.0.min(mesh.bounds.0), reach.1.max(mesh.bounds.1));
+        Self::build(gpu, scene, Some(mesh), target, Some(skin))
     }
 
     /// The one sequence that builds the stages: reach, strand source, shadow method per
@@ -205,7 +250,13 @@ impl Frame {
         scene: &Scene,
         mesh: Option<MeshBuffers>,
         target: &FrameTarget,
+        skin: Option<&Skin>,
     ) -> crate::Result<Self> {
+        // The targets' size first: every method would refuse it in its own words.
+        pelage_shade::check_image_size(gpu, target.width, target.height)?;
+        // The scene's rig, or the caller's skin: either skins the mesh every frame.
+        let rig = scene.skin.as_ref().map(|bend| bend.skin(&scene.mesh));
+        let skin = skin.or(rig.as_ref());
         // A groom with an empty mesh is a groom-only scene: nothing of the mesh is drawn
         // or shadowed, and nothing moves it or binds roots to it.
         let groom_only = scene.groom.is_some() && scene.mesh.indices.is_empty();
@@ -228,9 +279,27 @@ impl Frame {
             if scene.guides.is_some() {
                 return Err(refuse("guides", "to root the render strands on").into());
             }
+            if skin.is_some() {
+                return Err(refuse("skin", "to skin").into());
+            }
+        }
+        if skin.is_some() && scene.motion.is_some() {
+            return Err(pelage_scene::ParamError::new(
+                "skin",
+                "set with motion",
+                "a mesh is moved either rigidly (motion) or by its skin, not both: leave one out",
+            )
+            .into());
         }
         let draw_mesh = target.draw_mesh && !groom_only;
         let (mesh, strands) = StrandSource::of(scene).build(gpu, scene, mesh, groom_only)?;
+        let skin = match skin {
+            Some(skin) => Some((
+                MeshSkin::new(gpu, &scene.mesh, skin, &mesh)?,
+                scene.skin.clone(),
+            )),
+            None => None,
+        };
         Light::validate_all(&scene.lights).map_err(pelage_shade::ShadeError::from)?;
         // Every later stage sizes itself from what stage 1 hands over: the strand
         // buffers carry their counts, widths and reach.
@@ -288,6 +357,16 @@ impl Frame {
             target.height,
         )?;
         let plan = frame_plan(strands.as_ref(), &shadows, hair.as_ref());
+        // The skinning pass writes the mesh before stage 1 reads it.
+        let plan = match &skin {
+            Some((skin, _)) => {
+                let mut skinned = FramePlan::new(plan.inputs().iter().cloned());
+                skinned.push([skin.pass()]);
+                skinned.push(plan.passes().iter().cloned());
+                skinned
+            }
+            None => plan,
+        };
         plan.validate()?;
         // A point light at the centre the shadows are fitted around has no direction.
         let shadow_target = (reach.0 + reach.1) * 0.5;
@@ -296,6 +375,7 @@ impl Frame {
         }
         Ok(Self {
             motion: scene.motion.clone().map(|m| (m, scene.mesh.clone())),
+            skin,
             mesh,
             strands,
             shadows,
@@ -358,6 +438,9 @@ impl Frame {
     ) -> crate::Result<StrandFrame> {
         if let Some(camera) = camera {
             camera.validate()?;
+        }
+        if let Some((skin, Some(rig))) = &self.skin {
+            skin.set_joint_matrices(queue, &rig.joint_matrices(t))?;
         }
         if let Some((motion, rest)) = &self.motion {
             self.mesh.update(queue, &motion.apply(rest, t))?;
@@ -430,9 +513,13 @@ impl Frame {
     pub fn record_strands(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        timer: Option<&mut GpuTimer>,
+        mut timer: Option<&mut GpuTimer>,
     ) -> crate::Result<()> {
-        Ok(self.strands.encode(encoder, &self.prepared()?, timer)?)
+        let frame = self.prepared()?;
+        if let Some((skin, _)) = &self.skin {
+            skin.encode(encoder, timer.as_deref_mut());
+        }
+        Ok(self.strands.encode(encoder, &frame, timer)?)
     }
 
     /// Each light's shadow and hand-over (the second part of [`Frame::record`]): a
@@ -530,6 +617,39 @@ impl Frame {
     /// The mesh buffers every stage reads.
     pub fn mesh_buffers(&self) -> &MeshBuffers {
         &self.mesh
+    }
+
+    /// The skinning pass (`None` unless the frame skins its mesh: a scene's
+    /// [`SkinBend`] or [`Frame::with_skin`]), for its joint-matrix buffer.
+    pub fn skin(&self) -> Option<&MeshSkin> {
+        self.skin.as_ref().map(|(skin, _)| skin)
+    }
+
+    /// Writes the joint matrices the next recorded frame skins the mesh with (see
+    /// [`MeshSkin::set_joint_matrices`]): a frame without a skin, one whose scene rig
+    /// sets them at every prepare, a wrong count or a non-finite matrix is an error
+    /// naming `skin` or `skin.joint_matrices[i]`.
+    pub fn set_joint_matrices(
+        &self,
+        queue: &wgpu::Queue,
+        matrices: &[glam::Mat4],
+    ) -> crate::Result<()> {
+        match &self.skin {
+            Some((skin, None)) => Ok(skin.set_joint_matrices(queue, matrices)?),
+            Some((_, Some(_))) => Err(pelage_scene::ParamError::new(
+                "skin",
+                "a [skin] rig",
+                "the scene's rig sets the joint matrices at every prepare; build the frame \
+                 with Frame::with_skin to set them yourself",
+            )
+            .into()),
+            None => Err(pelage_scene::ParamError::new(
+                "skin",
+                "none",
+                "this frame has no skin: build it with Frame::with_skin or a scene with a skin rig",
+            )
+            .into()),
+        }
     }
 
     /// The lights the next prepare uses.

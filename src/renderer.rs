@@ -7,7 +7,7 @@ pub use update::{Change, Update};
 use pelage_gpu::{FramePlan, Gpu, GpuTimer, wgpu};
 use pelage_scene::{
     Camera, DynamicsParams, GuideParams, HairParams, Light, Mesh, MeshMotion, Resampled,
-    ShadeParams, ShadowParams,
+    ShadeParams, ShadowParams, SkinBend,
 };
 #[cfg(not(target_arch = "wasm32"))]
 use pelage_shade::TargetViews;
@@ -39,6 +39,11 @@ pub struct Scene {
     /// A rigid motion of the mesh over time (written into the mesh buffers every
     /// frame: the hair on it, its colliders and its drawing follow); `None` keeps it still.
     pub motion: Option<MeshMotion>,
+    /// A procedural two-joint rig skinning the mesh on the GPU every frame
+    /// ([`pelage_strands::MeshSkin`]: the hair on it follows); `None` keeps it still. Not
+    /// with `motion`. An engine's own skin and joint matrices go through
+    /// [`Frame::with_skin`] instead.
+    pub skin: Option<SkinBend>,
     /// Shadow method.
     pub shadow: ShadowParams,
     /// Raster and shading.
@@ -60,6 +65,7 @@ impl Default for Scene {
             guides: None,
             dynamics: None,
             motion: None,
+            skin: None,
             shadow: ShadowParams::default(),
             shade: ShadeParams::default(),
             camera: Camera::default(),
@@ -87,6 +93,7 @@ impl Scene {
             guides: file.groom.as_ref().and_then(|g| g.guides.clone()),
             dynamics: file.dynamics.clone(),
             motion: file.motion.clone(),
+            skin: file.skin.clone(),
             shadow: file.shadow.clone(),
             shade: file.shade.clone(),
             camera: file.camera.clone(),
@@ -115,7 +122,8 @@ impl Scene {
     /// which the renderer then refuses).
     ///
     /// A simulated groom (or simulated guides) reaches its longest strand (and width)
-    /// around its rest bounds; with a [`MeshMotion`] the box is the sphere around the pivot holding it.
+    /// around its rest bounds; with a [`MeshMotion`] the box is the sphere around the pivot holding it, and with a
+    /// [`SkinBend`] the box holding every pose of its moving joint.
     pub fn reach(&self) -> (glam::Vec3, glam::Vec3) {
         let (lo, hi) = self.mesh.bounds();
         // A simulated groom: its longest strand (and width) around its rest bounds.
@@ -147,6 +155,7 @@ impl Scene {
             return (glo, ghi);
         }
         let reach = (lo.min(glo), hi.max(ghi));
+        let reach = self.skin.as_ref().map_or(reach, |s| s.reach(reach));
         self.motion.as_ref().map_or(reach, |m| m.reach(reach))
     }
 }

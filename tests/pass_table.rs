@@ -140,6 +140,11 @@ fn generate(gpu: &Gpu) -> Result<String, String> {
             "`scenes/guides.toml`",
             small(scene_file("guides.toml")),
         ),
+        (
+            "`GrowStrands` on a skinned mesh (`MeshSkin`)",
+            "`scenes/creature_skinned.toml`",
+            small(scene_file("creature_skinned.toml")),
+        ),
     ];
     for (method, scene_name, scene) in stage1 {
         let plan = plan_of(gpu, &scene)?;

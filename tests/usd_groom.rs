@@ -169,6 +169,13 @@ fn a_groom_only_scene_draws_the_hair_and_no_mesh() {
                 ..only.clone()
             },
         ),
+        (
+            "skin",
+            Scene {
+                skin: Some(pelage::scene::SkinBend::default()),
+                ..only.clone()
+            },
+        ),
     ] {
         let e = Renderer::new(&gpu, &scene, SIZE.0, SIZE.1).unwrap_err();
         assert!(

@@ -4,7 +4,7 @@
 
 use glam::Vec3;
 use pelage_scene::{
-    DynamicsParams, HairParams, Light, MeshMotion, ShadeParams, ShadowParams, WindParams,
+    DynamicsParams, HairParams, Light, MeshMotion, ShadeParams, ShadowParams, SkinBend, WindParams,
 };
 
 use super::{Renderer, Scene};
@@ -43,6 +43,7 @@ pub(crate) struct Built {
     lights: Vec<Light>,
     dynamics: Option<DynamicsParams>,
     motion: Option<MeshMotion>,
+    skin: Option<SkinBend>,
     /// [`geometry_fingerprint`] of the mesh and the groom.
     geometry: u64,
 }
@@ -57,6 +58,7 @@ impl Built {
             lights: scene.lights.clone(),
             dynamics: scene.dynamics.clone(),
             motion: scene.motion.clone(),
+            skin: scene.skin.clone(),
             geometry: geometry_fingerprint(scene),
         }
     }
@@ -140,7 +142,7 @@ impl Renderer {
     /// Anything else (the mesh or groom, strand count, growth other than colour, level of
     /// detail parameters, the shadow method or its parameters, the light count with
     /// shadows on, the transparency method, sample count, minimum ribbon width, the kind
-    /// of shading model, a groom's reach under a new wind, the dynamics, the motion) answers [`Update::Rebuild`]
+    /// of shading model, a groom's reach under a new wind, the dynamics, the motion, the skin) answers [`Update::Rebuild`]
     /// naming it, and nothing is applied. Bad values are an error, as from
     /// [`Renderer::new`], and nothing is applied either. The camera is the caller's at
     /// every `render` and is not compared.
@@ -173,6 +175,9 @@ impl Renderer {
         }
         if scene.motion != built.motion {
             return Ok(Update::Rebuild("motion".into()));
+        }
+        if scene.skin != built.skin {
+            return Ok(Update::Rebuild("skin".into()));
         }
         if let Err(why) = self.frame.lights_in_place(&scene.lights) {
             return Ok(Update::Rebuild(why));

@@ -61,7 +61,7 @@ use bevy::log::error;
 use bevy::mesh::{Indices, Mesh, Mesh3d, PrimitiveTopology, VertexAttributeValues};
 use bevy::prelude::*;
 use bevy::render::camera::ExtractedCamera;
-use bevy::render::render_resource::{LoadOp, StoreOp};
+use bevy::render::render_resource::{LoadOp, StoreOp, TextureUsages};
 use bevy::render::renderer::{
     RenderAdapterInfo, RenderContext, RenderDevice, RenderQueue, ViewQuery,
 };
@@ -112,12 +112,26 @@ impl Default for Fur {
     }
 }
 
+/// Lets pelage's compute passes read every camera's depth: adds `TEXTURE_BINDING` to
+/// each [`Camera3d`]'s depth texture usages (as Bevy's own occlusion culling does).
+/// The strand rasterizer culls and depth-tests the hair against the opaque depth it
+/// samples; without the flag Bevy's depth texture is a render attachment only.
+fn let_pelage_read_depth(mut cameras: Query<&mut Camera3d>) {
+    for mut camera in &mut cameras {
+        let usages = TextureUsages::from(camera.depth_texture_usages);
+        // Written only when missing, so change detection stays quiet.
+        if !usages.contains(TextureUsages::TEXTURE_BINDING) {
+            camera.depth_texture_usages = (usages | TextureUsages::TEXTURE_BINDING).into();
+        }
+    }
+}
+
 /// Adds fur to every entity with [`Fur`] and [`Mesh3d`], drawn by every [`Camera3d`].
 pub struct PelagePlugin;
 
 impl Plugin for PelagePlugin {
     fn build(&self, app: &mut App) {
-        app.add_systems(PostUpdate, read_fur_meshes);
+        app.add_systems(PostUpdate, (read_fur_meshes, let_pelage_read_depth));
         let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
             return;
         };
@@ -382,6 +396,7 @@ impl FurInstance {
             guides: None,
             dynamics: None,
             motion: None,
+            skin: None,
             shadow: ShadowParams::Voxel(fur.voxel.clone()),
             shade,
             camera: Default::default(),

@@ -29,12 +29,13 @@ use std::time::Instant;
 use pelage::gpu::{Gpu, GpuTimer, ShaderSources, compute_pipeline, dispatch_size, wgpu};
 use pelage::scene::{
     ChiangParams, DirectionalLight, DynamicsParams, MultipleScattering, ShadingModel, ShadowParams,
-    Transparency, VoxelParams, WindParams,
+    SkinBend, Transparency, VoxelParams, WindParams,
 };
 use pelage::scene::{GuideParams, Resampled};
 use pelage::shadow::{ShadowMethod, VoxelShadow};
 use pelage::strands::{
-    GroomStrands, GrowStrands, GuideMemory, GuideStrands, MeshBuffers, SimulateStrands, StrandStage,
+    GroomStrands, GrowStrands, GuideMemory, GuideStrands, MeshBuffers, MeshSkin, SKIN_LABEL,
+    SimulateStrands, StrandStage,
 };
 use pelage::{Renderer, Scene};
 use pelage_lab::{ScatterChart, ScatterPoint, Table};
@@ -314,7 +315,7 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
         .collect();
     // Steps: each strand count's compute stages and each of its transparency methods,
     // then the bare lit pass and the three combinations of section 4.
-    let bar = progress::bar((counts.len() * (1 + methods.len()) + 7) as u64, "steps")?;
+    let bar = progress::bar((counts.len() * (1 + methods.len()) + 8) as u64, "steps")?;
 
     // 1. Compute stages and the copy kernel, on a device that never draws.
     bar.println(format!(
@@ -497,6 +498,11 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
         scan_ms.push(get(&times, "shadow: scan"));
         grow_points.push((f64::from(strands), get(&times, "strands: grow")));
     }
+
+    // 1b. GPU skinning, stage 1's input, against the growth pass it feeds.
+    let (skin_rows, skin_ratio) = skinning_section(frames, &bar)?;
+    rows.extend(skin_rows);
+    bar.inc(1);
 
     // 2. Raster stages and whole frames, per strand count, on devices of their own.
     bar.println("raster stages (timestamps) and whole stages (wall clock, submitted alone):");
@@ -842,6 +848,11 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
             "1 = independent of strands",
         ),
         (
+            "skinning: skin pass over growth pass",
+            skin_ratio,
+            "timestamps, the creature skinned by the [skin] rig, 20000 strands x 8 segments grown on it",
+        ),
+        (
             "memory: bytes per strand vertex",
             per_vertex,
             "StrandBuffers::vertices",
@@ -932,6 +943,9 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
             );
         }
     }
+    println!(
+        "  skinning: the skin pass takes {skin_ratio:.3}x the growth pass of a {SKIN_STRANDS}-strand creature (target <= 0.1)"
+    );
     for line in &raster.summary {
         println!("  {line}");
     }
@@ -949,6 +963,68 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
         started.elapsed().as_secs_f64()
     );
     Ok(())
+}
+
+/// The strand count of the skinning section: issue 37's creature.
+const SKIN_STRANDS: u32 = 20_000;
+
+/// Section 1b of the benchmark: the creature skinned by the default [`SkinBend`] rig
+/// ([`MeshSkin`], a compute pass over its vertices) then [`SKIN_STRANDS`] strands of 8
+/// segments grown on it, both timed with timestamps in the same frames; returns the two
+/// rows and the skin pass's time over the growth pass's.
+fn skinning_section(frames: usize, bar: &progress::Progress) -> Result<(Vec<Row>, f64), Error> {
+    let gpu = Gpu::headless()?;
+    let s = scene(SKIN_STRANDS, 8);
+    let mesh = MeshBuffers::upload(&gpu, &s.mesh)?;
+    let rig = SkinBend::default();
+    let skin = MeshSkin::new(&gpu, &s.mesh, &rig.skin(&s.mesh), &mesh)?;
+    let mut grow = GrowStrands::new(&gpu, &s.mesh, &mesh, &s.hair)?;
+    let times = time_frames(&gpu, frames, |encoder, mut timer, frame| {
+        let t = frame as f32 / 24.0;
+        skin.set_joint_matrices(&gpu.queue, &rig.joint_matrices(t))?;
+        let frame = grow.prepare(&gpu.queue, t)?;
+        skin.encode(encoder, timer.as_deref_mut());
+        grow.encode(encoder, &frame, timer)?;
+        Ok(())
+    })?;
+    let (skin_ms, grow_ms) = (get(&times, SKIN_LABEL), get(&times, "strands: grow"));
+    let vertices = u64::from(mesh.vertex_count);
+    // Reads bind positions, normals (12 B each), joints and weights (16 B each); writes
+    // positions and normals (12 B each).
+    let skin_bytes = vertices * (12 + 12 + 16 + 16 + 12 + 12);
+    bar.println(format!(
+        "  {SKIN_STRANDS:>7} strands  {SKIN_LABEL} ({vertices} vertices) {skin_ms:9.3} ms, {:.3}x the growth pass ({grow_ms:.3} ms)",
+        skin_ms / grow_ms
+    ));
+    let row = |stage: &str, ms: f64, bytes: u64, note: String| Row {
+        section: "skinning",
+        stage: stage.into(),
+        strands: SKIN_STRANDS,
+        pixels: 0,
+        gpu_ms: ms,
+        bytes,
+        copy_ratio: skin_ms / grow_ms,
+        note,
+    };
+    Ok((
+        vec![
+            row(
+                SKIN_LABEL,
+                skin_ms,
+                skin_bytes,
+                format!(
+                    "linear blend skinning of the creature's {vertices} vertices (4 joints each); ratio: over the growth pass"
+                ),
+            ),
+            row(
+                "strands: grow (skinned)",
+                grow_ms,
+                0,
+                "the growth pass on the skinned mesh, same frames; ratio: skin over grow".into(),
+            ),
+        ],
+        skin_ms / grow_ms,
+    ))
 }
 
 /// What [`strand_raster_section`] measured.

@@ -554,7 +554,7 @@ mod tests {
         );
         assert_eq!(
             scene.model(&["--model", "kajiya_kay"]).unwrap(),
-            ShadingModel::default()
+            ShadingModel::KajiyaKay(KajiyaKayParams::default())
         );
     }
 
@@ -619,8 +619,8 @@ mod tests {
     #[test]
     fn chiang_options_refuse_another_model_and_bad_values() {
         for args in [
-            &["--melanin", "0.3"][..],
-            &["--dual-scattering", "off"],
+            &["--model", "kajiya_kay", "--melanin", "0.3"][..],
+            &["--model", "kajiya_kay", "--dual-scattering", "off"],
             &["--model", "marschner", "--melanin", "0.3"],
             &["--model", "sadeghi", "--dual-scattering", "on"],
             &["--model", "sadeghi", "--multiple-scattering", "volume"],

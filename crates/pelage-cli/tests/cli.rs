@@ -285,7 +285,15 @@ fn an_unknown_key_at_marschners_own_level_is_refused() {
 #[test]
 fn chiang_options_refuse_another_model() {
     exits_2(
-        &["render", "--size", "32x24", "--melanin", "0.3"],
+        &[
+            "render",
+            "--size",
+            "32x24",
+            "--model",
+            "kajiya_kay",
+            "--melanin",
+            "0.3",
+        ],
         &["--melanin", "chiang", "kajiya_kay"],
     );
     exits_2(

@@ -28,6 +28,7 @@ pub mod oit_raster;
 pub mod path_tracer;
 pub mod shading;
 pub mod simulate;
+pub mod skin;
 pub mod strand_raster;
 pub mod strands;
 pub mod transmittance;

@@ -20,6 +20,7 @@ pub mod params;
 pub mod scene_file;
 mod scene_keys;
 pub mod shading;
+pub mod skin;
 pub mod surface_map;
 pub mod tfx_file;
 pub mod transparency;
@@ -53,6 +54,7 @@ pub use shading::{
     chiang_color_scale, sigma_a_from_artist_melanin, sigma_a_from_color, sigma_a_from_melanin,
     sigma_a_from_reflectance,
 };
+pub use skin::{MAX_JOINTS, Skin, SkinBend, WEIGHT_SUM_TOLERANCE, check_finite_matrices};
 pub use surface_map::{MAX_MAP_FILE_BYTES, MAX_MAP_SIZE, MapError, MapImage, TextureMap};
 pub use tfx_file::{TfxFile, TfxFileError};
 pub use transparency::{MAX_OIT_K, MIN_NODES_PER_PIXEL, MIN_POOL, Transparency, WboitWeight};

@@ -1358,7 +1358,8 @@ pub struct ShadeParams {
     /// Ambient light, a fraction of the base colour.
     pub ambient: f32,
     /// The hair shading model (Kajiya-Kay, Marschner analytic or from lookup tables,
-    /// Sadeghi) and its parameters.
+    /// Sadeghi, Chiang) and its parameters; Chiang with dual scattering by default (the
+    /// scattering lab measures it closest to the path tracer).
     pub model: crate::ShadingModel,
     /// Darkening at the root in [0, 1], a stand-in for self-shadowing until a shadow method is on.
     pub root_occlusion: f32,
@@ -1368,7 +1369,9 @@ pub struct ShadeParams {
     /// composite per pixel and always draw 1 sample: the ribbons' coverage alpha does
     /// their anti-aliasing (see [`ShadeParams::samples`]).
     pub sample_count: u32,
-    /// How the hair's fragments are composited (opaque, or an OIT method).
+    /// How the hair's fragments are composited (opaque, an OIT method, or the strand
+    /// rasterizer, the default: the bench and the OIT lab measure it the fastest and at
+    /// least as accurate as any other).
     pub transparency: crate::Transparency,
 }
 
@@ -1382,7 +1385,7 @@ impl Default for ShadeParams {
             root_occlusion: 0.65,
             min_pixels: 0.7,
             sample_count: 4,
-            transparency: crate::Transparency::Opaque,
+            transparency: crate::Transparency::default(),
         }
     }
 }

@@ -48,6 +48,18 @@
 //! turn_frequency = 0.35   # per second
 //! ```
 //!
+//! A `[skin]` table bends and twists the mesh by a procedural two-joint rig, skinned on
+//! the GPU every frame (see [`SkinBend`] and `scenes/creature_skinned.toml`; not with
+//! `[motion]`):
+//!
+//! ```toml
+//! [skin]
+//! origin = [0.0, 0.1, 0.2]  # the joint
+//! axis = [0.0, 0.0, 1.0]    # into the part that moves
+//! bend = 0.6                # radians about bend_axis
+//! bend_frequency = 0.5      # per second
+//! ```
+//!
 //! A `[groom]` table draws the strands of a `.hair`, `.tfx` or (feature `usd`) USD file
 //! (`.usda`, `.usdc`, `.usd`, `.usdz`) instead of growing fur from the mesh (see
 //! [`GroomSource`]; the mesh is still drawn, as the head, say):
@@ -105,7 +117,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::{
     Camera, DynamicsParams, GroomError, GroomSource, HairParams, Light, Mesh, MeshError,
-    MeshMotion, ObjError, Resampled, ShadeParams, ShadowParams, WindParams, scene_keys,
+    MeshMotion, ObjError, Resampled, ShadeParams, ShadowParams, SkinBend, WindParams, scene_keys,
 };
 
 /// The surface the hair grows from.
@@ -175,6 +187,11 @@ pub struct SceneFile {
     /// and the hair on it turn and nod.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub motion: Option<MeshMotion>,
+    /// A procedural two-joint rig skinning the mesh on the GPU every frame (none by
+    /// default): the mesh bends and twists, and the hair on it follows (see
+    /// [`SkinBend`]; not with `[motion]`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub skin: Option<SkinBend>,
     /// Stage 2's method.
     pub shadow: ShadowParams,
     /// Stage 3: shading model, transparency, look.
@@ -193,6 +210,7 @@ impl Default for SceneFile {
             groom: None,
             dynamics: None,
             motion: None,
+            skin: None,
             shadow: ShadowParams::default(),
             shade: ShadeParams::default(),
             camera: Camera::default(),
@@ -377,6 +395,25 @@ impl SceneFile {
         }
         if let Some(motion) = &self.motion {
             motion.validate()?;
+        }
+        if let Some(skin) = &self.skin {
+            skin.validate()?;
+            if self.motion.is_some() {
+                return Err(crate::ParamError::new(
+                    "skin",
+                    "set with [motion]",
+                    "a mesh is moved either rigidly ([motion]) or by its skin ([skin]), not \
+                     both: leave one out",
+                ));
+            }
+            if self.mesh == MeshSource::None {
+                return Err(crate::ParamError::new(
+                    "skin",
+                    "set with mesh.kind = \"none\"",
+                    "a groom-only scene has no mesh to skin; give the scene a mesh or leave \
+                     [skin] out",
+                ));
+            }
         }
         Light::validate_all(&self.lights)?;
         self.shade.transparency.validate_pools()?;

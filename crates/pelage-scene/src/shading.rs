@@ -841,9 +841,10 @@ pub enum ShadingModel {
 }
 
 impl Default for ShadingModel {
-    /// Kajiya-Kay with the look of `ribbons.wgsl`.
+    /// Chiang et al. 2016 with dual scattering: of the models, the one the scattering
+    /// lab (`pelage lab scattering`) measures closest to the path tracer.
     fn default() -> Self {
-        Self::KajiyaKay(KajiyaKayParams::default())
+        Self::Chiang(ChiangParams::default())
     }
 }
 

@@ -223,13 +223,20 @@ fn a_left_out_tag_is_the_default_variant() {
             ..Default::default()
         })
     );
-    let file = SceneFile::parse("[shade.model]\nshininess = 20.0\n").unwrap();
+    let file = SceneFile::parse("[shade.model]\nbeta_m = 0.4\n").unwrap();
     assert_eq!(
         file.shade.model,
-        ShadingModel::KajiyaKay(KajiyaKayParams {
-            shininess: 20.0,
+        ShadingModel::Chiang(ChiangParams {
+            beta_m: 0.4,
             ..Default::default()
         })
+    );
+    // A key of another model than the default names the default it was read against.
+    let e = SceneFile::parse("[shade.model]\nshininess = 20.0\n").unwrap_err();
+    assert!(e.to_string().contains("unknown field `shininess`"), "{e}");
+    assert!(
+        e.to_string().contains("so it is \"chiang\", the default"),
+        "{e}"
     );
     let file = SceneFile::parse("[[lights]]\nintensity = 3.0\n").unwrap();
     assert_eq!(
@@ -244,7 +251,7 @@ fn a_left_out_tag_is_the_default_variant() {
     // A key of another variant under a left-out tag says what the tag became.
     let m = refused("[shade.transparency]\nk = 8\n", "k", 2);
     assert!(
-        m.contains("`method` is left out") && m.contains("\"opaque\""),
+        m.contains("`method` is left out") && m.contains("\"strand_raster\""),
         "{m}"
     );
     let m = refused("[shadow]\npcf_radius = 2\n", "pcf_radius", 2);

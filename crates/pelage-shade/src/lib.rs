@@ -31,7 +31,9 @@ pub use models::{
 };
 pub use pelage_scene::ShadeParams;
 pub use ribbons::{FrameLight, FrameUniforms, MeshStyle, RibbonStyle};
-pub use targets::{COLOR_FORMAT, DEPTH_FORMAT, TargetFormat, TargetViewSet, Targets};
+pub use targets::{
+    COLOR_FORMAT, DEPTH_FORMAT, TargetFormat, TargetViewSet, Targets, check_image_size,
+};
 pub use volume::{VOLUME_FIXED_SCALE, VOLUME_FLUENCE, VolumeField, VolumeGrid, VolumeUniforms};
 
 /// The shaders of stage 3 (`wgsl/shade/*.wgsl`), importing pelage-gpu's (the shared

@@ -183,15 +183,7 @@ impl Targets {
     ) -> crate::Result<Self> {
         format.validate(gpu)?;
         let sample_count = format.samples;
-        let max = gpu.limits().max_texture_dimension_2d;
-        if width == 0 || height == 0 || width > max || height > max {
-            return Err(pelage_scene::ParamError {
-                name: "image size".into(),
-                value: format!("{width}x{height}"),
-                reason: format!("each side must be in 1..={max} on this adapter"),
-            }
-            .into());
-        }
+        check_image_size(gpu, width, height)?;
         let texture = |label: &str, format, samples, usage| {
             gpu.device.create_texture(&wgpu::TextureDescriptor {
                 label: Some(label),
@@ -336,4 +328,20 @@ impl TargetViewSet {
             load: false,
         }
     }
+}
+
+/// Refuses targets of `width` x `height` unless each side is in 1..= the adapter's
+/// `max_texture_dimension_2d`, naming `image size`: what [`Targets::with_format`] and a
+/// frame built for the caller's targets both check first.
+pub fn check_image_size(gpu: &Gpu, width: u32, height: u32) -> crate::Result<()> {
+    let max = gpu.limits().max_texture_dimension_2d;
+    if width == 0 || height == 0 || width > max || height > max {
+        return Err(pelage_scene::ParamError {
+            name: "image size".into(),
+            value: format!("{width}x{height}"),
+            reason: format!("each side must be in 1..={max} on this adapter"),
+        }
+        .into());
+    }
+    Ok(())
 }

@@ -121,6 +121,9 @@ fn shade_params(transparency: Transparency) -> ShadeParams {
         min_pixels: 1.0,
         sample_count: 1,
         transparency,
+        // Kajiya-Kay under an ambient of 1 and no root occlusion: the colour the CPU
+        // rasterisation composites (these tests judge compositing, not fibre shading).
+        model: pelage_scene::ShadingModel::KajiyaKay(Default::default()),
         ..Default::default()
     }
 }

@@ -16,7 +16,9 @@
 //!
 //! The mesh lives in [`MeshBuffers`]: tightly packed `f32 x3` positions and
 //! normals and a `u32` triangle list in storage buffers, which an engine may own
-//! and rewrite every frame (a skinned mesh, say).
+//! and rewrite every frame (a skinned mesh, say). [`MeshSkin`] skins a mesh into them on
+//! the GPU (linear blend skinning, up to four joints per vertex), recorded before the
+//! method's pass.
 //!
 //! Level of detail ([`LodLevel`], from `HairParams::lod`): stochastic simplification
 //! grows only a prefix of the (randomly ordered) strands, widened by seed 002's
@@ -33,6 +35,7 @@ mod lod;
 mod mesh_buffers;
 mod roots;
 mod simulate;
+mod skin;
 
 pub use groom::GroomStrands;
 pub use grow::{
@@ -49,6 +52,7 @@ pub use roots::{
     StrandRoot, hash_to_unit, pcg_hash, root_region, root_tint, sample_roots, strand_brightness,
 };
 pub use simulate::{ColliderUniform, STATE_HEADER, SimUniforms, SimulateStrands};
+pub use skin::{MeshSkin, SKIN_LABEL, SkinUniforms};
 
 use pelage_gpu::{GpuError, ShaderSources};
 use pelage_scene::{MeshError, ParamError};
@@ -63,6 +67,7 @@ pub static SHADERS: ShaderSources = pelage_gpu::wgsl_sources!(
     "strands/lod.wgsl",
     "strands/rotation.wgsl",
     "strands/simulate.wgsl",
+    "strands/skin.wgsl",
 );
 
 /// What can go wrong in stage 1.

@@ -47,13 +47,13 @@ pub struct Settings {
 }
 
 impl Default for Settings {
-    /// The default scene's strands and wind, drawn by the strand rasterizer (the method
-    /// that needs no optional feature).
+    /// The default scene's strands, wind and transparency method (the strand
+    /// rasterizer, which needs no optional feature).
     fn default() -> Self {
         Self {
             strands: Scene::default().hair.roots.count,
             wind: 1.0,
-            method: "strand_raster".into(),
+            method: Scene::default().shade.transparency.name().into(),
         }
     }
 }
@@ -131,8 +131,8 @@ mod tests {
     #[test]
     fn the_default_settings_draw_the_default_scene_with_the_strand_rasterizer() {
         let s = scene(&Settings::default()).unwrap();
-        let mut expected = Scene::default();
-        expected.shade.transparency = Transparency::strand_raster();
+        let expected = Scene::default();
+        assert_eq!(expected.shade.transparency, Transparency::strand_raster());
         assert_eq!(s.hair, expected.hair);
         assert_eq!(s.shade, expected.shade);
         assert_eq!(s.camera, expected.camera);
