@@ -265,7 +265,10 @@ pub fn tile_depths(
         .map_err(|_| params.too_many_cells())?;
     let farther = |a: f32, b: f32| if params.reverse_z { a < b } else { a > b };
     for t in 0..tiles {
-        let (tx, ty) = (t as u64 % u64::from(params.tiles_x.max(1)), t as u64 / u64::from(params.tiles_x.max(1)));
+        let (tx, ty) = (
+            t as u64 % u64::from(params.tiles_x.max(1)),
+            t as u64 / u64::from(params.tiles_x.max(1)),
+        );
         let tile = u64::from(params.tile);
         let (x0, y0) = (tx * tile, ty * tile);
         let x1 = (x0 + tile).min(u64::from(params.width));
@@ -587,7 +590,8 @@ fn composite_pixel(
             ],
         };
         for slot in window.iter_mut() {
-            let nearer = carry.depth < slot.depth || (carry.depth == slot.depth && carry.id < slot.id);
+            let nearer =
+                carry.depth < slot.depth || (carry.depth == slot.depth && carry.id < slot.id);
             if !nearer {
                 std::mem::swap(&mut carry, slot);
             }

@@ -246,7 +246,10 @@ fn mirror_frame(
         "  {drawn} pixels drawn; largest composite difference {largest:.2e}; {same} of {} pixels equal after rounding to f16",
         capture.composite.len()
     );
-    assert!(largest <= 1.0 / 255.0, "{name}: composite differs by {largest}");
+    assert!(
+        largest <= 1.0 / 255.0,
+        "{name}: composite differs by {largest}"
+    );
     Checked { capture, stats }
 }
 
@@ -688,7 +691,10 @@ fn a_pool_ten_times_too_small_drops_a_frame_visibly_then_grows() {
     );
     assert!(stats2.capacity >= stats1.peak_nodes);
     // Equal: every cell is sorted by segment index, whatever the pool's size.
-    assert!(second == whole, "the grown pool's frame differs: FLIP {same}");
+    assert!(
+        second == whole,
+        "the grown pool's frame differs: FLIP {same}"
+    );
 }
 
 #[test]
@@ -725,8 +731,14 @@ fn the_same_frame_renders_the_same_bytes_twice() {
             );
             assert!(stats.peak_nodes > 100_000, "too little hair: {stats:?}");
             assert_eq!(stats.dropped, 0);
-            assert!(first == second, "opacity {opacity}, tile {tile}: frames differ");
-            assert!(first == other, "opacity {opacity}, tile {tile}: methods differ");
+            assert!(
+                first == second,
+                "opacity {opacity}, tile {tile}: frames differ"
+            );
+            assert!(
+                first == other,
+                "opacity {opacity}, tile {tile}: methods differ"
+            );
         }
     }
 }
