@@ -1158,7 +1158,9 @@ fn chiang_ui(ui: &mut egui::Ui, p: &mut ChiangParams, hair_color: Vec3) {
             ui.label("absorption from each strand's colour (hair panel)");
         }
     }
-    ui.checkbox(&mut p.dual_scattering, "dual scattering");
+    if let Some(method) = pick_method(ui, "multiple scattering", &p.multiple_scattering) {
+        p.multiple_scattering = method;
+    }
 }
 
 /// `--time-changes`: each uniform-only parameter changed twice, first through a new

@@ -28,8 +28,8 @@ use std::time::Instant;
 
 use pelage::gpu::{Gpu, GpuTimer, ShaderSources, compute_pipeline, dispatch_size, wgpu};
 use pelage::scene::{
-    ChiangParams, DirectionalLight, DynamicsParams, ShadingModel, ShadowParams, SkinBend,
-    Transparency, VoxelParams, WindParams,
+    ChiangParams, DirectionalLight, DynamicsParams, MultipleScattering, ShadingModel, ShadowParams,
+    SkinBend, Transparency, VoxelParams, WindParams,
 };
 use pelage::scene::{GuideParams, Resampled};
 use pelage::shadow::{ShadowMethod, VoxelShadow};
@@ -672,7 +672,7 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
         (
             "chiang single scattering",
             ShadingModel::Chiang(ChiangParams {
-                dual_scattering: false,
+                multiple_scattering: MultipleScattering::None,
                 ..ChiangParams::default()
             }),
         ),
@@ -680,11 +680,32 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
             "chiang dual scattering",
             ShadingModel::Chiang(ChiangParams::default()),
         ),
+        (
+            "chiang volume scattering 16³",
+            ShadingModel::Chiang(ChiangParams {
+                multiple_scattering: MultipleScattering::Volume,
+                volume_grid: 16,
+                ..ChiangParams::default()
+            }),
+        ),
+        (
+            "chiang volume scattering",
+            ShadingModel::Chiang(ChiangParams {
+                multiple_scattering: MultipleScattering::Volume,
+                ..ChiangParams::default()
+            }),
+        ),
     ];
     let mut model_ms = Vec::new();
     for (name, model) in models {
         let gpu = Gpu::headless()?;
         let mut s = scene(seed_strands, 15);
+        let grid_bytes = match &model {
+            ShadingModel::Chiang(p) if p.multiple_scattering == MultipleScattering::Volume => {
+                pelage::shade::VolumeGrid::bytes_for(p.volume_grid)
+            }
+            _ => 0,
+        };
         s.shade.model = model;
         s.shade.sample_count = 1;
         let mut renderer = Renderer::new(&gpu, &s, seed_size, seed_size)?;
@@ -695,14 +716,19 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
             .filter(|(n, _)| n == "shade")
             .map(|(_, ms)| *ms)
             .collect();
-        model_ms.push((name, median(shade)));
+        model_ms.push((name, median(shade), grid_bytes));
         bar.inc(1);
     }
     let single_ms = model_ms[1].1;
-    for &(name, ms) in &model_ms {
+    for &(name, ms, grid_bytes) in &model_ms {
         let ratio = ms / single_ms;
+        let memory = if grid_bytes > 0 {
+            format!(" (grid {:.2} MB)", grid_bytes as f64 / 1e6)
+        } else {
+            String::new()
+        };
         bar.println(format!(
-            "  {seed_strands} hairs at {seed_size}x{seed_size}, voxel shadows: shade stage with {name}: {ms:.1} ms = {ratio:.2}x chiang single scattering"
+            "  {seed_strands} hairs at {seed_size}x{seed_size}, voxel shadows: shade stage with {name}: {ms:.1} ms = {ratio:.2}x chiang single scattering{memory}"
         ));
         rows.push(Row {
             section: "scattering",
@@ -710,10 +736,12 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
             strands: seed_strands,
             pixels: u64::from(seed_size) * u64::from(seed_size),
             gpu_ms: ms,
-            bytes: 0,
+            bytes: grid_bytes,
             copy_ratio: ratio,
-            note: "wall clock of the shade stage; ratio column = ratio to chiang single scattering"
-                .into(),
+            note:
+                "wall clock of the shade stage; ratio column = ratio to chiang single scattering; \
+                   bytes = the volume grid's GPU memory"
+                    .into(),
         });
     }
 

@@ -6,7 +6,9 @@ use std::str::FromStr;
 
 use clap::ValueEnum;
 use pelage::Scene;
-use pelage::scene::{Light, Named, ParamError, ShadingModel, ShadowParams, Transparency};
+use pelage::scene::{
+    Light, MultipleScattering, Named, ParamError, ShadingModel, ShadowParams, Transparency,
+};
 
 use crate::error::CliError;
 
@@ -183,10 +185,16 @@ pub struct SceneOpts {
     #[arg(long, value_name = "EU[,PHEO]", allow_hyphen_values = true)]
     pub melanin: Option<Melanin>,
     /// Dual scattering of the chiang model: light scattered between fibres, estimated
-    /// from the shadows (on), or single scattering only (off). Default: the scene's (on
-    /// unless it says otherwise). Refused when the model is not chiang.
-    #[arg(long, value_name = "on|off")]
+    /// from the shadows (on), or single scattering only (off); the older spelling of
+    /// `--multiple-scattering dual|none`. Default: the scene's (dual unless it says
+    /// otherwise). Refused when the model is not chiang.
+    #[arg(long, value_name = "on|off", conflicts_with = "multiple_scattering")]
     pub dual_scattering: Option<OnOff>,
+    /// Multiple scattering of the chiang model: none, dual, or volume (a radiance grid
+    /// over the hair). Default: the scene's (dual unless it says otherwise). Refused when
+    /// the model is not chiang.
+    #[arg(long, value_name = "METHOD", value_parser = method::<MultipleScattering>())]
+    pub multiple_scattering: Option<MultipleScattering>,
     /// Lights (the scene's by default: one key light).
     #[arg(long, value_name = "SET")]
     pub lights: Option<LightsArg>,
@@ -341,6 +349,7 @@ impl SceneOpts {
         let given: Vec<&str> = [
             self.melanin.map(|_| "--melanin"),
             self.dual_scattering.map(|_| "--dual-scattering"),
+            self.multiple_scattering.map(|_| "--multiple-scattering"),
         ]
         .into_iter()
         .flatten()
@@ -364,7 +373,14 @@ impl SceneOpts {
             params.sigma_a = None;
         }
         if let Some(dual) = self.dual_scattering {
-            params.dual_scattering = dual == OnOff::On;
+            params.multiple_scattering = if dual == OnOff::On {
+                MultipleScattering::Dual
+            } else {
+                MultipleScattering::None
+            };
+        }
+        if let Some(method) = self.multiple_scattering {
+            params.multiple_scattering = method;
         }
         model
             .validate()
@@ -568,9 +584,14 @@ mod tests {
             panic!("not chiang");
         };
         assert_eq!(
-            (p.eumelanin, p.pheomelanin, p.dual_scattering, p.beta_m),
-            (Some(8.0), Some(0.0), false, 0.5)
+            (p.eumelanin, p.pheomelanin, p.multiple_scattering, p.beta_m),
+            (Some(8.0), Some(0.0), MultipleScattering::None, 0.5)
         );
+        let ShadingModel::Chiang(p) = scene.model(&["--multiple-scattering", "volume"]).unwrap()
+        else {
+            panic!("not chiang");
+        };
+        assert_eq!(p.multiple_scattering, MultipleScattering::Volume);
         // A scene's sigma_a gives way to the melanin of the command line.
         let sigma = SceneWith::new(
             "chiang_sigma",
@@ -602,6 +623,7 @@ mod tests {
             &["--model", "kajiya_kay", "--dual-scattering", "off"],
             &["--model", "marschner", "--melanin", "0.3"],
             &["--model", "sadeghi", "--dual-scattering", "on"],
+            &["--model", "sadeghi", "--multiple-scattering", "volume"],
         ] {
             let e = opts(args).scene().unwrap_err();
             let m = e.to_string();

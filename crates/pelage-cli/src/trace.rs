@@ -107,6 +107,7 @@ fn refuse_renderer_options(opts: &SceneOpts) -> Result<(), CliError> {
         opts.shadow_res.map(|_| "--shadow-res"),
         opts.oit.as_ref().map(|_| "--oit"),
         opts.dual_scattering.map(|_| "--dual-scattering"),
+        opts.multiple_scattering.map(|_| "--multiple-scattering"),
         opts.lod.then_some("--lod"),
     ]
     .into_iter()

@@ -32,4 +32,5 @@ pub mod skin;
 pub mod strand_raster;
 pub mod strands;
 pub mod transmittance;
+pub mod volume;
 pub mod voxel;

@@ -5,21 +5,21 @@
 //! `StrandRaster::capture` in pelage-shade reads them back): projection and shading are
 //! checked elsewhere. [`bin`] walks every segment's footprint over the screen tiles as
 //! `cs_bin` and `cs_scatter` do and lists, per (tile, depth bin) cell, the segments that
-//! touch it; [`composite`] runs `cs_fine` tile by tile: the tile's cells bin after bin,
-//! in runs of segments whose fragments each pixel sorts by window depth and composites
-//! front to back with analytic coverage, the depth test against the opaque depth, until
-//! the transmittance drops below [`OPAQUE_ENOUGH`].
+//! touch it; [`composite`] runs `cs_fine` pixel by pixel: the tile's cells bin after
+//! bin, each pixel keeping the [`WINDOW`] nearest fragments of a bin in order and
+//! compositing front to back with analytic coverage, the depth test against the opaque
+//! depth, until the transmittance drops below [`OPAQUE_ENOUGH`].
 //!
 //! Every function follows its WGSL twin in plain `f32` with the same operation order, so
 //! the tile lists equal the GPU's exactly and the composite matches within float noise
-//! (the GPU stores it as `rgba16float`, and may fuse multiply-adds). Which segments share
-//! a run depends on the order the pool holds a cell's entries (atomic order on the GPU),
-//! so [`composite`] is given the GPU's own cells to match it; `emit_fragments`' walk over
-//! the pixels near a segment only prunes, so the mirror tests every pixel of the tile.
+//! (the GPU stores it as `rgba16float`, and may fuse multiply-adds). The GPU sorts each
+//! cell by segment index (`cs_sort`), as [`bin`] lists it, so the mirror's cells and
+//! the GPU's give the same picture; the row and column masks `cs_fine` stages with a
+//! batch only prune, so the mirror tests every segment at every pixel of the tile.
 //!
 //! The tile-level early exit of `cs_fine` (a workgroup stops once every pixel of its
-//! tile is finished) skips only pixels that are already finished, so it does not change
-//! any pixel.
+//! tile is finished) and its batches skip only pixels that are already finished, so
+//! they do not change any pixel.
 
 /// A pixel is finished once its transmittance drops below this (`OPAQUE_ENOUGH`).
 pub const OPAQUE_ENOUGH: f32 = 0.003_921_568_6;
@@ -239,18 +239,70 @@ pub fn row_columns(params: &RasterParams, seg: &RasterSegment, r: f32, row: u32)
     [x0.max(0), x1.min((params.tiles_x as i32).wrapping_sub(1))]
 }
 
-/// `cs_bin` and `cs_scatter`: per cell (`(tile_y * tiles_x + tile_x) * bins + bin`), the
-/// indices of the segments whose widened footprint touches it, in ascending order (the
-/// GPU's pool holds them in atomic order: sort its lists to compare). Culled segments
-/// are in no cell; every reference is listed, whatever `params.capacity` (see
-/// [`RasterParams::capacity`]).
+/// `cs_tile_depth`: per screen tile (row-major), the farthest opaque depth over its
+/// pixels inside the target (`opaque_depth`, row-major, one value per pixel).
 ///
-/// Errors when the cells pass [`MAX_CELLS`] or cannot be allocated.
+/// Errors when `opaque_depth` is not one value per pixel or the tiles cannot be
+/// allocated.
+pub fn tile_depths(
+    params: &RasterParams,
+    opaque_depth: &[f32],
+) -> Result<Vec<f32>, StrandRasterError> {
+    let pixels = u64::from(params.width) * u64::from(params.height);
+    if opaque_depth.len() as u64 != pixels {
+        return Err(StrandRasterError::DepthCount {
+            expected: usize::try_from(pixels).unwrap_or(usize::MAX),
+            given: opaque_depth.len(),
+        });
+    }
+    let tiles = u64::from(params.tiles_x) * u64::from(params.tiles_y);
+    let tiles = usize::try_from(tiles)
+        .ok()
+        .filter(|&t| t as u64 <= MAX_CELLS)
+        .ok_or_else(|| params.too_many_cells())?;
+    let mut out: Vec<f32> = Vec::new();
+    out.try_reserve_exact(tiles)
+        .map_err(|_| params.too_many_cells())?;
+    let farther = |a: f32, b: f32| if params.reverse_z { a < b } else { a > b };
+    for t in 0..tiles {
+        let (tx, ty) = (
+            t as u64 % u64::from(params.tiles_x.max(1)),
+            t as u64 / u64::from(params.tiles_x.max(1)),
+        );
+        let tile = u64::from(params.tile);
+        let (x0, y0) = (tx * tile, ty * tile);
+        let x1 = (x0 + tile).min(u64::from(params.width));
+        let y1 = (y0 + tile).min(u64::from(params.height));
+        let mut deepest = if params.reverse_z { 2.0 } else { -1.0 };
+        for y in y0..y1 {
+            for x in x0..x1 {
+                let z = opaque_depth[(y * u64::from(params.width) + x) as usize];
+                if farther(z, deepest) {
+                    deepest = z;
+                }
+            }
+        }
+        out.push(deepest);
+    }
+    Ok(out)
+}
+
+/// `cs_bin` and `cs_scatter`: per cell (`(tile_y * tiles_x + tile_x) * bins + bin`), the
+/// indices of the segments whose widened footprint touches it, less the tiles whose
+/// opaque surface (the farthest of `opaque_depth` over the tile, [`tile_depths`]) is in
+/// front of the whole segment, in ascending order (the GPU's pool holds them so after
+/// `cs_sort`). Culled segments are in no cell; every reference is listed, whatever
+/// `params.capacity` (see [`RasterParams::capacity`]).
+///
+/// Errors when the cells pass [`MAX_CELLS`] or cannot be allocated, or `opaque_depth`
+/// is not one value per pixel.
 pub fn bin(
     params: &RasterParams,
     segments: &[RasterSegment],
+    opaque_depth: &[f32],
 ) -> Result<Vec<Vec<u32>>, StrandRasterError> {
     let count = params.cell_count()?;
+    let depths = tile_depths(params, opaque_depth)?;
     let mut cells: Vec<Vec<u32>> = Vec::new();
     cells
         .try_reserve_exact(count)
@@ -268,9 +320,27 @@ pub fn bin(
         let bin = segment_bin(params, seg);
         let r = segment_reach(seg);
         let rows = segment_rows(params, seg, r);
+        let nearest = if params.reverse_z {
+            seg.a[2].max(seg.b[2])
+        } else {
+            seg.a[2].min(seg.b[2])
+        };
         for row in rows[0]..=rows[1] {
             let cols = row_columns(params, seg, r, row as u32);
             for col in cols[0]..=cols[1] {
+                let t = (row as u32)
+                    .wrapping_mul(params.tiles_x)
+                    .wrapping_add(col as u32) as usize;
+                let hidden = depths.get(t).is_some_and(|&opaque| {
+                    if params.reverse_z {
+                        nearest <= opaque
+                    } else {
+                        nearest >= opaque
+                    }
+                });
+                if hidden {
+                    continue;
+                }
                 let cell = params.cell(col as u32, row as u32, bin);
                 if let Some(list) = cells.get_mut(cell) {
                     list.push(index);
@@ -316,20 +386,19 @@ pub fn segment_coverage(seg: &RasterSegment, p: [f32; 2]) -> [f32; 3] {
 /// and 1 - transmittance, what the GPU stores in its `rgba16float` composite.
 ///
 /// `cells` holds every cell's segment indices in the order the pool does (the GPU's
-/// lists from `StrandRaster::capture`, or [`bin`]'s): a tile's cells read bin after bin
-/// are its sequence of segments, drawn in runs of up to [`RUN_PER_THREAD`] segments per
-/// thread of a `tile x tile` workgroup. A run puts a fragment into a pixel's list for
-/// every segment that covers the pixel (`emit_fragments`: projection onto the segment in
-/// `[0, 1)`, distance below the half width plus half a pixel, in front of the opaque
-/// depth), unless the pixel is already finished; if any list would pass its
-/// [`FRAG_SLOTS`]` / tile²` slots the run is drawn again at half the length (and runs
-/// stay that long for the rest of the tile). Each pixel then sorts its list by window
-/// depth (nearer first, then run order) and composites it front to back with
-/// [`segment_coverage`], finishing once the transmittance drops below
-/// [`OPAQUE_ENOUGH`]. The result depends on the order of the cells' entries (which
-/// segments share a run), so it matches the GPU when given the GPU's order.
-/// `opaque_depth` is the window depth of the opaque scene per pixel, row-major. Pixels
-/// outside the tiles stay zero, as the GPU leaves them unwritten.
+/// lists from `StrandRaster::capture`, sorted by `cs_sort`, or [`bin`]'s, also
+/// ascending): a tile's cells read bin after bin are its sequence of segments. Each
+/// pixel walks the sequence; a segment puts a fragment into it when
+/// [`fragment_depth`] says so (projection onto the segment in `[0, 1)`, distance below
+/// the half width plus half a pixel, in front of the opaque depth), with the colour
+/// and alpha of [`segment_coverage`]. The pixel keeps the [`WINDOW`] nearest fragments
+/// of the current bin, ordered by (depth, segment index); a fragment arriving when the
+/// window is full pushes the nearest of the window and itself out and that one is
+/// composited front to back; when the bin changes and at the end the window is
+/// composited nearest first. The pixel takes nothing more once its transmittance drops
+/// below [`OPAQUE_ENOUGH`]. `opaque_depth` is the window depth of the opaque scene per
+/// pixel, row-major. Pixels outside the tiles stay zero, as the GPU leaves them
+/// unwritten.
 ///
 /// Errors when `cells` is not one list per cell, `opaque_depth` not one value per
 /// pixel, a cell names a segment past `segments`, or the sizes cannot be allocated.
@@ -376,49 +445,75 @@ pub fn composite(
     }
     for tile_y in 0..params.tiles_y {
         for tile_x in 0..params.tiles_x {
-            let sequence: Vec<u32> = (0..params.bins)
-                .flat_map(|bin| cells[params.cell(tile_x, tile_y, bin)].iter().copied())
+            let sequence: Vec<(u32, &RasterSegment)> = (0..params.bins)
+                .flat_map(|bin| cells[params.cell(tile_x, tile_y, bin)].iter())
+                .map(|&s| (s, &segments[s as usize]))
                 .collect();
-            composite_tile(
-                params,
-                segments,
-                &sequence,
-                (tile_x, tile_y),
-                opaque_depth,
-                &mut out,
-            );
+            for y in 0..params.tile {
+                for x in 0..params.tile {
+                    let (px, py) = (tile_x * params.tile + x, tile_y * params.tile + y);
+                    if px < params.width && py < params.height {
+                        let index = py as usize * params.width as usize + px as usize;
+                        let centre = [px as f32 + 0.5, py as f32 + 0.5];
+                        out[index] =
+                            composite_pixel(params, &sequence, centre, opaque_depth[index]);
+                    }
+                }
+            }
         }
     }
     Ok(out)
 }
 
-/// Segments per thread in a run before an overflow halves it (`RUN_PER_THREAD`).
-pub const RUN_PER_THREAD: usize = 2;
-/// Fragment slots of a tile's lists (`FRAG_SLOTS`).
-pub const FRAG_SLOTS: usize = 2048;
-/// Bits of a fragment key holding its run entry (`ENTRY_MASK`).
-const ENTRY_MASK: u32 = 511;
+/// Fragments a pixel's window holds (`WINDOW`): the order within a bin is exact
+/// wherever a pixel gets at most this many fragments from it.
+pub const WINDOW: usize = 8;
 
-/// One pixel of a tile as `cs_fine` keeps it.
+/// A fragment in a pixel's window: sort depth (nearer is smaller; negative: an empty
+/// slot), segment index, linear colour and alpha.
 #[derive(Clone, Copy)]
-struct Pixel {
-    index: usize,
-    centre: [f32; 2],
-    opaque: f32,
-    open: bool,
-    color: [f32; 3],
-    transmittance: f32,
+struct Fragment {
+    depth: f32,
+    id: u32,
+    color: [f32; 4],
 }
 
-/// `emit_fragments`' test: the key of the fragment `seg` (run entry `entry`) puts into
-/// the pixel centred at `centre`, if it covers it in front of `opaque`.
-fn fragment_key(
+const EMPTY: Fragment = Fragment {
+    depth: -1.0,
+    id: 0,
+    color: [0.0; 4],
+};
+
+/// The front-to-back state of one pixel.
+struct Blend {
+    color: [f32; 3],
+    transmittance: f32,
+    open: bool,
+}
+
+impl Blend {
+    /// Composites `f` behind what the pixel holds, unless the pixel is finished or `f`
+    /// is an empty slot.
+    fn take(&mut self, f: &Fragment) {
+        if self.open && f.depth >= 0.0 {
+            let weight = self.transmittance * f.color[3];
+            for (k, channel) in self.color.iter_mut().enumerate() {
+                *channel += weight * f.color[k];
+            }
+            self.transmittance *= 1.0 - f.color[3];
+            self.open = self.transmittance >= OPAQUE_ENOUGH;
+        }
+    }
+}
+
+/// `fragment_depth`: the sort depth of the fragment `seg` puts into the pixel centred
+/// at `centre` in front of `opaque` (nearer is smaller, never negative), or `None`.
+pub fn fragment_depth(
     params: &RasterParams,
     seg: &RasterSegment,
-    entry: u32,
     centre: [f32; 2],
     opaque: f32,
-) -> Option<u32> {
+) -> Option<f32> {
     let d = [seg.b[0] - seg.a[0], seg.b[1] - seg.a[1]];
     let len2 = d[0] * d[0] + d[1] * d[1];
     let inv_len2 = if len2 > 1e-12 { 1.0 / len2 } else { 0.0 };
@@ -446,89 +541,72 @@ fn fragment_key(
         return None;
     }
     let near_first = if params.reverse_z { 1.0 - z } else { z };
-    Some((near_first.max(0.0).to_bits() & !ENTRY_MASK) | entry)
+    Some(near_first.max(0.0))
 }
 
-/// `cs_fine` for one tile: its sequence of segments in runs, as [`composite`] describes.
-fn composite_tile(
+/// `cs_fine` for one pixel: the tile's `sequence` of (segment index, segment) in pool
+/// order, as [`composite`] describes.
+fn composite_pixel(
     params: &RasterParams,
-    segments: &[RasterSegment],
-    sequence: &[u32],
-    (tile_x, tile_y): (u32, u32),
-    opaque_depth: &[f32],
-    out: &mut [[f32; 4]],
-) {
-    let tile = params.tile;
-    let threads = (tile * tile) as usize;
-    let slots = FRAG_SLOTS / threads;
-    let mut pixels: Vec<Pixel> = Vec::with_capacity(threads);
-    for y in 0..tile {
-        for x in 0..tile {
-            let (px, py) = (tile_x * tile + x, tile_y * tile + y);
-            if px < params.width && py < params.height {
-                let index = py as usize * params.width as usize + px as usize;
-                pixels.push(Pixel {
-                    index,
-                    centre: [px as f32 + 0.5, py as f32 + 0.5],
-                    opaque: opaque_depth[index],
-                    open: true,
-                    color: [0.0; 3],
-                    transmittance: 1.0,
-                });
-            }
+    sequence: &[(u32, &RasterSegment)],
+    centre: [f32; 2],
+    opaque: f32,
+) -> [f32; 4] {
+    let mut blend = Blend {
+        color: [0.0; 3],
+        transmittance: 1.0,
+        open: true,
+    };
+    // Farthest first; empty slots (depth -1) are nearer than any fragment.
+    let mut window = [EMPTY; WINDOW];
+    let mut bin = 0u32;
+    for &(id, seg) in sequence {
+        if !blend.open {
+            break;
         }
-    }
-    let longest = threads * RUN_PER_THREAD;
-    let mut run = longest;
-    let mut done = 0;
-    while done < sequence.len() {
-        let count = run.min(sequence.len() - done);
-        let mut lists: Vec<Vec<u32>> = vec![Vec::new(); pixels.len()];
-        for (entry, &s) in sequence[done..done + count].iter().enumerate() {
-            let seg = &segments[s as usize];
-            for (list, pixel) in lists.iter_mut().zip(&pixels) {
-                if !pixel.open {
-                    continue;
-                }
-                if let Some(key) =
-                    fragment_key(params, seg, entry as u32, pixel.centre, pixel.opaque)
-                {
-                    list.push(key);
-                }
+        let seg_bin = segment_bin(params, seg);
+        if seg_bin != bin {
+            for f in window.iter_mut().rev() {
+                blend.take(f);
+                *f = EMPTY;
             }
+            bin = seg_bin;
         }
-        if run > 1 && lists.iter().any(|l| l.len() > slots) {
-            run = (run / 2).max(1);
+        if !blend.open {
             continue;
         }
-        for (list, pixel) in lists.iter_mut().zip(pixels.iter_mut()) {
-            list.truncate(slots);
-            list.sort_unstable();
-            for &key in list.iter() {
-                let seg = &segments[sequence[done + (key & ENTRY_MASK) as usize] as usize];
-                let c = segment_coverage(seg, pixel.centre);
-                let alpha = params.opacity * c[0];
-                let weight = pixel.transmittance * alpha;
-                for (k, channel) in pixel.color.iter_mut().enumerate() {
-                    *channel += weight * mix(seg.color_a[k], seg.color_b[k], c[2]);
-                }
-                pixel.transmittance *= 1.0 - alpha;
-                if pixel.transmittance < OPAQUE_ENOUGH {
-                    pixel.open = false;
-                    break;
-                }
+        let Some(depth) = fragment_depth(params, seg, centre, opaque) else {
+            continue;
+        };
+        let c = segment_coverage(seg, centre);
+        let mut carry = Fragment {
+            depth,
+            id,
+            color: [
+                mix(seg.color_a[0], seg.color_b[0], c[2]),
+                mix(seg.color_a[1], seg.color_b[1], c[2]),
+                mix(seg.color_a[2], seg.color_b[2], c[2]),
+                params.opacity * c[0],
+            ],
+        };
+        for slot in window.iter_mut() {
+            let nearer =
+                carry.depth < slot.depth || (carry.depth == slot.depth && carry.id < slot.id);
+            if !nearer {
+                std::mem::swap(&mut carry, slot);
             }
         }
-        done += count;
+        blend.take(&carry);
     }
-    for pixel in &pixels {
-        out[pixel.index] = [
-            pixel.color[0],
-            pixel.color[1],
-            pixel.color[2],
-            1.0 - pixel.transmittance,
-        ];
+    for f in window.iter().rev() {
+        blend.take(f);
     }
+    [
+        blend.color[0],
+        blend.color[1],
+        blend.color[2],
+        1.0 - blend.transmittance,
+    ]
 }
 
 #[cfg(test)]
@@ -581,13 +659,31 @@ mod tests {
             a: [0.0, 0.0, 0.0, -1.0],
             ..seg
         };
-        let cells = bin(&p, &[seg, culled]).unwrap();
+        let cells = bin(&p, &[seg, culled], &[1.0; 32 * 24]).unwrap();
         let touched: Vec<usize> = (0..cells.len()).filter(|&c| !cells[c].is_empty()).collect();
         assert_eq!(
             touched,
             vec![p.cell(0, 0, 1), p.cell(1, 0, 1), p.cell(2, 0, 1)]
         );
         assert!(touched.iter().all(|&c| cells[c] == vec![0]));
+        // The segment is at window depth 0.6: an opaque surface at 0.5 over tile 1
+        // (pixels 8..16 of rows 0..8) hides it there, unless one pixel of the tile is
+        // open to the far plane.
+        let mut depth = vec![1.0; 32 * 24];
+        for x in 8..16 {
+            for y in 0..8 {
+                if (x, y) != (15, 7) {
+                    depth[y * 32 + x] = 0.5;
+                }
+            }
+        }
+        let cells = bin(&p, &[seg], &depth).unwrap();
+        assert_eq!(cells[p.cell(1, 0, 1)], vec![0], "one pixel is behind it");
+        depth[7 * 32 + 15] = 0.5;
+        let cells = bin(&p, &[seg], &depth).unwrap();
+        assert!(cells[p.cell(1, 0, 1)].is_empty(), "hidden in tile 1");
+        assert_eq!(cells[p.cell(0, 0, 1)], vec![0]);
+        assert_eq!(cells[p.cell(2, 0, 1)], vec![0]);
     }
 
     #[test]
@@ -596,7 +692,7 @@ mod tests {
         let red = segment(0.0, 8.5, 32.0, 8.5, 2.0, 2.0, [1.0, 0.0, 0.0]);
         let blue = segment(0.0, 8.5, 32.0, 8.5, 3.0, 2.0, [0.0, 0.0, 1.0]);
         let segments = [blue, red];
-        let cells = bin(&p, &segments).unwrap();
+        let cells = bin(&p, &segments, &[1.0; 32 * 24]).unwrap();
         let depth = vec![1.0; 32 * 24];
         let image = composite(&p, &segments, &cells, &depth).unwrap();
         // Pixel (5, 8): fully covered by both; red in front: 0.5 red, 0.25 blue.
@@ -637,8 +733,8 @@ mod tests {
     fn malformed_inputs_are_errors_not_panics() {
         let p = params(8, 4);
         let seg = segment(0.0, 0.0, 10.0, 10.0, 2.0, 1.0, [1.0; 3]);
-        let cells = bin(&p, &[seg]).unwrap();
         let depth = vec![1.0; 32 * 24];
+        let cells = bin(&p, &[seg], &depth).unwrap();
         assert!(matches!(
             composite(&p, &[seg], &cells[1..], &depth),
             Err(StrandRasterError::CellCount { .. })
@@ -656,7 +752,11 @@ mod tests {
             tiles_y: u32::MAX,
             ..p
         };
-        assert!(bin(&huge, &[seg]).is_err());
+        assert!(bin(&huge, &[seg], &depth).is_err());
+        assert!(matches!(
+            bin(&p, &[seg], &depth[1..]),
+            Err(StrandRasterError::DepthCount { .. })
+        ));
         // Degenerate parameters and segments: no panic.
         for q in [
             RasterParams { tile: 0, ..p },
@@ -672,7 +772,7 @@ mod tests {
             },
         ] {
             let nan = segment(f32::NAN, 0.0, f32::INFINITY, 1e30, 0.0, f32::NAN, [1.0; 3]);
-            let cells = bin(&q, &[seg, nan]).unwrap();
+            let cells = bin(&q, &[seg, nan], &depth).unwrap();
             let _ = composite(&q, &[seg, nan], &cells, &depth).unwrap();
         }
     }

@@ -48,9 +48,10 @@ pub use params::{
 pub use scene_file::{MeshSource, SceneFile, SceneFileError};
 pub use shading::{
     ARTIST_EUMELANIN_SIGMA_A, ARTIST_PHEOMELANIN_SIGMA_A, Absorption, ChiangParams,
-    DEFAULT_MELANIN_REDNESS, EUMELANIN_SIGMA_A, KajiyaKayParams, MAX_MELANIN, MarschnerParams,
-    PHEOMELANIN_SIGMA_A, SadeghiParams, ShadingModel, chiang_color_scale,
-    sigma_a_from_artist_melanin, sigma_a_from_color, sigma_a_from_melanin,
+    DEFAULT_MELANIN_REDNESS, DEFAULT_VOLUME_GRID, DEFAULT_VOLUME_ITERATIONS, EUMELANIN_SIGMA_A,
+    KajiyaKayParams, MAX_MELANIN, MAX_VOLUME_GRID, MAX_VOLUME_ITERATIONS, MIN_VOLUME_GRID,
+    MarschnerParams, MultipleScattering, PHEOMELANIN_SIGMA_A, SadeghiParams, ShadingModel,
+    chiang_color_scale, sigma_a_from_artist_melanin, sigma_a_from_color, sigma_a_from_melanin,
     sigma_a_from_reflectance,
 };
 pub use skin::{MAX_JOINTS, Skin, SkinBend, WEIGHT_SUM_TOLERANCE, check_finite_matrices};

@@ -245,13 +245,34 @@ pub(crate) fn normalize(doc: &mut Spanned<DeTable<'_>>) -> Result<Normalized, Lo
             Ok(())
         })?;
     }
-    for_tables_at(
-        root,
-        root_span,
-        &["shade", "model"],
-        &mut gather_marschner_params,
-    )?;
+    for_tables_at(root, root_span, &["shade", "model"], &mut |table, span| {
+        rename_dual_scattering(table)?;
+        gather_marschner_params(table, span)
+    })?;
     Ok(normalized)
+}
+
+/// Chiang's `dual_scattering = true/false` (the older spelling) becomes
+/// `multiple_scattering = "dual"/"none"`, the key the scene is written back with; both at
+/// once is refused at the second.
+fn rename_dual_scattering(table: &mut DeTable<'_>) -> Result<(), Located> {
+    let Some((key, value)) = table.remove_entry("dual_scattering") else {
+        return Ok(());
+    };
+    if let Some((other, _)) = table.get_key_value("multiple_scattering") {
+        return Err(Located {
+            span: other.span(),
+            message: "`multiple_scattering` and its older spelling `dual_scattering` are both \
+                      given; keep multiple_scattering"
+                .into(),
+        });
+    }
+    let span = key.span();
+    table.insert(
+        Spanned::new(span, Cow::Borrowed("multiple_scattering")),
+        value,
+    );
+    Ok(())
 }
 
 /// The tables under `table` (itself included) that serde's error at `span` may be

@@ -444,14 +444,76 @@ pub struct ChiangParams {
     pub tint: Option<Vec3>,
     /// Absorption per unit fibre radius, linear RGB, each in [0, 1e4].
     pub sigma_a: Option<Vec3>,
-    /// Light scattered between fibres (dual scattering, Zinke et al. 2008), estimated
-    /// from stage 2's shadows; `false` is single scattering.
-    pub dual_scattering: bool,
+    /// Light scattered between fibres ([`MultipleScattering`]): `none` (single scattering),
+    /// `dual` (Zinke et al. 2008, from stage 2's shadows) or `volume` (a radiance grid over
+    /// the hair, after Moon, Walter and Marschner 2008). Scene files may still write
+    /// `dual_scattering = true/false` (read as `dual` / `none`).
+    #[serde(alias = "dual_scattering")]
+    pub multiple_scattering: MultipleScattering,
+    /// Cells per side of the `volume` method's cubic grid over the hair, in
+    /// [[`MIN_VOLUME_GRID`], [`MAX_VOLUME_GRID`]] (a device may allow less: its storage
+    /// binding size is checked when the grid is built).
+    pub volume_grid: u32,
+    /// Propagation steps of the `volume` method (light moves one cell per step), in
+    /// [1, [`MAX_VOLUME_ITERATIONS`]].
+    pub volume_iterations: u32,
+}
+
+/// Smallest `volume_grid`.
+pub const MIN_VOLUME_GRID: u32 = 4;
+/// Largest `volume_grid` (the grid holds 224 bytes per cell: 128³ is 470 MB).
+pub const MAX_VOLUME_GRID: u32 = 128;
+/// Default `volume_grid` (7.3 MB of GPU memory).
+pub const DEFAULT_VOLUME_GRID: u32 = 32;
+/// Largest `volume_iterations`.
+pub const MAX_VOLUME_ITERATIONS: u32 = 256;
+/// Default `volume_iterations` (the scattering lab's choice: at 32³ blond hair gains 10 to 18
+/// points of luminance from 16 steps to 64; see docs/src/path-tracer.md).
+pub const DEFAULT_VOLUME_ITERATIONS: u32 = 64;
+
+/// How Chiang's fibres carry light scattered by other fibres (the orders the single
+/// scattering term leaves out). Names in [`crate::names`]: `none`, `dual`, `volume`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MultipleScattering {
+    /// Single scattering only (times stage 2's visibility).
+    None,
+    /// Dual scattering (Zinke et al. 2008) from stage 2's visibility.
+    #[default]
+    Dual,
+    /// Single scattering plus a volumetric radiance grid (orders >= 2): fibre density and
+    /// direction splatted into a grid over the hair, single-scattered light injected
+    /// through the grid's own transmittance toward each light, propagated cell to cell with
+    /// a fibre phase function from Chiang's energy tables, read at shading.
+    Volume,
+}
+
+impl<'de> Deserialize<'de> for MultipleScattering {
+    /// A name of the method table (or an alias), or a bool for `dual_scattering`'s old
+    /// spelling: `true` is `dual`, `false` is `none`.
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        #[derive(Deserialize)]
+        #[serde(untagged)]
+        enum Either {
+            Flag(bool),
+            Name(String),
+        }
+        match Either::deserialize(d)? {
+            Either::Flag(true) => Ok(Self::Dual),
+            Either::Flag(false) => Ok(Self::None),
+            Either::Name(n) => <Self as crate::names::Named>::named(&n).ok_or_else(|| {
+                serde::de::Error::custom(format!(
+                    "unknown multiple_scattering `{n}`: expected one of {} (or true/false)",
+                    <Self as crate::names::Named>::name_list()
+                ))
+            }),
+        }
+    }
 }
 
 impl Default for ChiangParams {
     /// pbrt-v3's defaults (β_m = β_n = 0.3, α = 2°, η = 1.55), absorption from the hair's
-    /// colour, dual scattering on.
+    /// colour, dual scattering (the volume grid's defaults: 32³ cells, 64 steps).
     fn default() -> Self {
         Self {
             beta_m: 0.3,
@@ -464,7 +526,9 @@ impl Default for ChiangParams {
             melanin_redness: None,
             tint: None,
             sigma_a: None,
-            dual_scattering: true,
+            multiple_scattering: MultipleScattering::Dual,
+            volume_grid: DEFAULT_VOLUME_GRID,
+            volume_iterations: DEFAULT_VOLUME_ITERATIONS,
         }
     }
 }
@@ -574,6 +638,20 @@ impl ChiangParams {
                 m,
                 "give either melanin (Blender's and Unreal's convention) or eumelanin/pheomelanin \
                  (pbrt's), not both",
+            ));
+        }
+        if !(MIN_VOLUME_GRID..=MAX_VOLUME_GRID).contains(&self.volume_grid) {
+            return Err(error(
+                &format!("{p}.volume_grid"),
+                self.volume_grid,
+                &format!("must be in [{MIN_VOLUME_GRID}, {MAX_VOLUME_GRID}] cells per side"),
+            ));
+        }
+        if !(1..=MAX_VOLUME_ITERATIONS).contains(&self.volume_iterations) {
+            return Err(error(
+                &format!("{p}.volume_iterations"),
+                self.volume_iterations,
+                &format!("must be in [1, {MAX_VOLUME_ITERATIONS}] propagation steps"),
             ));
         }
         if let Some(s) = self.sigma_a {
@@ -1036,7 +1114,7 @@ mod tests {
             p.validate().map_err(|e| (e.name, e.reason))
         };
         type Spoil = fn(&mut ChiangParams);
-        let cases: [(Spoil, &str); 10] = [
+        let cases: [(Spoil, &str); 14] = [
             (|p| p.melanin = Some(1.01), "melanin"),
             (|p| p.melanin = Some(-0.01), "melanin"),
             (|p| p.melanin = Some(f32::NAN), "melanin"),
@@ -1061,6 +1139,11 @@ mod tests {
                 },
                 "tint",
             ),
+            // The volume grid: no cells, too many, no steps, absurd steps.
+            (|p| p.volume_grid = 0, "volume_grid"),
+            (|p| p.volume_grid = MAX_VOLUME_GRID + 1, "volume_grid"),
+            (|p| p.volume_iterations = 0, "volume_iterations"),
+            (|p| p.volume_iterations = u32::MAX, "volume_iterations"),
             // Nothing silently ignored: redness and tint without melanin.
             (|p| p.melanin_redness = Some(0.5), "melanin_redness"),
             (|p| p.tint = Some(Vec3::splat(0.5)), "tint"),
@@ -1130,7 +1213,7 @@ mod tests {
             ShadingModel::Chiang(ChiangParams::melanin(0.3, 0.0)),
             ShadingModel::Chiang(ChiangParams {
                 sigma_a: Some(Vec3::new(0.2, 0.4, 0.8)),
-                dual_scattering: false,
+                multiple_scattering: MultipleScattering::None,
                 ..Default::default()
             }),
         ] {
@@ -1174,9 +1257,25 @@ mod tests {
             c,
             ShadingModel::Chiang(ChiangParams {
                 eumelanin: Some(0.3),
-                dual_scattering: false,
+                multiple_scattering: MultipleScattering::None,
                 ..Default::default()
             })
         );
+        // The method's names, and dual_scattering's old spelling both ways.
+        for (text, want) in [
+            (
+                "multiple_scattering = \"volume\"",
+                MultipleScattering::Volume,
+            ),
+            ("multiple_scattering = \"dual\"", MultipleScattering::Dual),
+            ("multiple_scattering = \"none\"", MultipleScattering::None),
+            ("dual_scattering = true", MultipleScattering::Dual),
+            ("dual_scattering = false", MultipleScattering::None),
+        ] {
+            let c: ChiangParams = toml::from_str(text).unwrap();
+            assert_eq!(c.multiple_scattering, want, "{text}");
+        }
+        let bad = toml::from_str::<ChiangParams>("multiple_scattering = \"photons\"").unwrap_err();
+        assert!(bad.to_string().contains("none, dual, volume"), "{bad}");
     }
 }

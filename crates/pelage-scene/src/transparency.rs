@@ -236,7 +236,9 @@ impl Transparency {
 
     /// The strand rasterizer with its default tile (16 px), bins (64) and pool (4
     /// references per segment): the OIT lab's sweep (`pelage lab oit`) found 64 bins
-    /// the most accurate everywhere, at the time of 16.
+    /// the most accurate everywhere, at the time of 16; with the lane-per-pixel fine
+    /// pass, tiles of 8 (four times the cells to scan, scatter and sort) were not
+    /// consistently faster (docs/src/strand-raster.md).
     pub fn strand_raster() -> Self {
         Self::StrandRaster {
             tile: default_tile(),

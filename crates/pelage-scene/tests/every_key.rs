@@ -5,9 +5,9 @@
 use glam::Vec3;
 use pelage_scene::{
     AdsmParams, ChiangParams, DeepOpacityParams, DirectionalLight, GroomSource, GuideParams,
-    HairType, KajiyaKayParams, LayerSpacing, Light, MarschnerParams, MeshSource, PointLight,
-    SadeghiParams, SceneFile, SceneFileError, ShadingModel, ShadowMapParams, ShadowParams,
-    Transparency, VoxelParams, WboitWeight,
+    HairType, KajiyaKayParams, LayerSpacing, Light, MarschnerParams, MeshSource,
+    MultipleScattering, PointLight, SadeghiParams, SceneFile, SceneFileError, ShadingModel,
+    ShadowMapParams, ShadowParams, Transparency, VoxelParams, WboitWeight,
 };
 
 /// Parses `text`, which must fail with a TOML error naming `key` at `line`.
@@ -383,7 +383,13 @@ fn every_variant() -> Vec<SceneFile> {
         ShadingModel::Chiang(ChiangParams::melanin(0.3, 0.1)),
         ShadingModel::Chiang(ChiangParams {
             sigma_a: Some(Vec3::new(0.1, 0.2, 0.3)),
-            dual_scattering: false,
+            multiple_scattering: MultipleScattering::None,
+            ..Default::default()
+        }),
+        ShadingModel::Chiang(ChiangParams {
+            multiple_scattering: MultipleScattering::Volume,
+            volume_grid: 16,
+            volume_iterations: 4,
             ..Default::default()
         }),
     ] {

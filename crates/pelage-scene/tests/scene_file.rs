@@ -2,7 +2,7 @@
 
 use std::path::Path;
 
-use pelage_scene::{MeshSource, SceneFile, SceneFileError, Transparency};
+use pelage_scene::{MeshSource, MultipleScattering, SceneFile, SceneFileError, Transparency};
 
 const DEFAULT: &str = "../../scenes/default.toml";
 
@@ -200,7 +200,10 @@ fn bad_chiang_values_in_a_scene_file_are_named() {
     let pelage_scene::ShadingModel::Chiang(p) = file.shade.model else {
         panic!("not chiang");
     };
-    assert_eq!((p.eumelanin, p.dual_scattering), (Some(0.3), false));
+    assert_eq!(
+        (p.eumelanin, p.multiple_scattering),
+        (Some(0.3), MultipleScattering::None)
+    );
 }
 
 #[test]

@@ -557,3 +557,23 @@ fn wave_and_curl_products_are_bounded() {
     )
     .unwrap();
 }
+
+#[test]
+fn strand_raster_tiles_bins_and_pools_out_of_range_are_refused_naming_the_key() {
+    for (line, key, range) in [
+        ("tile = 12", "transparency.tile", "must be 8 or 16"),
+        ("tile = 0", "transparency.tile", "must be 8 or 16"),
+        ("bins = 0", "transparency.bins", "1..=256"),
+        ("bins = 257", "transparency.bins", "1..=256"),
+        ("pool = 0.0", "transparency.pool", ""),
+        ("pool = 1e9", "transparency.pool", "at most 1024"),
+    ] {
+        let text = format!("[shade.transparency]\nmethod = \"strand_raster\"\n{line}\n");
+        assert_eq!(key_of(&text), key, "{text}");
+        assert!(
+            message_of(&text).contains(range),
+            "{text}: {}",
+            message_of(&text)
+        );
+    }
+}

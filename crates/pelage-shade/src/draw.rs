@@ -14,6 +14,7 @@ use pelage_strands::{MeshBuffers, PreparedFrame, StrandBuffers, StrandFrame, Str
 use crate::hair_model::HairModel;
 use crate::ribbons::{FrameUniforms, MeshStyle, RibbonStyle};
 use crate::targets::TargetFormat;
+use crate::volume::{VOLUME_FLUENCE, VolumeGrid};
 
 /// The frame resource naming the colour target a method draws into.
 pub const TARGET_COLOR: &str = "target.color";
@@ -166,6 +167,10 @@ pub(crate) struct Common {
     /// Whether `mesh_draw` is drawn.
     pub draw_mesh: bool,
     pub model: HairModel,
+    /// The volume method's grid passes, when the model uses them.
+    pub volume: Option<VolumeGrid>,
+    /// The device's limits (the grid's dispatch sizes).
+    pub limits: wgpu::Limits,
     /// Floats per light in the visibility buffer (0: none).
     pub visibility_stride: u32,
     /// The visibility buffer, or a small one that is never read.
@@ -272,6 +277,12 @@ impl Common {
             ),
         };
         let model = HairModel::new(gpu, &params.model)?;
+        let volume = match (model.volume(), model.chiang()) {
+            (Some(field), Some(tables)) => {
+                Some(VolumeGrid::new(gpu, field, tables, &frame.buffer, strands)?)
+            }
+            _ => None,
+        };
         let redirects: Vec<Redirect> = shadow
             .iter()
             .map(|b| b.redirect())
@@ -350,6 +361,8 @@ impl Common {
             target,
             draw_mesh,
             model,
+            volume,
+            limits: gpu.limits().clone(),
             visibility_stride,
             visibility: visibility_buffer,
             mesh_style,
@@ -485,6 +498,9 @@ impl Common {
                 ..self.style_value
             },
         )?;
+        if let Some(volume) = &self.volume {
+            volume.prepare(queue, layout, self.style_value.tip_width)?;
+        }
         self.hair_vertices
             .store(ribbon_vertices(layout), Ordering::Release);
         self.prepared.set(strands);
@@ -544,15 +560,31 @@ impl Common {
         })
     }
 
-    /// A hair pass labelled `label`: reads the strands, the visibility (when bound) and
-    /// the depth target.
+    /// The volume method's grid pass, when the model uses it (recorded by
+    /// [`Common::encode_volume`] before the mesh).
+    pub fn volume_pass(&self) -> Option<PassInfo> {
+        self.volume.as_ref().map(VolumeGrid::pass_info)
+    }
+
+    /// Records the volume method's grid passes (nothing for the other models).
+    pub fn encode_volume(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&mut GpuTimer>) {
+        if let Some(volume) = &self.volume {
+            volume.encode(encoder, &self.limits, timer);
+        }
+    }
+
+    /// A hair pass labelled `label`: reads the strands, the visibility (when bound), the
+    /// volume grid's fluence (when the model reads it) and the depth target.
     pub fn hair_pass(&self, label: &str) -> PassInfo {
-        let pass = PassInfo::new(label)
+        let mut pass = PassInfo::new(label)
             .reads([
                 pelage_strands::STRAND_VERTICES,
                 pelage_strands::STRAND_ROOTS,
             ])
             .reads([TARGET_DEPTH]);
+        if self.volume.is_some() {
+            pass = pass.reads([VOLUME_FLUENCE]);
+        }
         if self.visibility_stride > 0 {
             pass.reads([VISIBILITY])
         } else {

@@ -2,11 +2,12 @@
 //! (and Marschner's lookup tables when asked) behind the contract `shade/hair_model.wgsl`.
 
 use pelage_gpu::{BoundResource, Gpu, ShaderBinding, UniformBuffer};
-use pelage_scene::ShadingModel;
+use pelage_scene::{MultipleScattering, ShadingModel};
 
 use crate::models::{
     ChiangTables, KajiyaKayUniforms, MarschnerLut, MarschnerUniforms, SadeghiUniforms,
 };
+use crate::volume::VolumeField;
 
 /// Resolution of Marschner's lookup tables when [`ShadingModel::Marschner`] has `lut`
 /// set: 128 texels per axis, where `tests/models.rs` measures the tables within 0.43% of
@@ -24,6 +25,7 @@ pub struct HairModel {
     binding: ShaderBinding,
     lut: Option<MarschnerLut>,
     chiang: Option<ChiangTables>,
+    volume: Option<VolumeField>,
     bytes: u64,
     /// The model and parameters in use (see [`HairModel::update`]).
     params: ShadingModel,
@@ -35,6 +37,7 @@ impl HairModel {
     pub fn new(gpu: &Gpu, model: &ShadingModel) -> crate::Result<Self> {
         model.validate()?;
         let mut chiang = None;
+        let mut volume = None;
         let (module, resources, lut) = match model {
             ShadingModel::KajiyaKay(p) => {
                 let u = UniformBuffer::new(
@@ -93,14 +96,21 @@ impl HairModel {
                 let mut encoder = gpu.device.create_command_encoder(&Default::default());
                 tables.encode(&mut encoder);
                 gpu.submit_and_wait([encoder.finish()])?;
-                // chiang.wgsl: the model uniform, then the two tables.
-                let resources = vec![
+                // chiang.wgsl: the model uniform, then the two tables; with the volume
+                // method, the grid's uniform and fluence (chiang_volume_model.wgsl).
+                let mut resources = vec![
                     BoundResource::Uniform(tables.model_buffer().clone()),
                     BoundResource::Storage(tables.n_buffer().clone()),
                     BoundResource::Storage(tables.dual_buffer().clone()),
                 ];
+                if p.multiple_scattering == MultipleScattering::Volume {
+                    let field = VolumeField::new(gpu, p)?;
+                    resources.push(BoundResource::Uniform(field.uniform_buffer().clone()));
+                    resources.push(BoundResource::Storage(field.fluence_buffer().clone()));
+                    volume = Some(field);
+                }
                 chiang = Some(tables);
-                ("shade/models/chiang_model.wgsl", resources, None)
+                (model_module(model), resources, None)
             }
         };
         let bytes = resources
@@ -117,6 +127,7 @@ impl HairModel {
             },
             lut,
             chiang,
+            volume,
             bytes,
             params: model.clone(),
         })
@@ -134,6 +145,21 @@ impl HairModel {
                 self.params.name(),
                 model.name()
             )));
+        }
+        if let (Some(field), ShadingModel::Chiang(p)) = (&self.volume, model) {
+            let held = field.uniforms();
+            if p.volume_grid != held.resolution {
+                return Err(crate::ShadeError::NeedsRebuild(format!(
+                    "shading.chiang.volume_grid ({} to {}: the grid's buffers)",
+                    held.resolution, p.volume_grid
+                )));
+            }
+            if p.volume_iterations != held.iterations {
+                return Err(crate::ShadeError::NeedsRebuild(format!(
+                    "shading.chiang.volume_iterations ({} to {}: the grid's passes)",
+                    held.iterations, p.volume_iterations
+                )));
+            }
         }
         if let (Some(lut), ShadingModel::Marschner { params, .. }) = (&self.lut, model) {
             if MarschnerLut::slices_for(params, lut.resolution()) != lut.slices() {
@@ -225,6 +251,11 @@ impl HairModel {
         self.chiang.as_ref()
     }
 
+    /// The volume method's grid field (uniform and fluence), when Chiang's model uses it.
+    pub fn volume(&self) -> Option<&VolumeField> {
+        self.volume.as_ref()
+    }
+
     /// The redirect of the contract `shade/hair_model.wgsl` and the resources of `@group(2)`.
     pub fn binding(&self) -> &ShaderBinding {
         &self.binding
@@ -253,6 +284,9 @@ fn model_module(model: &ShadingModel) -> &'static str {
         ShadingModel::Marschner { lut: false, .. } => "shade/models/marschner_model.wgsl",
         ShadingModel::Marschner { lut: true, .. } => "shade/models/marschner_lut_model.wgsl",
         ShadingModel::Sadeghi(_) => "shade/models/sadeghi_model.wgsl",
+        ShadingModel::Chiang(p) if p.multiple_scattering == MultipleScattering::Volume => {
+            "shade/models/chiang_volume_model.wgsl"
+        }
         ShadingModel::Chiang(_) => "shade/models/chiang_model.wgsl",
     }
 }

@@ -14,6 +14,7 @@ mod methods;
 mod models;
 mod ribbons;
 mod targets;
+mod volume;
 
 pub use draw::{
     HairInputs, OIT_STORAGE, TARGET_COLOR, TARGET_DEPTH, TargetViews, VISIBILITY, Visibility,
@@ -33,6 +34,7 @@ pub use ribbons::{FrameLight, FrameUniforms, MeshStyle, RibbonStyle};
 pub use targets::{
     COLOR_FORMAT, DEPTH_FORMAT, TargetFormat, TargetViewSet, Targets, check_image_size,
 };
+pub use volume::{VOLUME_FIXED_SCALE, VOLUME_FLUENCE, VolumeField, VolumeGrid, VolumeUniforms};
 
 /// The shaders of stage 3 (`wgsl/shade/*.wgsl`), importing pelage-gpu's (the shared
 /// files and the shadow contract `shadow/none.wgsl`). A shadow method's lookup comes in
@@ -47,6 +49,7 @@ pub static SHADERS: pelage_gpu::ShaderSources = pelage_gpu::wgsl_sources!(
     "shade/models/chiang_eval.wgsl",
     "shade/models/chiang_model.wgsl",
     "shade/models/chiang_tables.wgsl",
+    "shade/models/chiang_volume_model.wgsl",
     "shade/models/eval.wgsl",
     "shade/models/fibre.wgsl",
     "shade/models/kajiya_kay.wgsl",
@@ -57,6 +60,7 @@ pub static SHADERS: pelage_gpu::ShaderSources = pelage_gpu::wgsl_sources!(
     "shade/models/marschner_model.wgsl",
     "shade/models/sadeghi.wgsl",
     "shade/models/sadeghi_model.wgsl",
+    "shade/models/volume_common.wgsl",
     "shade/oit/a_buffer.wgsl",
     "shade/oit/bindings.wgsl",
     "shade/oit/common.wgsl",
@@ -69,6 +73,7 @@ pub static SHADERS: pelage_gpu::ShaderSources = pelage_gpu::wgsl_sources!(
     "shade/oit/tail.wgsl",
     "shade/oit/wboit.wgsl",
     "shade/ribbons.wgsl",
+    "shade/volume.wgsl",
 );
 
 /// What can go wrong in stage 3.

@@ -49,8 +49,8 @@ use pelage_gpu::{
     BindLayout, Gpu, UniformBuffer, compute_pipeline_with_layouts, wgpu, zeroed_storage,
 };
 use pelage_scene::{
-    Absorption, ChiangParams, KajiyaKayParams, MarschnerParams, ParamError, SadeghiParams,
-    chiang_color_scale,
+    Absorption, ChiangParams, KajiyaKayParams, MarschnerParams, MultipleScattering, ParamError,
+    SadeghiParams, chiang_color_scale,
 };
 
 /// `KajiyaKayModel` in `wgsl/shade/models/kajiya_kay.wgsl`.
@@ -534,7 +534,7 @@ impl ChiangUniforms {
             s,
             cos_2k_alpha: Vec3::from_array(cos_2k),
             color_scale: chiang_color_scale(bn),
-            dual: u32::from(p.dual_scattering),
+            dual: u32::from(p.multiple_scattering == MultipleScattering::Dual),
             _pad0: 0,
             _pad1: 0,
             _pad2: 0,

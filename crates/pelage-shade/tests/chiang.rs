@@ -165,7 +165,7 @@ fn white_furnace_is_one_without_tilt() {
             beta_n,
             alpha_deg: 0.0,
             sigma_a: Some(Vec3::ZERO),
-            dual_scattering: false,
+            multiple_scattering: pelage_scene::MultipleScattering::None,
             ..Default::default()
         };
         let tab = tables(&gpu, &params);
@@ -211,7 +211,7 @@ fn dual_scattering_limits() {
     let blond = Vec3::new(0.8, 0.6, 0.35);
     let black = Vec3::new(0.03, 0.025, 0.02);
     let single = ChiangParams {
-        dual_scattering: false,
+        multiple_scattering: pelage_scene::MultipleScattering::None,
         ..Default::default()
     };
     let dual = ChiangParams::default();

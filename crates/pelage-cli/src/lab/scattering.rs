@@ -1,4 +1,4 @@
-//! The scattering lab: pelage's Chiang fibres, single and dual scattering, against an
+//! The scattering lab: pelage's Chiang fibres, single, dual and volume scattering, against an
 //! independent path tracer (`pelage_reference::path_tracer`: the real strand cylinders,
 //! Chiang's near-field BSDF at the true fibre offset, every bounce up to 16, the mesh as a
 //! diffuse occluder) on the same strands, camera, sun and sky.
@@ -13,7 +13,7 @@
 //! two path-traced images with different seeds (16 bounces); their own difference (FLIP of
 //! one seed against the other) is the noise floor each row reports. pelage renders the
 //! same scene with the k-buffer (k = 8) and the voxel shadow, once per row of [`METHODS`]
-//! (the Chiang model with dual scattering off and on).
+//! (the Chiang model with multiple scattering none, dual and volume).
 //!
 //! **Where the light comes from**: more path-traced images of seed 1 cap the bounces at 1,
 //! 2, 4 and 8, and one at 64 shows how much 16 truncates (the same paths stopped earlier or
@@ -36,8 +36,8 @@ use pelage::gpu::Gpu;
 use pelage::gpu::read_buffer;
 use pelage::scene::{
     AdsmParams, Camera, ChiangParams, DeepOpacityParams, DirectionalLight, HairType, Light, Mesh,
-    ShadingModel, ShadowMapParams, ShadowParams, Transparency, VoxelParams, WindParams,
-    chiang_color_scale, sigma_a_from_melanin,
+    MultipleScattering, ShadingModel, ShadowMapParams, ShadowParams, Transparency, VoxelParams,
+    WindParams, chiang_color_scale, sigma_a_from_melanin,
 };
 use pelage::{Renderer, Scene};
 use pelage_lab::{ScatterChart, ScatterPoint, Table, contact_sheet};
@@ -65,9 +65,25 @@ type Method = (&'static str, fn(&mut ChiangParams));
 
 /// The pelage variants measured against the path tracer: name, and how the variant sets
 /// up the scene's Chiang parameters. A new multiple-scattering method adds a row.
-const METHODS: [Method; 2] = [
-    ("single", |p| p.dual_scattering = false),
-    ("dual", |p| p.dual_scattering = true),
+const METHODS: [Method; 5] = [
+    ("single", |p| {
+        p.multiple_scattering = MultipleScattering::None
+    }),
+    ("dual", |p| p.multiple_scattering = MultipleScattering::Dual),
+    // The volume method beside its defaults (32³ cells, 64 steps): a coarser grid, and
+    // fewer steps (light still in flight after the last step is lost).
+    ("volume_g16", |p| {
+        p.multiple_scattering = MultipleScattering::Volume;
+        p.volume_grid = 16;
+    }),
+    ("volume_s16", |p| {
+        p.multiple_scattering = MultipleScattering::Volume;
+        p.volume_iterations = 16;
+    }),
+    // The defaults last: the sheet shows its FLIP.
+    ("volume", |p| {
+        p.multiple_scattering = MultipleScattering::Volume
+    }),
 ];
 
 /// Bounce caps of the bounce-order split below the reference's 16 (one seed each).

@@ -66,6 +66,7 @@ impl HairPass for Opaque {
     ) -> crate::Result<()> {
         self.common.check(self.name(), strands)?;
         // The mesh does not resolve: the hair pass that follows does.
+        self.common.encode_volume(encoder, timer.as_deref_mut());
         self.common
             .encode_mesh(encoder, target, None, timer.as_deref_mut());
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -105,8 +106,9 @@ impl HairPass for Opaque {
             .hair_pass(self.hair.label)
             .writes([crate::draw::TARGET_COLOR, crate::draw::TARGET_DEPTH]);
         self.common
-            .mesh_pass(lookup)
+            .volume_pass()
             .into_iter()
+            .chain(self.common.mesh_pass(lookup))
             .chain([hair])
             .collect()
     }

@@ -496,6 +496,7 @@ impl SlicedMethod {
         mut timer: Option<&mut GpuTimer>,
     ) -> crate::Result<()> {
         self.sliced.check_target(target)?;
+        self.common.encode_volume(encoder, timer.as_deref_mut());
         self.common
             .encode_mesh(encoder, target, None, timer.as_deref_mut());
         self.sliced.encode(encoder, target, timer)
@@ -538,8 +539,9 @@ macro_rules! sliced_hair_pass {
             fn passes(&self, lookup: &[String]) -> Vec<pelage_gpu::PassInfo> {
                 self.0
                     .common
-                    .mesh_pass(lookup)
+                    .volume_pass()
                     .into_iter()
+                    .chain(self.0.common.mesh_pass(lookup))
                     .chain(self.0.sliced.pass_infos(&self.0.common))
                     .collect()
             }

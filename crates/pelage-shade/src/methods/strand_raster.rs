@@ -4,12 +4,14 @@
 //! Per frame: every strand vertex is projected and shaded once; every segment is
 //! clipped, projected and counted into the (screen tile, depth bin) cells its footprint
 //! touches; a prefix sum turns the counts into offsets in a pool of segment indices the
-//! caller sizes; the segments are scattered into it; one workgroup per tile takes its
-//! segments bin after bin (front to back) in runs: each thread puts one segment's
-//! fragments (analytic coverage: the pixel centre's distance to the centre line against
-//! the projected half width) into per-pixel lists in workgroup memory, each pixel sorts
-//! its list by depth and composites it front to back; a full-screen pass blends the
-//! result over the colour target.
+//! caller sizes; the segments are scattered into it and each cell sorted by segment
+//! index (so every run reads the same order); one workgroup per tile, one thread per
+//! pixel, takes its segments bin after bin (front to back) in batches staged in
+//! workgroup memory: each thread tests its own pixel against each segment (analytic
+//! coverage: the pixel centre's distance to the centre line against the projected half
+//! width), keeps the nearest few fragments of the bin in a window in registers and
+//! composites front to back; a full-screen pass blends the result over the colour
+//! target.
 //!
 //! What shading once per vertex loses against shading per fragment: the shading model
 //! is evaluated at the strand's centre line at each vertex and interpolated along the
@@ -19,7 +21,8 @@
 //! exact composite, and the flat ones (no shading) against a true-width reference.
 //!
 //! Memory: 8 bytes per pixel (the composite, `rgba16float`), 8 bytes per (tile, bin)
-//! cell (counts, offsets) and 4 per 1024 cells (block sums), 32 bytes per strand
+//! cell (counts, offsets) and 4 per 1024 cells (block sums), 4 per tile (its opaque
+//! depth), 32 bytes per strand
 //! vertex, 64 per segment, 4 per pool entry.
 //!
 //! The pool follows vello's pattern: the scan records the size a frame needed in a
@@ -55,8 +58,8 @@ const SHADED_BYTES: u64 = 32;
 const SEGMENT_BYTES: u64 = 64;
 /// Bytes of the composite per pixel (`rgba16float`).
 const COMPOSITE_BYTES: u64 = 8;
-/// Bytes of the header (`Header`: four `u32`).
-const HEADER_BYTES: u64 = 16;
+/// Bytes of the header (`Header`: five `u32`).
+const HEADER_BYTES: u64 = 20;
 
 /// The method's constants and this frame's layout (`RasterParams` in
 /// `shade/oit/strand_raster.wgsl`).
@@ -97,10 +100,20 @@ pub struct StrandRasterUniforms {
 }
 
 /// The compute passes in recording order: (label, entry point, `@group(3)` bindings).
-const PASSES: [(&str, &str, &[u32]); 7] = [
+const PASSES: [(&str, &str, &[u32]); 9] = [
     ("shade: strand raster shade", "cs_shade", &[0, 1]),
-    // cs_bin and cs_scatter share walk_cells, which names offsets and the pool.
-    ("shade: strand raster bin", "cs_bin", &[0, 1, 2, 3, 4, 5]),
+    (
+        "shade: strand raster tile depth",
+        "cs_tile_depth",
+        &[0, 8, 11],
+    ),
+    // cs_bin and cs_scatter share walk_cells, which names offsets, the pool and the
+    // tiles' depths.
+    (
+        "shade: strand raster bin",
+        "cs_bin",
+        &[0, 1, 2, 3, 4, 5, 11],
+    ),
     (
         "shade: strand raster scan reduce",
         "cs_scan_reduce",
@@ -115,8 +128,9 @@ const PASSES: [(&str, &str, &[u32]); 7] = [
     (
         "shade: strand raster scatter",
         "cs_scatter",
-        &[0, 2, 3, 4, 5],
+        &[0, 2, 3, 4, 5, 11],
     ),
+    ("shade: strand raster sort", "cs_sort", &[0, 3, 4, 5, 7]),
     (
         "shade: strand raster fine",
         "cs_fine",
@@ -136,17 +150,23 @@ enum Grid {
     Blocks,
     /// One workgroup.
     One,
+    /// One thread per (tile, bin) cell.
+    Cells,
+    /// One thread per tile.
+    TileThreads,
     /// One workgroup per tile.
     Tiles,
 }
 
-const GRIDS: [Grid; 7] = [
+const GRIDS: [Grid; 9] = [
     Grid::Vertices,
+    Grid::TileThreads,
     Grid::Segments,
     Grid::Blocks,
     Grid::One,
     Grid::Blocks,
     Grid::Segments,
+    Grid::Cells,
     Grid::Tiles,
 ];
 
@@ -215,6 +235,7 @@ struct Storage {
     offsets: wgpu::Buffer,
     block_sums: wgpu::Buffer,
     header: wgpu::Buffer,
+    tile_depth: wgpu::Buffer,
     composite: wgpu::Texture,
     composite_view: wgpu::TextureView,
 }
@@ -368,6 +389,10 @@ impl StrandRaster {
                 "pelage strand raster header",
                 HEADER_BYTES,
                 usage | wgpu::BufferUsages::COPY_SRC,
+            )?,
+            tile_depth: storage_buffer(
+                "pelage strand raster tile depths",
+                u64::from(tiles_x) * u64::from(tiles_y) * 4,
             )?,
             composite,
             composite_view,
@@ -537,6 +562,18 @@ impl StrandRaster {
         self.pool.lock().map_or(0, |p| p.capacity)
     }
 
+    /// Cells, summed over every frame drawn (saturating), longer than the sort takes
+    /// (`SORT_MAX` in the WGSL, 1024 references; lavapipe's loop limit): they are
+    /// composited in the order the scatter's atomics gave, so their tiles may differ
+    /// from run to run. Reads the GPU's counters (waits for the GPU).
+    pub fn unsorted_cells(&self, gpu: &Gpu) -> crate::Result<u64> {
+        let bytes = pelage_gpu::read_buffer(gpu, &self.storage.header)?;
+        Ok(bytes
+            .get(16..20)
+            .and_then(|b| b.try_into().ok())
+            .map_or(0, |b| u64::from(u32::from_le_bytes(b))))
+    }
+
     /// What the last recorded frame left on the GPU (waits for it): the uniforms, every
     /// projected segment, each cell's segment indices as the pool holds them, and the
     /// composite. For tests and the CPU mirror (`pelage_reference::strand_raster`).
@@ -620,6 +657,7 @@ impl StrandRaster {
                                 6 => s.block_sums.as_entire_binding(),
                                 7 => s.header.as_entire_binding(),
                                 8 => wgpu::BindingResource::TextureView(depth),
+                                11 => s.tile_depth.as_entire_binding(),
                                 _ => wgpu::BindingResource::TextureView(&s.composite_view),
                             };
                             wgpu::BindGroupEntry { binding, resource }
@@ -682,6 +720,11 @@ impl StrandRaster {
                 Grid::Segments => layout.segment_count().div_ceil(LINE_GROUP),
                 Grid::Blocks => u64::from(u.scan_blocks),
                 Grid::One => 1,
+                Grid::Cells => (u64::from(u.tiles_x) * u64::from(u.tiles_y) * u64::from(u.bins))
+                    .div_ceil(LINE_GROUP),
+                Grid::TileThreads => {
+                    (u64::from(u.tiles_x) * u64::from(u.tiles_y)).div_ceil(LINE_GROUP)
+                }
                 Grid::Tiles => u64::from(u.tiles_x) * u64::from(u.tiles_y),
             };
             let (x, y) = grid(n, max_dim).unwrap_or((0, 0));
@@ -857,6 +900,7 @@ impl HairPass for StrandRaster {
             });
         }
         let groups = self.groups(target)?;
+        self.common.encode_volume(encoder, timer.as_deref_mut());
         self.common
             .encode_mesh(encoder, target, None, timer.as_deref_mut());
         self.record_compute(encoder, &groups, PASSES.len(), timer.as_deref_mut());
@@ -895,21 +939,25 @@ impl HairPass for StrandRaster {
 
     fn passes(&self, lookup: &[String]) -> Vec<PassInfo> {
         let shade = self.common.hair_pass(PASSES[0].0).writes([OIT_STORAGE]);
-        let middle = PASSES[1..6].iter().map(|(label, _, _)| {
+        let tile_depth = PassInfo::new(PASSES[1].0)
+            .reads([OIT_STORAGE, TARGET_DEPTH])
+            .writes([OIT_STORAGE]);
+        let middle = PASSES[2..8].iter().map(|(label, _, _)| {
             PassInfo::new(*label)
                 .reads([OIT_STORAGE])
                 .writes([OIT_STORAGE])
         });
-        let fine = PassInfo::new(PASSES[6].0)
+        let fine = PassInfo::new(PASSES[8].0)
             .reads([OIT_STORAGE, TARGET_DEPTH])
             .writes([OIT_STORAGE]);
         let resolve = PassInfo::new(RESOLVE)
             .reads([OIT_STORAGE, TARGET_COLOR])
             .writes([TARGET_COLOR]);
         self.common
-            .mesh_pass(lookup)
+            .volume_pass()
             .into_iter()
-            .chain([shade])
+            .chain(self.common.mesh_pass(lookup))
+            .chain([shade, tile_depth])
             .chain(middle)
             .chain([fine, resolve])
             .collect()
@@ -925,6 +973,7 @@ impl HairPass for StrandRaster {
             &s.offsets,
             &s.block_sums,
             &s.header,
+            &s.tile_depth,
             &self.uniforms.buffer,
         ]
         .iter()

@@ -209,6 +209,7 @@ impl HairPass for Wboit {
     ) -> crate::Result<()> {
         self.common.check(self.name(), strands)?;
         self.resolve.check_target(target)?;
+        self.common.encode_volume(encoder, timer.as_deref_mut());
         self.common
             .encode_mesh(encoder, target, None, timer.as_deref_mut());
         let accumulation = self.accumulation.create_view(&Default::default());
@@ -280,8 +281,9 @@ impl HairPass for Wboit {
                 .writes([crate::draw::TARGET_COLOR])
         });
         self.common
-            .mesh_pass(lookup)
+            .volume_pass()
             .into_iter()
+            .chain(self.common.mesh_pass(lookup))
             .chain([accumulate])
             .chain(resolve)
             .collect()

@@ -122,5 +122,8 @@ fn hair_shade(in: VertexOut) -> vec4<f32> {
         let irradiance = frame_irradiance(l, in.world);
         lit += hair_light(t, frame_to_light(l, in.world), v, in.color, in.strand_random, in.visibility[i]) * irradiance;
     }
-    return vec4<f32>(hair_ambient(in.color) * (frame.ambient * occlusion) + lit * direct_occlusion, style.opacity * in.coverage);
+    // Light scattered by other fibres that the terms above leave out (the volume method's
+    // grid, which carries its own shadowing; zero for the other models and methods).
+    let scattered = hair_scattered(t, v, in.world, in.color);
+    return vec4<f32>(hair_ambient(in.color) * (frame.ambient * occlusion) + lit * direct_occlusion + scattered, style.opacity * in.coverage);
 }

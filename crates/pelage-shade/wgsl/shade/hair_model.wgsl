@@ -4,9 +4,13 @@
 // for light that stage 2 sees reaching the fibre with `visibility` in [0, 1]: the
 // single-scattering models multiply, a model with multiple scattering (Chiang's with dual
 // scattering) estimates from it the fibres in front and the light they scatter forward;
-// and `hair_ambient(base_color)`, the hair's radiance per unit of `frame.ambient`. This file is the default implementation, Kajiya-Kay; a pass that
+// `hair_ambient(base_color)`, the hair's radiance per unit of `frame.ambient`; and
+// `hair_scattered(t, v, p, base_color)`, light other fibres scattered toward this one that
+// the per-light terms do not carry (Chiang's volume method; zero for the others). This
+// file is the default implementation, Kajiya-Kay; a pass that
 // imports it can be redirected to shade/models/marschner_model.wgsl,
-// marschner_lut_model.wgsl, sadeghi_model.wgsl or chiang_model.wgsl (HairModel in
+// marschner_lut_model.wgsl, sadeghi_model.wgsl, chiang_model.wgsl or
+// chiang_volume_model.wgsl (HairModel in
 // crates/pelage-shade/src/models.rs picks one and binds its resources).
 //
 // Reads: @group(2) @binding(0) the model's parameters (uniform KajiyaKayModel).
@@ -29,4 +33,10 @@ fn hair_light(t: vec3<f32>, l: vec3<f32>, v: vec3<f32>, base_color: vec3<f32>, s
 // colour (an artistic model: `ambient` is a fraction of the base colour, as it always was).
 fn hair_ambient(base_color: vec3<f32>) -> vec3<f32> {
     return base_color;
+}
+
+// Light that other fibres scattered toward this one and that no term above carries
+// (the volume method's orders >= 2), toward v at world position p: none for this model.
+fn hair_scattered(t: vec3<f32>, v: vec3<f32>, p: vec3<f32>, base_color: vec3<f32>) -> vec3<f32> {
+    return vec3<f32>(0.0);
 }

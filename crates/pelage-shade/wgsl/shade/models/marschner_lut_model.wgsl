@@ -23,3 +23,9 @@ fn hair_light(t: vec3<f32>, l: vec3<f32>, v: vec3<f32>, base_color: vec3<f32>, s
 fn hair_ambient(base_color: vec3<f32>) -> vec3<f32> {
     return base_color;
 }
+
+// Light that other fibres scattered toward this one and that no term above carries
+// (the volume method's orders >= 2), toward v at world position p: none for this model.
+fn hair_scattered(t: vec3<f32>, v: vec3<f32>, p: vec3<f32>, base_color: vec3<f32>) -> vec3<f32> {
+    return vec3<f32>(0.0);
+}

@@ -5,10 +5,12 @@
 //   cs_shade        one thread per strand vertex: projects it (clip position) and shades
 //                   it once with the hair model contract (hair_shade of shade/hair.wgsl,
 //                   stage 2's per-vertex visibility), into `shaded`.
+//   cs_tile_depth   one thread per screen tile: the farthest opaque depth over its pixels.
 //   cs_bin          one thread per segment: clips it to the near and far planes, projects
 //                   it into a RasterSegment (pixels, window depth, half width in pixels,
 //                   colours), and counts it into every (screen tile, depth bin) cell its
-//                   widened footprint touches (atomicAdd on u32).
+//                   widened footprint touches and the tile's opaque surface does not
+//                   hide (atomicAdd on u32).
 //   cs_scan_reduce, cs_scan_top, cs_scan_apply
 //                   exclusive prefix sum of the cell counts into `offsets` (blocks of
 //                   SCAN_BLOCK cells, then one workgroup over the block sums); the total
@@ -16,12 +18,15 @@
 //   cs_scatter      one thread per segment again: the same cells, each gets the
 //                   segment's index at offsets[cell] + atomicAdd(counts[cell]); indices
 //                   past the pool's capacity are dropped and counted.
+//   cs_sort         one thread per (tile, bin) cell: sorts the cell's references by
+//                   segment index, so the order cs_fine reads is the same every run.
 //   cs_fine         one workgroup per screen tile, one thread per pixel: the tile's
-//                   segments, bin after bin in key order, drawn in runs: each thread
-//                   puts one segment's fragments (analytic coverage, depth tested against
-//                   the opaque depth) into per-pixel lists, each pixel sorts its list by
-//                   view depth and composites it front to back; a pixel stops below 1/255
-//                   transmittance (and takes no more fragments), the tile once all have.
+//                   segments, bin after bin, staged in batches in workgroup memory;
+//                   each thread tests its own pixel against every segment of the batch
+//                   (analytic coverage, depth tested against the opaque depth), keeps a
+//                   small window of the nearest fragments of the bin in registers and
+//                   composites front to back; a pixel stops below 1/255 transmittance,
+//                   the tile once all have (one vote per batch).
 //   vs_fullscreen + fs_resolve
 //                   blends the result (premultiplied colour, 1 - transmittance) over the
 //                   caller's colour target.
@@ -83,12 +88,14 @@ struct RasterSegment {
 
 // Counters kept from frame to frame (zeroed when the method is built), read back by
 // StrandRaster: index 0 the pool size the last frame needed, 1 the largest any frame
-// needed, 2 frames whose pool overflowed, 3 segment indices dropped (saturating).
+// needed, 2 frames whose pool overflowed, 3 segment indices dropped (saturating), 4
+// cells longer than SORT_MAX left in the scatter's order (saturating).
 struct Header {
     needed: atomic<u32>,
     peak: atomic<u32>,
     overflowed_frames: atomic<u32>,
     dropped: atomic<u32>,
+    unsorted: atomic<u32>,
 }
 
 @group(3) @binding(0) var<uniform> raster: RasterParams;
@@ -103,6 +110,8 @@ struct Header {
 @group(3) @binding(8) var opaque_depth: texture_2d<f32>;
 @group(3) @binding(9) var composite: texture_storage_2d<rgba16float, write>;
 @group(3) @binding(10) var composite_read: texture_2d<f32>;
+// Per screen tile, the farthest opaque depth over its pixels (cs_tile_depth).
+@group(3) @binding(11) var<storage, read_write> tile_depth: array<f32>;
 
 fn linear_id(wid: vec3<u32>, groups: vec3<u32>, size: u32, lid: u32) -> u32 {
     return (wid.x + wid.y * groups.x) * size + lid;
@@ -243,17 +252,73 @@ fn segment_rows(seg: RasterSegment, r: f32) -> vec2<i32> {
     return vec2<i32>(max(y0, 0), min(y1, i32(raster.tiles_y) - 1));
 }
 
-// Every (tile, bin) cell segment `s` (projected as `seg`) touches: counted into `counts`
-// (cs_bin), or, with `scatter`, its index written at the cell's offset plus the count so
-// far (cs_scatter). One walk, so both passes visit the same cells.
+// ---- per tile: the farthest opaque depth ----------------------------------------------
+
+// The depth of an empty pixel: the far plane.
+fn far_depth() -> f32 {
+    return select(1.0, 0.0, raster.reverse_z != 0u);
+}
+
+// Whether window depth `a` is farther than `b`.
+fn farther(a: f32, b: f32) -> bool {
+    if (raster.reverse_z != 0u) {
+        return a < b;
+    }
+    return a > b;
+}
+
+// One thread per tile: the farthest opaque depth over the tile's pixels in the target
+// (a segment nowhere in front of it puts no fragment into the tile).
+@compute @workgroup_size(64)
+fn cs_tile_depth(
+    @builtin(workgroup_id) wid: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+    @builtin(local_invocation_index) lid: u32,
+) {
+    let t = linear_id(wid, groups, 64u, lid);
+    if (t >= raster.tiles_x * raster.tiles_y) {
+        return;
+    }
+    let origin = vec2<u32>(t % raster.tiles_x, t / raster.tiles_x) * raster.tile;
+    let end = min(origin + vec2<u32>(raster.tile), vec2<u32>(raster.width, raster.height));
+    // Nearer than anything: the first pixel replaces it.
+    var deepest = select(-1.0, 2.0, raster.reverse_z != 0u);
+    for (var y = origin.y; y < end.y; y += 1u) {
+        for (var x = origin.x; x < end.x; x += 1u) {
+            let z = textureLoad(opaque_depth, vec2<i32>(i32(x), i32(y)), 0).r;
+            deepest = select(deepest, z, farther(z, deepest));
+        }
+    }
+    tile_depth[t] = deepest;
+}
+
+// Whether the segment, nearest at window depth `nearest`, lies wholly behind the
+// opaque surface of tile `t`: it then puts no fragment there (cs_fine's depth test).
+fn behind_tile(nearest: f32, t: u32) -> bool {
+    let opaque = tile_depth[t];
+    if (raster.reverse_z != 0u) {
+        return nearest <= opaque;
+    }
+    return nearest >= opaque;
+}
+
+// Every (tile, bin) cell segment `s` (projected as `seg`) touches, less the tiles whose
+// opaque surface hides it: counted into `counts` (cs_bin), or, with `scatter`, its index
+// written at the cell's offset plus the count so far (cs_scatter). One walk, so both
+// passes visit the same cells.
 fn walk_cells(seg: RasterSegment, s: u32, scatter: bool) {
     let bin = segment_bin(seg);
     let r = segment_reach(seg);
     let rows = segment_rows(seg, r);
+    let nearest = select(min(seg.a.z, seg.b.z), max(seg.a.z, seg.b.z), raster.reverse_z != 0u);
     for (var row = rows.x; row <= rows.y; row += 1) {
         let cols = row_columns(seg, r, u32(row));
         for (var col = cols.x; col <= cols.y; col += 1) {
-            let cell = (u32(row) * raster.tiles_x + u32(col)) * raster.bins + bin;
+            let t = u32(row) * raster.tiles_x + u32(col);
+            if (behind_tile(nearest, t)) {
+                continue;
+            }
+            let cell = t * raster.bins + bin;
             let before = atomicAdd(&counts[cell], 1u);
             if (scatter) {
                 let slot = offsets[cell] + before;
@@ -427,37 +492,104 @@ fn cs_scan_apply(
     }
 }
 
+// ---- per cell: sort the references by segment index ------------------------------------
+//
+// cs_scatter's atomics put a cell's references in whatever order the threads reached
+// them; sorting each cell by segment index makes the order cs_fine reads (and so every
+// composite) the same run after run. One thread per cell, a Shell sort in the pool
+// (Ciura's gaps): no barrier, and close to linear on the nearly sorted lists a
+// scatter leaves. Lavapipe stops every loop of an invocation once its loops have taken
+// 65 535 iterations in all (gallivm's loop limiter, per 8-lane vector), which a Shell
+// sort of a few thousand references passes: cells longer than SORT_MAX stay in the
+// scatter's order (their tiles may differ from run to run) and are counted in the
+// header.
+
+const SORT_MAX: u32 = 1024u;
+
+// Ciura's gaps, largest first.
+const SORT_GAPS: array<u32, 8> = array<u32, 8>(701u, 301u, 132u, 57u, 23u, 10u, 4u, 1u);
+
+// The pool range [start, end) of `cell` (clipped to the pool's capacity).
+fn cell_range(cell: u32) -> vec2<u32> {
+    let start = min(offsets[cell], raster.capacity);
+    let end = min(offsets[cell] + atomicLoad(&counts[cell]), raster.capacity);
+    return vec2<u32>(start, max(start, end));
+}
+
+@compute @workgroup_size(64)
+fn cs_sort(
+    @builtin(workgroup_id) wid: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+    @builtin(local_invocation_index) lid: u32,
+) {
+    let cell = linear_id(wid, groups, 64u, lid);
+    if (cell >= raster.tiles_x * raster.tiles_y * raster.bins) {
+        return;
+    }
+    let range = cell_range(cell);
+    let n = range.y - range.x;
+    if (n > SORT_MAX) {
+        let before = atomicAdd(&header.unsorted, 1u);
+        if (before == 0xffffffffu) {
+            atomicStore(&header.unsorted, before);
+        }
+        return;
+    }
+    var gaps = SORT_GAPS;
+    for (var g = 0u; g < 8u; g += 1u) {
+        let gap = gaps[g];
+        if (gap >= n) {
+            continue;
+        }
+        for (var i = range.x + gap; i < range.y; i += 1u) {
+            let v = pool[i];
+            var j = i;
+            loop {
+                if (j < range.x + gap) {
+                    break;
+                }
+                let w = pool[j - gap];
+                if (w <= v) {
+                    break;
+                }
+                pool[j] = w;
+                j -= gap;
+            }
+            pool[j] = v;
+        }
+    }
+}
+
 // ---- per tile: composite ------------------------------------------------------------
 //
-// A tile's cells are consecutive in the pool, bin after bin (within a bin, in the order
-// cs_scatter's atomics gave): the tile's segments in depth order to the bins' resolution.
-// They are drawn in runs of up to one segment per thread:
-// each thread walks its segment's pixels in the tile (phase A) and appends a fragment
-// (view depth there, the segment's place in the run) to the pixel's list in workgroup
-// memory, skipping pixels already opaque; each thread then sorts its own pixel's list by
-// depth and composites it (phase B). A run whose fragments overflow a pixel's list is
-// drawn again as runs of half the length (for the rest of the tile), so no fragment is
-// lost. The order is exact per pixel within a run (window depth), and by depth bin
-// between runs: only fragments of the same bin drawn in different runs can be out of order.
+// One workgroup per tile, one thread per pixel. The tile's cells are consecutive in the
+// pool, bin after bin, each sorted by segment index (cs_sort): the tile's segments in
+// depth order to the bins' resolution. They are staged in batches of BATCH segments in
+// workgroup memory (each with a mask of the tile rows and columns its widened bounding
+// box touches); every thread walks the batch and tests its own pixel against each
+// segment (analytic coverage, depth tested against the opaque depth). A pixel keeps a
+// window of the WINDOW nearest fragments of the current bin in registers, sorted by
+// (window depth, segment index): a fragment arriving when the window is full pushes
+// the nearest of the window and itself out, and that one is composited front to back;
+// the window is flushed, nearest first, when the bin changes and at the end. The order
+// is exact within a bin wherever a pixel gets at most WINDOW fragments from it, and by
+// bin between bins. A pixel stops below 1/255 transmittance; the tile stops when all
+// its pixels have (one vote per batch). No per-pixel lists, no atomics, nothing capped.
 
-// Fragment slots of a tile's lists: FRAG_SLOTS / (TILE x TILE) per pixel.
-const FRAG_SLOTS: u32 = 2048u;
-// Bits of a fragment key holding its entry in the run (runs are at most 512 long).
-const ENTRY_MASK: u32 = 511u;
-const MAX_TILE_PIXELS: u32 = 256u;
+// Segments staged per batch.
+const BATCH: u32 = 64u;
+// Fragments a pixel's window holds (the order within a bin is exact up to this many).
+const WINDOW: u32 = 8u;
 
-// Segments per thread in a run (before halving on overflow).
-const RUN_PER_THREAD: u32 = 2u;
-var<workgroup> run_ids: array<u32, 512>;
-var<workgroup> frag_key: array<u32, FRAG_SLOTS>;
-var<workgroup> frag_count: array<atomic<u32>, MAX_TILE_PIXELS>;
-var<workgroup> tile_opaque: array<f32, MAX_TILE_PIXELS>;
-// 1 while the pixel is inside the target and not yet opaque.
-var<workgroup> tile_open: array<u32, MAX_TILE_PIXELS>;
-var<workgroup> overflowed: atomic<u32>;
-var<workgroup> pixels_done: atomic<u32>;
+var<workgroup> batch_segments: array<RasterSegment, BATCH>;
+// Segment index and bin of each staged segment.
+var<workgroup> batch_ids: array<u32, BATCH>;
+var<workgroup> batch_bins: array<u32, BATCH>;
+// Bits 0..15: tile rows the segment's widened box touches; bits 16..31: columns.
+var<workgroup> batch_masks: array<u32, BATCH>;
 var<workgroup> tile_range: vec2<u32>;
-var<workgroup> shared_word: u32;
+// The vote: ping-pong flags, set by every pixel still open.
+var<workgroup> tile_busy: array<u32, 2>;
 
 // Coverage of the pixel centred at `p` by the segment, its window depth and the
 // perspective-correct parameter along it: (coverage, depth, t); coverage 0 outside it.
@@ -491,73 +623,152 @@ fn in_front(z: f32, opaque: f32) -> bool {
     return z < opaque;
 }
 
-// Phase A for one segment: a fragment in every open pixel of the tile it covers.
-fn emit_fragments(seg: RasterSegment, entry: u32, origin: vec2<u32>, slots: u32) {
-    let r = segment_reach(seg);
+// Whether the segment puts a fragment into the pixel centred at `centre` in front of
+// `opaque`: its projection onto the segment in [0, 1), its squared distance to the
+// centre line (from the cross product: well conditioned however long the segment) below
+// the half width plus half a pixel. Returns the fragment's sort depth (nearer is
+// smaller, never negative), or -1 for none.
+fn fragment_depth(seg: RasterSegment, centre: vec2<f32>, opaque: f32) -> f32 {
     let d = seg.b.xy - seg.a.xy;
-    // Walk the segment's major axis; across it, only the pixels within `r` of the line
-    // (r / cos of the angle to the axis) can be covered.
-    let major = select(1u, 0u, abs(d.x) >= abs(d.y));
-    let minor = 1u - major;
-    let first = vec2<i32>(origin);
-    let last = first + vec2<i32>(i32(TILE) - 1);
-    let lo = max(i32(clamp(floor(min(seg.a[major], seg.b[major]) - r), -1.0, 1.0e9)), first[major]);
-    let hi = min(i32(clamp(floor(max(seg.a[major], seg.b[major]) + r), -1.0, 1.0e9)), last[major]);
-    let along = d[major];
     let len2 = dot(d, d);
     let inv_len2 = select(0.0, 1.0 / len2, len2 > 1e-12);
-    let span = select(r, r * length(d) / abs(along), abs(along) > 1e-6);
-    for (var m = lo; m <= hi; m += 1) {
-        // The infinite line's centre at this step (not clamped to the segment: every
-        // pixel within `r` of the segment is within `span` of it).
-        var centre_line = seg.a[minor];
-        if (abs(along) > 1e-6) {
-            centre_line = seg.a[minor] + (f32(m) + 0.5 - seg.a[major]) / along * d[minor];
-        }
-        let n0 = max(i32(clamp(floor(centre_line - span), -1.0, 1.0e9)), first[minor]);
-        let n1 = min(i32(clamp(floor(centre_line + span), -1.0, 1.0e9)), last[minor]);
-        for (var n = n0; n <= n1; n += 1) {
-            var pixel = vec2<i32>(m, n);
-            if (major == 1u) {
-                pixel = vec2<i32>(n, m);
-            }
-            let p = u32(pixel.y - first.y) * TILE + u32(pixel.x - first.x);
-            if (tile_open[p] == 0u) {
-                continue;
-            }
-            // Covered (as segment_coverage decides, without its square root) and in
-            // front of the opaque surface.
-            let q = vec2<f32>(pixel) + vec2<f32>(0.5) - seg.a.xy;
-            var u = 0.0;
-            if (len2 > 1e-12) {
-                u = dot(q, d) * inv_len2;
-                if (u < 0.0 || u >= 1.0) {
-                    continue;
-                }
-            }
-            // Squared distance to the line from the cross product (well conditioned
-            // however long the segment; |q|^2 - u^2 |d|^2 is not).
-            let cross = q.x * d.y - q.y * d.x;
-            let reach = mix(seg.a.w, seg.b.w, u) + 0.5;
-            if (cross * cross * inv_len2 >= reach * reach) {
-                continue;
-            }
-            let z = mix(seg.a.z, seg.b.z, u);
-            if (!in_front(z, tile_opaque[p])) {
-                continue;
-            }
-            let slot = atomicAdd(&frag_count[p], 1u);
-            if (slot < slots) {
-                // The window depth's bits (nearer first; non-negative floats order as
-                // integers) with the low bits replaced by the entry: one word sorts by
-                // depth, then run order.
-                let near_first = select(z, 1.0 - z, raster.reverse_z != 0u);
-                frag_key[p * slots + slot] = (bitcast<u32>(max(near_first, 0.0)) & ~ENTRY_MASK) | entry;
-            } else {
-                atomicStore(&overflowed, 1u);
-            }
+    let q = centre - seg.a.xy;
+    var u = 0.0;
+    if (len2 > 1e-12) {
+        u = dot(q, d) * inv_len2;
+        if (u < 0.0 || u >= 1.0) {
+            return -1.0;
         }
     }
+    let cross = q.x * d.y - q.y * d.x;
+    let reach = mix(seg.a.w, seg.b.w, u) + 0.5;
+    if (cross * cross * inv_len2 >= reach * reach) {
+        return -1.0;
+    }
+    let z = mix(seg.a.z, seg.b.z, u);
+    if (!in_front(z, opaque)) {
+        return -1.0;
+    }
+    return max(select(z, 1.0 - z, raster.reverse_z != 0u), 0.0);
+}
+
+// Bits of the tile rows (0..15) and columns (16..31) whose pixel centres lie in the
+// segment's bounding box widened by its reach.
+fn tile_mask(seg: RasterSegment, origin: vec2<u32>) -> u32 {
+    let r = segment_reach(seg);
+    let lo = min(seg.a.xy, seg.b.xy) - vec2<f32>(r) - vec2<f32>(origin) - vec2<f32>(0.5);
+    let hi = max(seg.a.xy, seg.b.xy) + vec2<f32>(r) - vec2<f32>(origin) - vec2<f32>(0.5);
+    // Pixel k (centre k + 0.5 in tile coordinates) is inside when lo <= k <= hi: bits
+    // [first, last + 1) (none when last < first).
+    let first = vec2<u32>(clamp(ceil(lo), vec2<f32>(0.0), vec2<f32>(f32(TILE))));
+    let end = vec2<u32>(clamp(floor(hi) + 1.0, vec2<f32>(0.0), vec2<f32>(f32(TILE))));
+    let below_end = (vec2<u32>(1u) << end) - vec2<u32>(1u);
+    let below_first = (vec2<u32>(1u) << first) - vec2<u32>(1u);
+    let bits = below_end & ~below_first;
+    return (bits.y & 0xffffu) | ((bits.x & 0xffffu) << 16u);
+}
+
+// One pixel's state in cs_fine: its place, front-to-back blend and window. Private so
+// that the helpers below, called with constant slots, keep the window in registers
+// (and so that no loop runs per fragment: lavapipe stops every loop of an invocation
+// once its loops have taken 65 535 iterations in all).
+var<private> px_centre: vec2<f32>;
+var<private> px_opaque: f32;
+var<private> px_row_bit: u32;
+var<private> px_column_bit: u32;
+var<private> px_color: vec3<f32>;
+var<private> px_transmittance: f32;
+// Still taking fragments: inside the target and above 1/255 transmittance.
+var<private> px_open: bool;
+// The bin the window holds fragments of.
+var<private> px_bin: u32;
+// The window, farthest first; an empty slot has depth -1 (nearer than any fragment,
+// so an insertion stops there and pushes nothing out).
+var<private> w_depth: array<f32, WINDOW>;
+var<private> w_id: array<u32, WINDOW>;
+var<private> w_color: array<vec4<f32>, WINDOW>;
+// The fragment being inserted, then the one pushed out.
+var<private> carry_depth: f32;
+var<private> carry_id: u32;
+var<private> carry_color: vec4<f32>;
+
+// Composites a fragment (colour, alpha) of sort depth `depth` behind what the pixel
+// holds, unless the pixel is finished or the fragment an empty slot (depth < 0).
+fn blend(depth: f32, f: vec4<f32>) {
+    if (px_open && depth >= 0.0) {
+        px_color += px_transmittance * f.w * f.rgb;
+        px_transmittance *= 1.0 - f.w;
+        px_open = px_transmittance >= OPAQUE_ENOUGH;
+    }
+}
+
+// Composites window slot `k` and empties it.
+fn flush_slot(k: u32) {
+    blend(w_depth[k], w_color[k]);
+    w_depth[k] = -1.0;
+}
+
+// The window composited nearest first, and emptied.
+fn flush_window() {
+    flush_slot(7u);
+    flush_slot(6u);
+    flush_slot(5u);
+    flush_slot(4u);
+    flush_slot(3u);
+    flush_slot(2u);
+    flush_slot(1u);
+    flush_slot(0u);
+}
+
+// One compare-exchange of the insertion: slot `k` keeps the farther of itself and the
+// carry (by depth, then segment index), the nearer goes on.
+fn exchange(k: u32) {
+    let nearer = carry_depth < w_depth[k] || (carry_depth == w_depth[k] && carry_id < w_id[k]);
+    let keep_depth = select(carry_depth, w_depth[k], nearer);
+    let keep_id = select(carry_id, w_id[k], nearer);
+    let keep_color = select(carry_color, w_color[k], nearer);
+    carry_depth = select(w_depth[k], carry_depth, nearer);
+    carry_id = select(w_id[k], carry_id, nearer);
+    carry_color = select(w_color[k], carry_color, nearer);
+    w_depth[k] = keep_depth;
+    w_id[k] = keep_id;
+    w_color[k] = keep_color;
+}
+
+// Entry `e` of the staged batch (of `count`) at this pixel: a new bin flushes the
+// window; a fragment goes into the window, and what the window pushes out (the nearest
+// of it and the fragment, once it is full) is composited.
+fn take_entry(e: u32, count: u32) {
+    if (e >= count || !px_open) {
+        return;
+    }
+    let seg_bin = batch_bins[e];
+    if (seg_bin != px_bin) {
+        flush_window();
+        px_bin = seg_bin;
+    }
+    let mask = batch_masks[e];
+    if ((mask & px_row_bit) == 0u || (mask & px_column_bit) == 0u || !px_open) {
+        return;
+    }
+    let seg = batch_segments[e];
+    let depth = fragment_depth(seg, px_centre, px_opaque);
+    if (depth < 0.0) {
+        return;
+    }
+    let c = segment_coverage(seg, px_centre);
+    carry_depth = depth;
+    carry_id = batch_ids[e];
+    carry_color = vec4<f32>(mix(seg.color_a.rgb, seg.color_b.rgb, c.z), raster.opacity * c.x);
+    exchange(0u);
+    exchange(1u);
+    exchange(2u);
+    exchange(3u);
+    exchange(4u);
+    exchange(5u);
+    exchange(6u);
+    exchange(7u);
+    blend(carry_depth, carry_color);
 }
 
 @compute @workgroup_size(TILE, TILE)
@@ -567,108 +778,74 @@ fn cs_fine(
     @builtin(local_invocation_id) local: vec3<u32>,
     @builtin(local_invocation_index) lid: u32,
 ) {
-    let threads = TILE * TILE;
-    let slots = FRAG_SLOTS / threads;
     let tile_index = wid.x + wid.y * groups.x;
     let tiles = raster.tiles_x * raster.tiles_y;
     let origin = vec2<u32>(tile_index % raster.tiles_x, tile_index / raster.tiles_x) * TILE;
     let px = origin.x + local.x;
     let py = origin.y + local.y;
     let inside = tile_index < tiles && px < raster.width && py < raster.height;
-    let centre = vec2<f32>(f32(px) + 0.5, f32(py) + 0.5);
-    var opaque = select(1.0, 0.0, raster.reverse_z != 0u);
+    px_centre = vec2<f32>(f32(px) + 0.5, f32(py) + 0.5);
+    px_opaque = far_depth();
     if (inside) {
-        opaque = textureLoad(opaque_depth, vec2<i32>(i32(px), i32(py)), 0).r;
+        px_opaque = textureLoad(opaque_depth, vec2<i32>(i32(px), i32(py)), 0).r;
     }
-    tile_opaque[lid] = opaque;
-    tile_open[lid] = select(0u, 1u, inside);
-    atomicStore(&frag_count[lid], 0u);
-    if (lid == 0u) {
-        atomicStore(&pixels_done, 0u);
-        atomicStore(&overflowed, 0u);
-    }
-    var color = vec3<f32>(0.0);
-    var transmittance = 1.0;
-    workgroupBarrier();
-    if (!inside) {
-        atomicAdd(&pixels_done, 1u);
-    }
+    px_row_bit = 1u << local.y;
+    px_column_bit = 1u << (16u + local.x);
+    px_color = vec3<f32>(0.0);
+    px_transmittance = 1.0;
+    px_open = inside;
+    px_bin = 0u;
+    w_depth = array<f32, WINDOW>(-1.0, -1.0, -1.0, -1.0, -1.0, -1.0, -1.0, -1.0);
     // The tile's cells are consecutive in the pool, bin after bin: one range.
     if (lid == 0u) {
         var range = vec2<u32>(0u, 0u);
         if (tile_index < tiles) {
-            let first_cell = tile_index * raster.bins;
-            let last_cell = first_cell + raster.bins - 1u;
-            let start = min(offsets[first_cell], raster.capacity);
-            let end = min(offsets[last_cell] + atomicLoad(&counts[last_cell]), raster.capacity);
-            range = vec2<u32>(start, max(start, end));
+            let first = cell_range(tile_index * raster.bins);
+            let last = cell_range(tile_index * raster.bins + raster.bins - 1u);
+            range = vec2<u32>(first.x, max(first.x, last.y));
         }
         tile_range = range;
+        tile_busy = array<u32, 2>(0u, 0u);
     }
     let range = workgroupUniformLoad(&tile_range);
-    var done = range.x;
-    let longest_run = threads * RUN_PER_THREAD;
-    var run = longest_run;
-    loop {
-        if (done >= range.y) {
+    var parity = 0u;
+    for (var done = range.x; done < range.y; done += BATCH) {
+        if (px_open) {
+            tile_busy[parity] = 1u;
+        }
+        if (lid == 0u) {
+            tile_busy[1u - parity] = 0u;
+        }
+        let count = min(BATCH, range.y - done);
+        if (lid < count) {
+            let s = pool[done + lid];
+            let seg = raster_segments[s];
+            batch_segments[lid] = seg;
+            batch_ids[lid] = s;
+            batch_bins[lid] = segment_bin(seg);
+            batch_masks[lid] = tile_mask(seg, origin);
+        }
+        if (workgroupUniformLoad(&tile_busy[parity]) == 0u) {
             break;
         }
-        let count = min(run, range.y - done);
-        for (var entry = lid; entry < count; entry += threads) {
-            let s = pool[done + entry];
-            run_ids[entry] = s;
-            emit_fragments(raster_segments[s], entry, origin, slots);
+        parity = 1u - parity;
+        // Eight entries per iteration (see px_open's note on lavapipe's loop limit).
+        for (var e = 0u; e < count && px_open; e += 8u) {
+            take_entry(e, count);
+            take_entry(e + 1u, count);
+            take_entry(e + 2u, count);
+            take_entry(e + 3u, count);
+            take_entry(e + 4u, count);
+            take_entry(e + 5u, count);
+            take_entry(e + 6u, count);
+            take_entry(e + 7u, count);
         }
         workgroupBarrier();
-        if (lid == 0u) {
-            shared_word = atomicLoad(&overflowed);
-        }
-        let overflow = workgroupUniformLoad(&shared_word) != 0u;
-        if (overflow && run > 1u) {
-            atomicStore(&frag_count[lid], 0u);
-            if (lid == 0u) {
-                atomicStore(&overflowed, 0u);
-            }
-            run = max(run >> 1u, 1u);
-            workgroupBarrier();
-            continue;
-        }
-        // Phase B: this pixel's fragments, sorted by view depth, front to back.
-        let base = lid * slots;
-        let fragments = min(atomicLoad(&frag_count[lid]), slots);
-        for (var i = 1u; i < fragments; i += 1u) {
-            let key = frag_key[base + i];
-            var at = i;
-            while (at > 0u && frag_key[base + at - 1u] > key) {
-                frag_key[base + at] = frag_key[base + at - 1u];
-                at -= 1u;
-            }
-            frag_key[base + at] = key;
-        }
-        for (var i = 0u; i < fragments; i += 1u) {
-            let seg = raster_segments[run_ids[frag_key[base + i] & ENTRY_MASK]];
-            let c = segment_coverage(seg, centre);
-            let alpha = raster.opacity * c.x;
-            color += transmittance * alpha * mix(seg.color_a.rgb, seg.color_b.rgb, c.z);
-            transmittance *= 1.0 - alpha;
-            if (transmittance < OPAQUE_ENOUGH) {
-                tile_open[lid] = 0u;
-                atomicAdd(&pixels_done, 1u);
-                break;
-            }
-        }
-        atomicStore(&frag_count[lid], 0u);
-        done += count;
-        workgroupBarrier();
-        if (lid == 0u) {
-            shared_word = atomicLoad(&pixels_done);
-        }
-        if (workgroupUniformLoad(&shared_word) >= threads) {
-            break;
-        }
     }
+    // The last bin's window, nearest first.
+    flush_window();
     if (inside) {
-        textureStore(composite, vec2<i32>(i32(px), i32(py)), vec4<f32>(color, 1.0 - transmittance));
+        textureStore(composite, vec2<i32>(i32(px), i32(py)), vec4<f32>(px_color, 1.0 - px_transmittance));
     }
 }
 

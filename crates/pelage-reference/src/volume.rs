@@ -1,0 +1,401 @@
+//! CPU mirror of the volume method's grid passes (`crates/pelage-shade/wgsl/shade/volume.wgsl`,
+//! after Moon, Walter and Marschner 2008), in `f64`, computing everything from the strands,
+//! the lights and the Chiang parameters: the grid's fit, the splat (in floating point, not
+//! the GPU's fixed point), the injection and the propagation, with the fibre energies from
+//! [`ChiangFibre::lobe_energies`] (integrated here, not read from the GPU's tables) sampled
+//! at the GPU table's `|θ|` texels and interpolated as it interpolates them.
+//!
+//! The method, its phase function and its approximations are stated in
+//! `crates/pelage-shade/wgsl/shade/models/volume_common.wgsl`; this file follows it step
+//! for step so that a test can hold the GPU to it.
+
+use std::collections::HashMap;
+use std::f64::consts::{FRAC_PI_2, PI};
+
+use glam::{DVec3, DVec4, IVec3, Vec3, Vec4};
+use pelage_scene::{Absorption, ChiangParams, Light};
+
+use crate::chiang::{ChiangFibre, sigma_a_from_reflectance};
+
+/// Texels of `|θ|` in the GPU's energy table (`CHIANG_THETA`).
+const THETA_TEXELS: usize = 32;
+/// Samples of `|θ|` of the isotropic averages (`VOLUME_THETA_SAMPLES`).
+const THETA_SAMPLES: usize = 8;
+/// Mean chord of a cube in cell edges (`VOLUME_CHORD`).
+const CHORD: f64 = 2.0 / 3.0;
+
+/// The strands as stage 1 hands them over, and what lights and shades them.
+#[derive(Clone, Copy, Debug)]
+pub struct VolumeInput<'a> {
+    /// `strands × (segments + 1)` vertices: xyz position, w the strand parameter in [0, 1].
+    pub vertices: &'a [Vec4],
+    /// Segments per strand.
+    pub segments: u32,
+    /// Root width of each strand.
+    pub widths: &'a [f32],
+    /// Colour of each strand (linear RGB; the absorption when the parameters take it from
+    /// the colour).
+    pub colors: &'a [Vec3],
+    /// Tip width as a fraction of the root width.
+    pub tip_width: f32,
+    /// The lights (as the scene gives them).
+    pub lights: &'a [Light],
+    /// The fibre, the grid's size and its steps.
+    pub params: &'a ChiangParams,
+}
+
+/// The grid the passes leave: what the shading reads, and the per-cell medium.
+#[derive(Clone, Debug)]
+pub struct VolumeGridCpu {
+    /// Cells per side.
+    pub resolution: u32,
+    /// The grid's lowest corner.
+    pub origin: DVec3,
+    /// Cell edge.
+    pub cell: f64,
+    /// Optical depth of each cell (over a cell edge, isotropic mean).
+    pub depth: Vec<f64>,
+    /// Per cell and channel: fluence and flux vector `(φ, Φ)`.
+    pub fluence: Vec<[DVec4; 3]>,
+    /// Total energy leaving the cells at each step (index 0: the injection), channels
+    /// summed: the energy test watches it.
+    pub step_energy: Vec<f64>,
+    /// Total energy arriving at the cells at each propagation step (one fewer than
+    /// `step_energy`): step `k`'s arrivals are step `k`'s departures less what left the
+    /// grid, and its departures are its arrivals less what the fibres absorbed.
+    pub step_arrivals: Vec<f64>,
+}
+
+/// Energy `A` and forward bias `g` per channel, as `volume_fibre_at`.
+#[derive(Clone, Copy, Debug)]
+struct Phase {
+    albedo: DVec3,
+    g: DVec3,
+}
+
+/// `(a_f, a_b)` per channel at the table's `|θ|` texels, for one σ_a.
+struct EnergyTable {
+    af: Vec<DVec3>,
+    ab: Vec<DVec3>,
+}
+
+impl EnergyTable {
+    fn new(fibre: &ChiangFibre) -> Self {
+        let (mut af, mut ab) = (Vec::new(), Vec::new());
+        for j in 0..THETA_TEXELS {
+            let theta = FRAC_PI_2 * j as f64 / (THETA_TEXELS - 1) as f64;
+            let e = fibre.lobe_energies(theta);
+            af.push(e.a_f());
+            ab.push(e.a_b());
+        }
+        Self { af, ab }
+    }
+
+    /// Linear in `|θ|` between texels, as `chiang_dual_at`.
+    fn at(&self, theta: f64) -> Phase {
+        let last = (THETA_TEXELS - 1) as f64;
+        let u = (theta / FRAC_PI_2).clamp(0.0, 1.0) * last;
+        let i = u.floor().min(last - 1.0);
+        let f = u - i;
+        let i = i as usize;
+        let af = self.af[i] * (1.0 - f) + self.af[i + 1] * f;
+        let ab = self.ab[i] * (1.0 - f) + self.ab[i + 1] * f;
+        let a = af + ab;
+        let g = DVec3::new(
+            bias(af.x, ab.x, a.x),
+            bias(af.y, ab.y, a.y),
+            bias(af.z, ab.z, a.z),
+        );
+        Phase { albedo: a, g }
+    }
+
+    /// `volume_fibre_isotropic`.
+    fn isotropic(&self) -> Phase {
+        let (mut w_sum, mut a, mut ag) = (0.0, DVec3::ZERO, DVec3::ZERO);
+        for j in 0..THETA_SAMPLES {
+            let theta = (j as f64 + 0.5) * FRAC_PI_2 / THETA_SAMPLES as f64;
+            let w = theta.cos().powi(2);
+            let p = self.at(theta);
+            w_sum += w;
+            a += w * p.albedo;
+            ag += w * p.albedo * p.g;
+        }
+        let albedo = a / w_sum;
+        let g = DVec3::new(
+            ratio(ag.x, w_sum * albedo.x),
+            ratio(ag.y, w_sum * albedo.y),
+            ratio(ag.z, w_sum * albedo.z),
+        );
+        Phase { albedo, g }
+    }
+}
+
+fn bias(af: f64, ab: f64, a: f64) -> f64 {
+    if a > 1e-8 {
+        (2.0 / PI) * (af - ab) / a
+    } else {
+        0.0
+    }
+}
+
+fn ratio(x: f64, y: f64) -> f64 {
+    if y > 1e-8 { x / y } else { 0.0 }
+}
+
+/// `volume_scatter_direction`.
+fn scatter_direction(p: DVec3, t: DVec3, s: f64, g: f64, g_iso: f64) -> DVec3 {
+    let along = t * t.dot(p);
+    s * (along + g * (p - along)) + (1.0 - s) * ((1.0 + 2.0 * g_iso) / 3.0) * p
+}
+
+/// `face_share`.
+fn face_share(m: DVec3, d: DVec3) -> f64 {
+    let sixth = 1.0 / 6.0;
+    let w = |x: f64| (sixth + x / 3.0).max(0.0);
+    let total = w(m.x) + w(m.y) + w(m.z) + w(-m.x) + w(-m.y) + w(-m.z);
+    w(m.dot(d)) / total
+}
+
+const FACES: [IVec3; 6] = [
+    IVec3::new(1, 0, 0),
+    IVec3::new(-1, 0, 0),
+    IVec3::new(0, 1, 0),
+    IVec3::new(0, -1, 0),
+    IVec3::new(0, 0, 1),
+    IVec3::new(0, 0, -1),
+];
+
+/// Runs the grid passes on the CPU. Strands or lights that give nothing leave a grid of
+/// zeros; nothing here can produce NaN from finite input (empty cells, zero-length
+/// segments and cells without light are skipped as the GPU skips them).
+pub fn volume_grid(input: &VolumeInput<'_>) -> VolumeGridCpu {
+    let p = input.params;
+    let n = p.volume_grid.max(1) as usize;
+    let segments = input.segments as usize;
+    let strands = input.widths.len().min(input.colors.len());
+    let per = segments + 1;
+    let vertices: &[Vec4] = if segments > 0 {
+        &input.vertices[..(strands * per).min(input.vertices.len())]
+    } else {
+        &[]
+    };
+    // Fit: a cube of n cells on the longest side, half a cell of margin.
+    let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+    for v in vertices {
+        let q = v.truncate().as_dvec3();
+        lo = lo.min(q);
+        hi = hi.max(q);
+    }
+    let mut centre = 0.5 * (lo + hi);
+    let mut extent = (hi - lo).max_element();
+    if vertices.is_empty() || !((0.0..1e30).contains(&extent) && centre.abs().max_element() < 1e30)
+    {
+        centre = DVec3::ZERO;
+        extent = 1.0;
+    }
+    let cell = (extent / (n as f64 - 1.0)).max(1e-6);
+    let origin = centre - DVec3::splat(0.5 * n as f64 * cell);
+    let cells = n * n * n;
+    let index = |c: IVec3| (c.z as usize * n + c.y as usize) * n + c.x as usize;
+    let clamp_cell = |q: DVec3| {
+        let c = ((q - origin) / cell).floor();
+        IVec3::new(
+            (c.x as i32).clamp(0, n as i32 - 1),
+            (c.y as i32).clamp(0, n as i32 - 1),
+            (c.z as i32).clamp(0, n as i32 - 1),
+        )
+    };
+    // Splat.
+    let mut depth = vec![0.0f64; cells];
+    let mut tangent = vec![DVec3::ZERO; cells];
+    let mut color = vec![DVec3::ZERO; cells];
+    for s in 0..strands {
+        let width = f64::from(input.widths[s]);
+        let col = input.colors[s].as_dvec3().clamp(DVec3::ZERO, DVec3::ONE);
+        for k in 0..segments {
+            let a = vertices[s * per + k];
+            let b = vertices[s * per + k + 1];
+            let w = width * (1.0 + (f64::from(input.tip_width) - 1.0) * 0.5 * f64::from(a.w + b.w));
+            let d = (b - a).truncate().as_dvec3();
+            let len = d.length();
+            if !(len > 0.0 && len < 1e30 && w > 0.0) {
+                continue;
+            }
+            let mut t = d / len;
+            let at = t.abs();
+            let major = if at.x >= at.y && at.x >= at.z {
+                t.x
+            } else if at.y >= at.z {
+                t.y
+            } else {
+                t.z
+            };
+            if major < 0.0 {
+                t = -t;
+            }
+            let samples = (2.0 * len / cell).ceil().clamp(1.0, 4096.0) as usize;
+            let amount = w * len * 0.25 * PI / (cell * cell) / samples as f64;
+            for i in 0..samples {
+                let f = (i as f64 + 0.5) / samples as f64;
+                let q = a.truncate().as_dvec3() * (1.0 - f) + b.truncate().as_dvec3() * f;
+                let c = index(clamp_cell(q));
+                depth[c] += amount;
+                tangent[c] += t * amount;
+                color[c] += col * amount;
+            }
+        }
+    }
+    // The fibre's energies, one table per absorption met.
+    let fibre_of = |sigma_a: DVec3| ChiangFibre {
+        sigma_a,
+        beta_m: f64::from(p.beta_m),
+        beta_n: f64::from(p.beta_n),
+        alpha: f64::from(p.alpha_deg).to_radians(),
+        eta: f64::from(p.eta),
+    };
+    let mut tables: HashMap<[u64; 3], EnergyTable> = HashMap::new();
+    let mut sigma_key = |c: DVec3| -> [u64; 3] {
+        let sigma = match p.absorption() {
+            Absorption::Fixed(s) => s.as_dvec3(),
+            Absorption::FromColor => sigma_a_from_reflectance(c, f64::from(p.beta_n)),
+        };
+        // The GPU computes sigma in f32.
+        let sigma = sigma.as_vec3().as_dvec3();
+        let key = [sigma.x.to_bits(), sigma.y.to_bits(), sigma.z.to_bits()];
+        tables
+            .entry(key)
+            .or_insert_with(|| EnergyTable::new(&fibre_of(sigma)));
+        key
+    };
+    // Medium.
+    let mut medium_t = vec![DVec3::ZERO; cells];
+    let mut medium_s = vec![0.0; cells];
+    let mut keys = Vec::with_capacity(cells);
+    for c in 0..cells {
+        let (mut t, mut s, mut col) = (DVec3::Y, 0.0, DVec3::ONE);
+        let tl = tangent[c].length();
+        if depth[c] > 0.0 {
+            s = (tl / depth[c]).clamp(0.0, 1.0);
+            col = (color[c] / depth[c]).clamp(DVec3::ZERO, DVec3::ONE);
+        }
+        if tl > 0.0 {
+            t = tangent[c] / tl;
+        }
+        medium_t[c] = t;
+        medium_s[c] = s;
+        keys.push(sigma_key(col));
+    }
+    let iso: Vec<Phase> = keys.iter().map(|k| tables[k].isotropic()).collect();
+    // Inject.
+    let mut state = vec![[DVec4::ZERO; 3]; cells];
+    let mut fluence = vec![[DVec4::ZERO; 3]; cells];
+    let half = 0.5 * CHORD;
+    for c in 0..cells {
+        let kappa = depth[c];
+        let meet = 1.0 - (-kappa).exp();
+        if meet <= 0.0 {
+            continue;
+        }
+        let xyz = IVec3::new((c % n) as i32, ((c / n) % n) as i32, (c / (n * n)) as i32);
+        let pos = origin + (xyz.as_dvec3() + 0.5) * cell;
+        let (t, s) = (medium_t[c], medium_s[c]);
+        let table = &tables[&keys[c]];
+        for light in input.lights.iter().take(pelage_scene::MAX_LIGHTS) {
+            let (l, irradiance, reach) = match light {
+                Light::Directional(d) => (
+                    (-d.direction.as_dvec3()).normalize(),
+                    (d.color * d.intensity).as_dvec3(),
+                    f64::INFINITY,
+                ),
+                Light::Point(pt) => {
+                    let to = pt.position.as_dvec3() - pos;
+                    let len = to.length();
+                    let l = if len < 1e-6 { DVec3::Y } else { to / len };
+                    (
+                        l,
+                        (pt.color * pt.intensity).as_dvec3() / to.length_squared().max(1e-4),
+                        len,
+                    )
+                }
+            };
+            let reach = reach.min(4.0 * n as f64 * cell);
+            let mut tau = 0.0;
+            for k in 1..4 * n {
+                if k as f64 * cell > reach {
+                    break;
+                }
+                let q = (pos + l * (k as f64 * cell) - origin) / cell;
+                if q.min_element() < 0.0 || q.max_element() >= n as f64 {
+                    break;
+                }
+                tau += depth[index(q.floor().as_ivec3())];
+            }
+            let theta = t.dot(l).abs().min(1.0).asin();
+            let aligned = table.at(theta);
+            let albedo = s * aligned.albedo + (1.0 - s) * iso[c].albedo;
+            let scattered = irradiance * ((-tau).exp() * meet) * albedo;
+            for ch in 0..3 {
+                let dir = scatter_direction(-l, t, s, aligned.g[ch], iso[c].g[ch]);
+                let f = scattered[ch] * dir;
+                state[c][ch] += DVec4::new(scattered[ch], f.x, f.y, f.z);
+            }
+        }
+        for ch in 0..3 {
+            fluence[c][ch] = half * state[c][ch];
+        }
+    }
+    let energy = |st: &[[DVec4; 3]]| st.iter().map(|c| c[0].x + c[1].x + c[2].x).sum::<f64>();
+    let mut step_energy = vec![energy(&state)];
+    let mut step_arrivals = Vec::new();
+    // Propagate.
+    for _ in 0..p.volume_iterations {
+        let mut next = vec![[DVec4::ZERO; 3]; cells];
+        let mut arrived = 0.0;
+        for c in 0..cells {
+            let xyz = IVec3::new((c % n) as i32, ((c / n) % n) as i32, (c / (n * n)) as i32);
+            let mut arrive = [DVec4::ZERO; 3];
+            for d in FACES {
+                let y = xyz - d;
+                if y.min_element() < 0 || y.max_element() >= n as i32 {
+                    continue;
+                }
+                let j = index(y);
+                let df = d.as_dvec3();
+                for ch in 0..3 {
+                    let st = state[j][ch];
+                    if st.x > 0.0 {
+                        let m = DVec3::new(st.y, st.z, st.w) / st.x;
+                        let moved = st.x * face_share(m, df);
+                        let f = moved * (2.0 / 3.0) * df;
+                        arrive[ch] += DVec4::new(moved, f.x, f.y, f.z);
+                    }
+                }
+            }
+            arrived += arrive[0].x + arrive[1].x + arrive[2].x;
+            let keep = (-CHORD * depth[c]).exp();
+            let (t, s) = (medium_t[c], medium_s[c]);
+            for ch in 0..3 {
+                let a = arrive[ch];
+                let scatter = (1.0 - keep) * iso[c].albedo[ch];
+                let flux = DVec3::new(a.y, a.z, a.w);
+                let f = keep * flux
+                    + scatter * scatter_direction(flux, t, s, iso[c].g[ch], iso[c].g[ch]);
+                let out = DVec4::new((keep + scatter) * a.x, f.x, f.y, f.z);
+                next[c][ch] = out;
+                fluence[c][ch] += half * (a + out);
+            }
+        }
+        state = next;
+        step_energy.push(energy(&state));
+        step_arrivals.push(arrived);
+    }
+    VolumeGridCpu {
+        resolution: n as u32,
+        origin,
+        cell,
+        depth,
+        fluence,
+        step_energy,
+        step_arrivals,
+    }
+}

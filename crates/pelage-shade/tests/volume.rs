@@ -1,0 +1,348 @@
+//! The volume method's grid (`wgsl/shade/volume.wgsl`) against its CPU mirror
+//! `pelage_reference::volume`, its energy bookkeeping, and degenerate hair.
+
+mod support;
+
+use glam::{DVec4, Vec2, Vec3, Vec4};
+use pelage_gpu::{Gpu, read_buffer, storage_buffer, wgpu};
+use pelage_reference::volume::{VolumeGridCpu, VolumeInput, volume_grid};
+use pelage_scene::{
+    Camera, ChiangParams, DirectionalLight, Light, MultipleScattering, PointLight, ShadeParams,
+    ShadingModel,
+};
+use pelage_shade::{FrameUniforms, HairModel, VolumeField, VolumeGrid};
+use pelage_strands::{StrandBuffers, StrandLayout, StrandRoot, StrandStyle};
+use support::gpu;
+
+/// Strands, as the GPU and the mirror both read them.
+struct Hair {
+    vertices: Vec<Vec4>,
+    widths: Vec<f32>,
+    colors: Vec<Vec3>,
+    segments: u32,
+}
+
+impl Hair {
+    fn strands(&self) -> u32 {
+        self.widths.len() as u32
+    }
+}
+
+/// `count` wavy strands of `segments` segments hanging in a box of side `size` (a
+/// deterministic hash places them).
+fn wavy(count: u32, segments: u32, size: f32, width: f32) -> Hair {
+    let hash = |i: u32, k: u32| {
+        let mut h = i.wrapping_mul(0x9e37_79b9) ^ k.wrapping_mul(0x85eb_ca6b);
+        h ^= h >> 15;
+        h = h.wrapping_mul(0x2c1b_3c6d);
+        h ^= h >> 12;
+        (h >> 8) as f32 / 16_777_216.0
+    };
+    let mut vertices = Vec::new();
+    for i in 0..count {
+        let root = Vec3::new(hash(i, 1) - 0.5, 0.5, hash(i, 2) - 0.5) * size;
+        let phase = hash(i, 3) * std::f32::consts::TAU;
+        for k in 0..=segments {
+            let f = k as f32 / segments as f32;
+            let wave = Vec3::new((phase + 9.0 * f).sin(), 0.0, (phase + 7.0 * f).cos()) * 0.12;
+            vertices.push((root + Vec3::new(0.0, -f * size, 0.0) + wave * size).extend(f));
+        }
+    }
+    Hair {
+        vertices,
+        widths: vec![width; count as usize],
+        colors: vec![Vec3::new(0.8, 0.6, 0.4); count as usize],
+        segments,
+    }
+}
+
+fn lights() -> Vec<Light> {
+    vec![
+        Light::Directional(DirectionalLight {
+            direction: Vec3::new(-0.6, -0.7, 0.4),
+            color: Vec3::new(1.0, 0.95, 0.9),
+            intensity: 2.0,
+        }),
+        Light::Point(PointLight {
+            position: Vec3::new(0.9, 0.3, -1.2),
+            color: Vec3::ONE,
+            intensity: 3.0,
+        }),
+    ]
+}
+
+fn volume_params(grid: u32, iterations: u32, sigma_a: Vec3) -> ChiangParams {
+    ChiangParams {
+        sigma_a: Some(sigma_a),
+        multiple_scattering: MultipleScattering::Volume,
+        volume_grid: grid,
+        volume_iterations: iterations,
+        ..Default::default()
+    }
+}
+
+/// Runs the grid passes on the GPU for `hair`, grown in a frame of `layout_strands`
+/// strands, and reads back the fluence and the medium.
+fn run_gpu(
+    gpu: &Gpu,
+    hair: &Hair,
+    layout_strands: u32,
+    params: &ChiangParams,
+    lights: &[Light],
+) -> (Vec<f32>, Vec<f32>) {
+    let model = HairModel::new(gpu, &ShadingModel::Chiang(params.clone())).unwrap();
+    let field: &VolumeField = model.volume().expect("a volume field");
+    let strands = hair.strands().max(1);
+    let mut vertices = hair.vertices.clone();
+    vertices.resize((strands * (hair.segments + 1)) as usize, Vec4::ZERO);
+    let roots: Vec<StrandRoot> = (0..strands as usize)
+        .map(|i| StrandRoot {
+            triangle: 0,
+            seed: i as u32,
+            bary: Vec2::ZERO,
+            length: 1.0,
+            width: hair.widths.get(i).copied().unwrap_or(0.0),
+            phase: 0.0,
+            tilt: 0.0,
+            azimuth: 0.0,
+            color: hair.colors.get(i).copied().unwrap_or(Vec3::ONE),
+            region: 0,
+        })
+        .collect();
+    let usage = wgpu::BufferUsages::STORAGE;
+    let vb = storage_buffer(gpu, "test vertices", &vertices, usage).unwrap();
+    let rb = storage_buffer(gpu, "test roots", &roots, usage).unwrap();
+    let style = StrandStyle {
+        width: 0.01,
+        max_width: 0.01,
+        tip_width: 0.5,
+        opacity: 1.0,
+    };
+    let buffers = StrandBuffers::new(
+        vb,
+        rb,
+        strands,
+        hair.segments,
+        style,
+        (Vec3::splat(-10.0), Vec3::splat(10.0)),
+    )
+    .unwrap();
+    let camera = Camera::default().matrices(64, 64);
+    let frame = FrameUniforms::new(&camera, lights, &ShadeParams::default(), 64, 0).unwrap();
+    let frame_buffer = pelage_gpu::UniformBuffer::new(gpu, "test frame", &frame).unwrap();
+    let tables = model.chiang().expect("tables");
+    let grid = VolumeGrid::new(gpu, field, tables, &frame_buffer.buffer, &buffers).unwrap();
+    grid.prepare(
+        &gpu.queue,
+        StrandLayout {
+            strands: layout_strands,
+            segments: hair.segments,
+        },
+        style.tip_width,
+    )
+    .unwrap();
+    assert_eq!(
+        grid.memory_bytes(),
+        VolumeGrid::bytes_for(params.volume_grid),
+        "memory"
+    );
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    grid.encode(&mut encoder, gpu.limits(), None);
+    gpu.submit_and_wait([encoder.finish()]).unwrap();
+    let floats = |b: &wgpu::Buffer| -> Vec<f32> {
+        read_buffer(gpu, b)
+            .unwrap()
+            .chunks_exact(4)
+            .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+            .collect()
+    };
+    let fluence = floats(field.fluence_buffer());
+    let medium = floats(grid.scratch_buffers().1);
+    (fluence, medium)
+}
+
+fn mirror(hair: &Hair, params: &ChiangParams, lights: &[Light], tip_width: f32) -> VolumeGridCpu {
+    volume_grid(&VolumeInput {
+        vertices: &hair.vertices,
+        segments: hair.segments,
+        widths: &hair.widths,
+        colors: &hair.colors,
+        tip_width,
+        lights,
+        params,
+    })
+}
+
+/// The GPU's fluence cell by cell against the mirror's, relative to the largest fluence of
+/// the grid: (median, p99, max) over cells and channels of every coefficient.
+fn compare(gpu_fluence: &[f32], cpu: &VolumeGridCpu) -> (f64, f64, f64) {
+    let header = &gpu_fluence[..4];
+    assert!(
+        (f64::from(header[3]) - cpu.cell).abs() <= 1e-5 * cpu.cell,
+        "cell {} vs {}",
+        header[3],
+        cpu.cell
+    );
+    let scale = cpu
+        .fluence
+        .iter()
+        .flat_map(|c| c.iter().map(|v| v.x))
+        .fold(0.0f64, f64::max);
+    assert!(scale > 0.0, "the mirror's grid holds no light");
+    let mut errors = Vec::new();
+    for (i, cell) in cpu.fluence.iter().enumerate() {
+        for (ch, want) in cell.iter().enumerate() {
+            let at = 4 * (1 + 3 * i + ch);
+            let got = DVec4::new(
+                f64::from(gpu_fluence[at]),
+                f64::from(gpu_fluence[at + 1]),
+                f64::from(gpu_fluence[at + 2]),
+                f64::from(gpu_fluence[at + 3]),
+            );
+            errors.push((got - *want).abs().max_element() / scale);
+        }
+    }
+    errors.sort_by(f64::total_cmp);
+    let q = |f: f64| errors[((errors.len() - 1) as f64 * f) as usize];
+    (q(0.5), q(0.99), q(1.0))
+}
+
+/// The GPU's grid is the mirror's: fit, splat, injection from a directional and a point
+/// light through the grid's own transmittance, and propagation with Chiang's energies.
+#[test]
+fn volume_grid_matches_cpu_mirror() {
+    let gpu = gpu();
+    let hair = wavy(300, 12, 1.0, 0.004);
+    let lights = lights();
+    for (sigma, iterations) in [
+        (Vec3::new(0.12, 0.2, 0.4), 8),
+        (Vec3::new(0.5, 0.9, 1.7), 3),
+    ] {
+        let params = volume_params(16, iterations, sigma);
+        let (fluence, _) = run_gpu(&gpu, &hair, hair.strands(), &params, &lights);
+        let cpu = mirror(&hair, &params, &lights, 0.5);
+        let (median, p99, max) = compare(&fluence, &cpu);
+        println!(
+            "sigma_a {sigma}, {iterations} steps: GPU - mirror over the largest fluence: median {median:.2e}, p99 {p99:.2e}, max {max:.2e}"
+        );
+        assert!(max < 2e-3, "max {max}");
+    }
+}
+
+/// White fibres (σ_a = 0) in a dense cube, lit from four sides: the fibres' energy
+/// (a_f + a_b, from the GPU's tables) is 1 at every cell, no propagation step adds energy
+/// (the mirror's total after each step never exceeds the one before), the transport
+/// loses only what leaves the grid, and the scattering keeps exactly what arrives.
+#[test]
+fn volume_white_fibres_gain_no_energy() {
+    let gpu = gpu();
+    let hair = wavy(800, 16, 1.0, 0.01);
+    let sky: Vec<Light> = [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y]
+        .into_iter()
+        .map(|d| {
+            Light::Directional(DirectionalLight {
+                direction: d,
+                color: Vec3::ONE,
+                intensity: 1.0,
+            })
+        })
+        .collect();
+    let params = volume_params(12, 24, Vec3::ZERO);
+    let (_, medium) = run_gpu(&gpu, &hair, hair.strands(), &params, &sky);
+    let mut worst: f32 = 0.0;
+    for cell in medium.chunks_exact(12) {
+        for ch in 0..3 {
+            worst = worst.max((cell[4 + ch] - 1.0).abs());
+        }
+    }
+    println!("white fibres: largest |A_iso - 1| on the GPU {worst:.2e}");
+    assert!(worst < 2e-3, "A_iso off 1 by {worst}");
+    let cpu = mirror(&hair, &params, &sky, 0.5);
+    let e = &cpu.step_energy;
+    println!(
+        "white fibres: energy leaving the cells, injection then each step: {:?}",
+        e.iter().map(|x| format!("{x:.4}")).collect::<Vec<_>>()
+    );
+    for w in e.windows(2) {
+        assert!(w[1] <= w[0] * (1.0 + 1e-6), "a step gained energy: {w:?}");
+    }
+    // Step by step, closed as a furnace: the transport only loses what leaves the grid,
+    // and white fibres neither gain nor lose (departures = arrivals within the CPU
+    // energies' quadrature).
+    let mut worst_scatter: f64 = 0.0;
+    for (k, &arrived) in cpu.step_arrivals.iter().enumerate() {
+        let (before, after) = (e[k], e[k + 1]);
+        assert!(
+            arrived <= before * (1.0 + 1e-12),
+            "step {k}: transport gained energy"
+        );
+        worst_scatter = worst_scatter.max((after / arrived - 1.0).abs());
+    }
+    println!("white fibres: largest |departures / arrivals - 1| of a step {worst_scatter:.2e}");
+    assert!(
+        worst_scatter < 1e-5,
+        "white fibres changed the energy by {worst_scatter}"
+    );
+    // And the grid holds light, the dense cube losing it only through its faces.
+    assert!(e[0] > 0.0 && e[e.len() - 1] > 0.0);
+}
+
+/// No NaN or infinity, and no negative fluence, for hair that gives the grid nothing to
+/// work with: no strands, one strand, and every strand in one cell (a zero-sized hair).
+#[test]
+fn volume_degenerate_hair_is_finite() {
+    let gpu = gpu();
+    let lights = lights();
+    let params = volume_params(8, 6, Vec3::new(0.3, 0.5, 0.9));
+    let one = wavy(1, 8, 1.0, 0.004);
+    let mut point = wavy(50, 4, 1.0, 0.004);
+    for v in &mut point.vertices {
+        *v = Vec3::new(0.25, 0.25, 0.25).extend(v.w);
+    }
+    let mut near = wavy(50, 4, 1.0, 0.004);
+    for v in &mut near.vertices {
+        *v = (Vec3::new(0.25, 0.25, 0.25) + v.truncate() * 1e-4).extend(v.w);
+    }
+    for (name, hair, strands) in [
+        ("no strands", &one, 0),
+        ("one strand", &one, 1),
+        ("one point", &point, 50),
+        ("one cell", &near, 50),
+    ] {
+        let (fluence, medium) = run_gpu(&gpu, hair, strands, &params, &lights);
+        assert!(
+            fluence.iter().chain(&medium).all(|x| x.is_finite()),
+            "{name}: a non-finite value"
+        );
+        let negative = fluence[4..].chunks_exact(4).filter(|c| c[0] < 0.0).count();
+        assert_eq!(negative, 0, "{name}: negative fluence");
+        let total: f32 = fluence[4..].chunks_exact(4).map(|c| c[0]).sum();
+        println!("{name}: cell {:.3e}, total fluence {total:.4e}", fluence[3]);
+        if strands == 0 {
+            assert_eq!(total, 0.0, "no strands, yet light in the grid");
+        }
+    }
+}
+
+/// No cells or no steps are refused naming the key and the range, and the default grid
+/// fits the device.
+#[test]
+fn volume_bad_sizes_are_refused() {
+    let gpu = gpu();
+    let max = VolumeField::max_resolution(&gpu);
+    println!(
+        "largest volume_grid on this device: {max}; the default 32³ grid holds {} bytes",
+        VolumeGrid::bytes_for(32)
+    );
+    assert!(VolumeGrid::bytes_for(32) <= 8_000_000);
+    assert!(max >= 32, "the default grid must fit: {max}");
+    let params = volume_params(0, 4, Vec3::ONE);
+    let e = HairModel::new(&gpu, &ShadingModel::Chiang(params)).unwrap_err();
+    assert!(e.to_string().contains("shading.chiang.volume_grid"), "{e}");
+    let params = volume_params(16, 0, Vec3::ONE);
+    let e = HairModel::new(&gpu, &ShadingModel::Chiang(params)).unwrap_err();
+    assert!(
+        e.to_string().contains("shading.chiang.volume_iterations"),
+        "{e}"
+    );
+}

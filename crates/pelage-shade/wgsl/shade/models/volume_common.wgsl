@@ -1,0 +1,116 @@
+// shade/models/volume_common.wgsl: what the volume method's passes (shade/volume.wgsl) and
+// its shading (shade/models/chiang_volume_model.wgsl) share: the grid's uniform, its
+// layout, and the fibre phase function built from Chiang's energy tables.
+// Declares structs, constants and pure functions only (chiang_dual_at reads
+// shade/models/chiang.wgsl's table at @group(2) @binding(2)).
+//
+// The grid: resolution^3 cubic cells over the hair's bounds. `fluence` holds a header
+// (fluence[0] = origin.xyz, cell edge) and then, per cell and colour channel c, at
+// 1 + 3 * cell + c, the vec4 (phi, Phi.xyz): the fluence phi = int L dw of the light
+// scattered at least once, and its flux vector Phi = int L w dw (w the direction the
+// light travels). That is order-1 spherical harmonics (4 coefficients) per channel in
+// moment form: L(w) = (phi + 3 Phi . w) / (4 pi).
+//
+// The fibre phase function (azimuthally averaged): light travelling along p that a fibre
+// of tangent t scatters leaves with the energy A = a_f + a_b (per channel, pbrt's
+// int f |cos theta| dw at |theta| of p, from the dual-scattering tables), on the specular
+// cone (the component along t kept) with its component across t kept times
+// g = (2 / pi) (a_f - a_b) / A (forward energy uniform over the forward half circle of
+// azimuths, backward over the backward one: the mean of cos over a half circle is 2 / pi).
+// For fibres of mixed directions (alignment s = |sum of tangents| / count in [0, 1]) the
+// unaligned share scatters with the mean over isotropic tangents: A_iso and
+// (1 + 2 g_iso) / 3 times p.
+
+#import shared/math.wgsl
+#import shade/models/chiang.wgsl
+
+// Mirrors `VolumeUniforms` in crates/pelage-shade/src/volume.rs.
+struct VolumeUniforms {
+    // Cells per side.
+    resolution: u32,
+    // Propagation steps.
+    iterations: u32,
+    // Strand vertices and segments stage 1 grew this frame.
+    vertex_count: u32,
+    segments: u32,
+    strand_count: u32,
+    // Invocations of the fit pass (a grid-stride loop covers every vertex).
+    fit_invocations: u32,
+    // Tip width as a fraction of the root width.
+    tip_width: f32,
+    // Fixed-point units per unit of optical depth in `accum`, and its inverse.
+    fixed_scale: f32,
+    inv_fixed_scale: f32,
+    // Smallest cell edge, world units.
+    min_cell: f32,
+    _pad0: u32,
+    _pad1: u32,
+}
+
+// u32 per cell in the splat accumulator: optical depth, tangent sum (x, y, z as i32),
+// colour sum (r, g, b), unused.
+const VOLUME_ACCUM: u32 = 8u;
+// The tangent sum is kept at a quarter of fixed_scale (it must fit an i32).
+const VOLUME_TANGENT_SCALE: f32 = 0.25;
+// Mean chord of a cube under isotropic light (4 V / S = 2/3 of the edge): how far, in cell
+// edges, scattered light travels through a cell per step.
+const VOLUME_CHORD: f32 = 0.6666667;
+// Samples of |theta| in [0, pi/2] for the isotropic averages.
+const VOLUME_THETA_SAMPLES: u32 = 8u;
+
+// Energy and forward bias of each channel for light at |theta| to the fibre.
+struct VolumeFibre {
+    albedo: vec3<f32>,
+    g: vec3<f32>,
+}
+
+fn volume_fibre_channel(theta: f32, x: f32) -> vec2<f32> {
+    let e = chiang_dual_at(theta, x);
+    let af = dot(e.forward, vec4<f32>(1.0));
+    let ab = dot(e.backward, vec4<f32>(1.0));
+    let a = af + ab;
+    return vec2<f32>(a, select(0.0, (2.0 / PI) * (af - ab) / a, a > 1e-8));
+}
+
+// The phase function's energy and bias at |theta| for absorption coordinates x (per channel).
+fn volume_fibre_at(theta: f32, x: vec3<f32>) -> VolumeFibre {
+    let r = volume_fibre_channel(theta, x.x);
+    let g = volume_fibre_channel(theta, x.y);
+    let b = volume_fibre_channel(theta, x.z);
+    return VolumeFibre(vec3<f32>(r.x, g.x, b.x), vec3<f32>(r.y, g.y, b.y));
+}
+
+// The mean over light of isotropic directions that meets the fibre: |theta| weighted by
+// cos^2 (cos for the directions' density, cos for the fibre's projected width), at
+// VOLUME_THETA_SAMPLES midpoints; g weighted by energy.
+fn volume_fibre_isotropic(x: vec3<f32>) -> VolumeFibre {
+    var w_sum = 0.0;
+    var a = vec3<f32>(0.0);
+    var ag = vec3<f32>(0.0);
+    for (var j = 0u; j < VOLUME_THETA_SAMPLES; j += 1u) {
+        let theta = (f32(j) + 0.5) * (0.5 * PI / f32(VOLUME_THETA_SAMPLES));
+        let c = cos(theta);
+        let w = c * c;
+        let f = volume_fibre_at(theta, x);
+        w_sum += w;
+        a += w * f.albedo;
+        ag += w * f.albedo * f.g;
+    }
+    let albedo = a / w_sum;
+    return VolumeFibre(albedo, select(vec3<f32>(0.0), ag / (w_sum * albedo), albedo > vec3<f32>(1e-8)));
+}
+
+// The mean direction of light travelling along p after one scattering by fibres of mean
+// tangent t with alignment s, channel bias g (aligned) and g_iso (unaligned).
+fn volume_scatter_direction(p: vec3<f32>, t: vec3<f32>, s: f32, g: f32, g_iso: f32) -> vec3<f32> {
+    let along = t * dot(t, p);
+    return s * (along + g * (p - along)) + (1.0 - s) * ((1.0 + 2.0 * g_iso) / 3.0) * p;
+}
+
+fn volume_sigma_coordinates(sigma: vec3<f32>) -> vec3<f32> {
+    return vec3<f32>(
+        chiang_sigma_coordinate(sigma.x),
+        chiang_sigma_coordinate(sigma.y),
+        chiang_sigma_coordinate(sigma.z),
+    );
+}

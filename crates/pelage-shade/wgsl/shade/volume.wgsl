@@ -1,0 +1,353 @@
+// shade/volume.wgsl: the volume method's grid passes (multiple scattering after Moon,
+// Walter and Marschner 2008), run every frame before the hair is drawn. The grid and the
+// phase function are described in shade/models/volume_common.wgsl. CPU mirror:
+// `pelage_reference::volume` (crates/pelage-reference/src/volume.rs).
+//
+// Reads:  u (VolumeUniforms), frame (Frame: the lights), the strand vertices and StrandRoot
+//         attributes (width, colour), Chiang's model and tables at @group(2).
+// Writes: bounds (6 x atomic<u32>, cleared to 0 before `fit`), accum (VOLUME_ACCUM u32 per
+//         cell, cleared to 0 before `splat`), medium (3 vec4 per cell: mean tangent times
+//         alignment and optical depth; A_iso; g_iso), state_in/state_out (3 vec4 per cell:
+//         per channel the energy E leaving the cell this step and its flux vector),
+//         fluence (header + 3 vec4 per cell, see volume_common.wgsl).
+// Dispatch, in order:
+//   `fit`: fit_invocations / 256 workgroups of 256 (grid-stride loop over the vertices);
+//   `finalize`: one workgroup of 1;
+//   `splat`: one invocation per segment, workgroups of 64, flattened as
+//            gid.y * num_workgroups.x * 64 + gid.x (pelage_gpu::dispatch_size);
+//   `inject`: one invocation per cell, workgroups of 64, flattened the same way;
+//   `propagate`: as `inject`, `iterations` times, state_in and state_out swapped each time.
+//
+// Splat: a segment of length L and width w adds optical depth w L (pi/4) / cell^2 to the
+// cells along it (pi/4: the mean of its projected width over isotropic directions; every
+// crossing of a fibre counts, as in the path tracer), sampled at most half a cell apart;
+// its tangent (sign chosen so the largest component is positive) and its colour weighted
+// by that depth. Fixed point, u32 atomics only (saturating; the tangent as wrapping i32).
+// Inject: per cell and light, the light reaching the cell unscattered, exp(-tau) with tau
+// the optical depth marched one cell at a time toward the light, times the share that
+// meets the cell's fibres (1 - exp(-kappa)), scattered once: E = irradiance exp(-tau)
+// (1 - exp(-kappa)) A(theta_l), its flux E times the scattered mean direction.
+// Propagate: each cell gathers from its six neighbours the share of their energy that
+// leaves through the shared face, w_d = max(0, 1/6 + m.d/3) normalised over the six faces
+// (m = flux / energy; the cosine-weighted exitance of L(w) = (1 + 3 m.w)), arriving with
+// flux (2/3) d times its energy (cosine-weighted hemisphere around d); of it exp(-2/3 kappa)
+// passes and the rest scatters (energy A_iso, direction as volume_scatter_direction).
+// The fluence adds (2/3) (arriving + leaving) / 2 per step: the light's time in the cell.
+
+#import shared/math.wgsl
+#import shared/strand.wgsl
+#import shade/frame.wgsl
+#import shade/models/chiang.wgsl
+#import shade/models/volume_common.wgsl
+
+@group(0) @binding(0) var<uniform> u: VolumeUniforms;
+@group(0) @binding(1) var<uniform> frame: Frame;
+@group(0) @binding(2) var<storage, read> vertices: array<vec4<f32>>;
+@group(0) @binding(3) var<storage, read> roots: array<StrandRoot>;
+@group(0) @binding(4) var<storage, read_write> bounds: array<atomic<u32>, 6>;
+@group(0) @binding(5) var<storage, read_write> accum: array<atomic<u32>>;
+@group(0) @binding(6) var<storage, read_write> medium: array<vec4<f32>>;
+@group(0) @binding(7) var<storage, read> state_in: array<vec4<f32>>;
+@group(0) @binding(8) var<storage, read_write> state_out: array<vec4<f32>>;
+@group(0) @binding(9) var<storage, read_write> fluence: array<vec4<f32>>;
+
+// Maps f32 to u32 so that unsigned order equals float order (NaN aside).
+fn order_key(f: f32) -> u32 {
+    let b = bitcast<u32>(f);
+    return select(b | 0x80000000u, ~b, (b & 0x80000000u) != 0u);
+}
+
+fn from_order_key(k: u32) -> f32 {
+    return bitcast<f32>(select(~k, k & 0x7fffffffu, (k & 0x80000000u) != 0u));
+}
+
+var<workgroup> wg_max: array<vec3<u32>, 256>;
+var<workgroup> wg_min: array<vec3<u32>, 256>;
+
+@compute @workgroup_size(256)
+fn fit(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+    var hi = vec3<u32>(0u);
+    var lo = vec3<u32>(0u);
+    for (var i = gid.x; i < u.vertex_count; i += u.fit_invocations) {
+        let p = vertices[i].xyz;
+        let k = vec3<u32>(order_key(p.x), order_key(p.y), order_key(p.z));
+        hi = max(hi, k);
+        lo = max(lo, ~k);
+    }
+    wg_max[lid] = hi;
+    wg_min[lid] = lo;
+    workgroupBarrier();
+    for (var stride = 128u; stride > 0u; stride >>= 1u) {
+        if lid < stride {
+            wg_max[lid] = max(wg_max[lid], wg_max[lid + stride]);
+            wg_min[lid] = max(wg_min[lid], wg_min[lid + stride]);
+        }
+        workgroupBarrier();
+    }
+    if lid == 0u {
+        atomicMax(&bounds[0], wg_max[0].x);
+        atomicMax(&bounds[1], wg_max[0].y);
+        atomicMax(&bounds[2], wg_max[0].z);
+        atomicMax(&bounds[3], wg_min[0].x);
+        atomicMax(&bounds[4], wg_min[0].y);
+        atomicMax(&bounds[5], wg_min[0].z);
+    }
+}
+
+// The grid: a cube of resolution cells on its longest side of the bounds, half a cell of
+// margin, centred on the hair.
+@compute @workgroup_size(1)
+fn finalize() {
+    let hi = vec3<f32>(
+        from_order_key(atomicLoad(&bounds[0])),
+        from_order_key(atomicLoad(&bounds[1])),
+        from_order_key(atomicLoad(&bounds[2])),
+    );
+    let lo = vec3<f32>(
+        from_order_key(~atomicLoad(&bounds[3])),
+        from_order_key(~atomicLoad(&bounds[4])),
+        from_order_key(~atomicLoad(&bounds[5])),
+    );
+    var centre = 0.5 * (lo + hi);
+    var extent = max(hi.x - lo.x, max(hi.y - lo.y, hi.z - lo.z));
+    // No vertices (or non-finite ones): a harmless unit grid at the origin.
+    if u.vertex_count == 0u || !(extent >= 0.0 && extent < 1e30 && all(abs(centre) < vec3<f32>(1e30))) {
+        centre = vec3<f32>(0.0);
+        extent = 1.0;
+    }
+    let n = f32(u.resolution);
+    // extent + cell = n cell: half a cell of margin on each side.
+    let cell = max(extent / (n - 1.0), u.min_cell);
+    fluence[0] = vec4<f32>(centre - vec3<f32>(0.5 * n * cell), cell);
+}
+
+fn add_saturating(index: u32, amount: u32) {
+    if amount == 0u {
+        return;
+    }
+    let old = atomicAdd(&accum[index], amount);
+    if old > 0xffffffffu - amount {
+        atomicMax(&accum[index], 0xffffffffu);
+    }
+}
+
+fn cell_of(p: vec3<f32>, origin: vec3<f32>, cell: f32) -> vec3<i32> {
+    let n = i32(u.resolution);
+    return clamp(vec3<i32>(floor((p - origin) / cell)), vec3<i32>(0), vec3<i32>(n - 1));
+}
+
+fn cell_index(c: vec3<i32>) -> u32 {
+    let n = u.resolution;
+    return (u32(c.z) * n + u32(c.y)) * n + u32(c.x);
+}
+
+@compute @workgroup_size(64)
+fn splat(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let segment = gid.y * groups.x * 64u + gid.x;
+    if segment >= u.strand_count * u.segments {
+        return;
+    }
+    let strand = segment / u.segments;
+    let k = segment % u.segments;
+    let base = strand * (u.segments + 1u);
+    let a = vertices[base + k];
+    let b = vertices[base + k + 1u];
+    let root = roots[strand];
+    let width = root.width * mix(1.0, u.tip_width, 0.5 * (a.w + b.w));
+    let header = fluence[0];
+    let origin = header.xyz;
+    let cell = header.w;
+    let d = b.xyz - a.xyz;
+    let len = length(d);
+    if !(len > 0.0) || !(width > 0.0) || !(len < 1e30) {
+        return;
+    }
+    var t = d / len;
+    let at = abs(t);
+    var major = t.z;
+    if at.x >= at.y && at.x >= at.z {
+        major = t.x;
+    } else if at.y >= at.z {
+        major = t.y;
+    }
+    t = select(t, -t, major < 0.0);
+    let n = u32(clamp(ceil(2.0 * len / cell), 1.0, 4096.0));
+    let depth = width * len * (0.25 * PI) / (cell * cell) / f32(n);
+    let amount = depth * u.fixed_scale;
+    if !(amount >= 0.5) {
+        return;
+    }
+    let fixed = u32(min(round(amount), 4294967295.0));
+    let tangent = vec3<i32>(round(t * (amount * VOLUME_TANGENT_SCALE)));
+    let color = vec3<u32>(round(clamp(root.color, vec3<f32>(0.0), vec3<f32>(1.0)) * amount));
+    for (var i = 0u; i < n; i++) {
+        let p = mix(a.xyz, b.xyz, (f32(i) + 0.5) / f32(n));
+        let at_cell = VOLUME_ACCUM * cell_index(cell_of(p, origin, cell));
+        add_saturating(at_cell, fixed);
+        atomicAdd(&accum[at_cell + 1u], bitcast<u32>(tangent.x));
+        atomicAdd(&accum[at_cell + 2u], bitcast<u32>(tangent.y));
+        atomicAdd(&accum[at_cell + 3u], bitcast<u32>(tangent.z));
+        add_saturating(at_cell + 4u, color.x);
+        add_saturating(at_cell + 5u, color.y);
+        add_saturating(at_cell + 6u, color.z);
+    }
+}
+
+fn depth_at(index: u32) -> f32 {
+    return f32(atomicLoad(&accum[VOLUME_ACCUM * index])) * u.inv_fixed_scale;
+}
+
+fn flat_cell(gid: vec3<u32>, groups: vec3<u32>) -> u32 {
+    return gid.y * groups.x * 64u + gid.x;
+}
+
+@compute @workgroup_size(64)
+fn inject(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let n = u.resolution;
+    let i = flat_cell(gid, groups);
+    if i >= n * n * n {
+        return;
+    }
+    let c = vec3<i32>(i32(i % n), i32((i / n) % n), i32(i / (n * n)));
+    let header = fluence[0];
+    let origin = header.xyz;
+    let cell = header.w;
+    // The cell's fibres: optical depth, mean tangent and alignment, mean colour.
+    let at = VOLUME_ACCUM * i;
+    let kappa = depth_at(i);
+    let tangent_sum = vec3<f32>(
+        f32(bitcast<i32>(atomicLoad(&accum[at + 1u]))),
+        f32(bitcast<i32>(atomicLoad(&accum[at + 2u]))),
+        f32(bitcast<i32>(atomicLoad(&accum[at + 3u]))),
+    ) * (u.inv_fixed_scale / VOLUME_TANGENT_SCALE);
+    let color_sum = vec3<f32>(
+        f32(atomicLoad(&accum[at + 4u])),
+        f32(atomicLoad(&accum[at + 5u])),
+        f32(atomicLoad(&accum[at + 6u])),
+    ) * u.inv_fixed_scale;
+    var t = vec3<f32>(0.0, 1.0, 0.0);
+    var s = 0.0;
+    var color = vec3<f32>(1.0);
+    let tl = length(tangent_sum);
+    if kappa > 0.0 {
+        s = clamp(tl / kappa, 0.0, 1.0);
+        color = clamp(color_sum / kappa, vec3<f32>(0.0), vec3<f32>(1.0));
+    }
+    if tl > 0.0 {
+        t = tangent_sum / tl;
+    }
+    let x = volume_sigma_coordinates(chiang_sigma_a(chiang, color));
+    let iso = volume_fibre_isotropic(x);
+    medium[3u * i] = vec4<f32>(t * s, kappa);
+    medium[3u * i + 1u] = vec4<f32>(iso.albedo, 0.0);
+    medium[3u * i + 2u] = vec4<f32>(iso.g, 0.0);
+
+    let meet = 1.0 - exp(-kappa);
+    let p = origin + (vec3<f32>(c) + vec3<f32>(0.5)) * cell;
+    var e = vec3<f32>(0.0);
+    var flux_r = vec3<f32>(0.0);
+    var flux_g = vec3<f32>(0.0);
+    var flux_b = vec3<f32>(0.0);
+    if meet > 0.0 {
+        for (var li = 0u; li < min(frame.light_count, MAX_LIGHTS); li += 1u) {
+            let light = frame.lights[li];
+            let l = frame_to_light(light, p);
+            let irradiance = frame_irradiance(light, p);
+            // March toward the light one cell edge at a time (nearest cell), up to the
+            // light itself when it is a point inside the grid.
+            var reach = 4.0 * f32(n) * cell;
+            if light.position.w != 0.0 {
+                reach = min(reach, length(light.position.xyz - p));
+            }
+            var tau = 0.0;
+            for (var k = 1u; k < 4u * n; k += 1u) {
+                if f32(k) * cell > reach {
+                    break;
+                }
+                let q = (p + l * (f32(k) * cell) - origin) / cell;
+                if any(q < vec3<f32>(0.0)) || any(q >= vec3<f32>(f32(n))) {
+                    break;
+                }
+                tau += depth_at(cell_index(vec3<i32>(floor(q))));
+            }
+            let cos_i = length(cross(t, l));
+            let theta = fibre_angle(abs(dot(t, l)), min(cos_i, 1.0));
+            let aligned = volume_fibre_at(theta, x);
+            let albedo = s * aligned.albedo + (1.0 - s) * iso.albedo;
+            let scattered = irradiance * (exp(-tau) * meet) * albedo;
+            let dir = -l;
+            e += scattered;
+            flux_r += scattered.x * volume_scatter_direction(dir, t, s, aligned.g.x, iso.g.x);
+            flux_g += scattered.y * volume_scatter_direction(dir, t, s, aligned.g.y, iso.g.y);
+            flux_b += scattered.z * volume_scatter_direction(dir, t, s, aligned.g.z, iso.g.z);
+        }
+    }
+    let r = vec4<f32>(e.x, flux_r);
+    let g = vec4<f32>(e.y, flux_g);
+    let b = vec4<f32>(e.z, flux_b);
+    state_out[3u * i] = r;
+    state_out[3u * i + 1u] = g;
+    state_out[3u * i + 2u] = b;
+    let w = 0.5 * VOLUME_CHORD;
+    fluence[1u + 3u * i] = w * r;
+    fluence[2u + 3u * i] = w * g;
+    fluence[3u + 3u * i] = w * b;
+}
+
+// The share of a cell's energy with mean direction m that leaves through the face toward d.
+fn face_share(m: vec3<f32>, d: vec3<f32>) -> f32 {
+    let w = max(vec3<f32>(0.0), vec3<f32>(1.0 / 6.0) + m / 3.0);
+    let v = max(vec3<f32>(0.0), vec3<f32>(1.0 / 6.0) - m / 3.0);
+    let total = w.x + w.y + w.z + v.x + v.y + v.z;
+    return max(0.0, 1.0 / 6.0 + dot(m, d) / 3.0) / total;
+}
+
+const VOLUME_FACES = array<vec3<i32>, 6>(
+    vec3<i32>(1, 0, 0), vec3<i32>(-1, 0, 0),
+    vec3<i32>(0, 1, 0), vec3<i32>(0, -1, 0),
+    vec3<i32>(0, 0, 1), vec3<i32>(0, 0, -1),
+);
+
+@compute @workgroup_size(64)
+fn propagate(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let n = u.resolution;
+    let i = flat_cell(gid, groups);
+    if i >= n * n * n {
+        return;
+    }
+    let c = vec3<i32>(i32(i % n), i32((i / n) % n), i32(i / (n * n)));
+    var arrive = array<vec4<f32>, 3>(vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0));
+    for (var f = 0u; f < 6u; f += 1u) {
+        let d = VOLUME_FACES[f];
+        let y = c - d;
+        if any(y < vec3<i32>(0)) || any(y >= vec3<i32>(i32(n))) {
+            continue;
+        }
+        let j = cell_index(y);
+        let df = vec3<f32>(d);
+        for (var ch = 0u; ch < 3u; ch += 1u) {
+            let st = state_in[3u * j + ch];
+            if st.x > 0.0 {
+                let moved = st.x * face_share(st.yzw / st.x, df);
+                arrive[ch] += vec4<f32>(moved, moved * (2.0 / 3.0) * df);
+            }
+        }
+    }
+    let med = medium[3u * i];
+    let s = length(med.xyz);
+    let t = select(vec3<f32>(0.0, 1.0, 0.0), med.xyz / s, s > 0.0);
+    let keep = exp(-VOLUME_CHORD * med.w);
+    let albedo = medium[3u * i + 1u].xyz;
+    let g = medium[3u * i + 2u].xyz;
+    let w = 0.5 * VOLUME_CHORD;
+    for (var ch = 0u; ch < 3u; ch += 1u) {
+        let a = arrive[ch];
+        let scatter = (1.0 - keep) * albedo[ch];
+        let out = vec4<f32>(
+            (keep + scatter) * a.x,
+            keep * a.yzw + scatter * volume_scatter_direction(a.yzw, t, s, g[ch], g[ch]),
+        );
+        state_out[3u * i + ch] = out;
+        fluence[1u + 3u * i + ch] += w * (a + out);
+    }
+}
