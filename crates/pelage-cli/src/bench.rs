@@ -668,7 +668,10 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
     //     shadows, opaque, at seed 000's sizes. Wall clock of the shade stage submitted
     //     alone, median of the frames.
     let models = [
-        ("kajiya-kay", ShadingModel::default()),
+        (
+            "kajiya-kay",
+            ShadingModel::KajiyaKay(pelage::scene::KajiyaKayParams::default()),
+        ),
         (
             "chiang single scattering",
             ShadingModel::Chiang(ChiangParams {
@@ -678,13 +681,16 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
         ),
         (
             "chiang dual scattering",
-            ShadingModel::Chiang(ChiangParams::default()),
+            ShadingModel::Chiang(ChiangParams {
+                multiple_scattering: MultipleScattering::Dual,
+                ..ChiangParams::default()
+            }),
         ),
         (
-            "chiang volume scattering 16³",
+            "chiang volume scattering 32³",
             ShadingModel::Chiang(ChiangParams {
                 multiple_scattering: MultipleScattering::Volume,
-                volume_grid: 16,
+                volume_grid: 32,
                 ..ChiangParams::default()
             }),
         ),

@@ -214,7 +214,10 @@ fn dual_scattering_limits() {
         multiple_scattering: pelage_scene::MultipleScattering::None,
         ..Default::default()
     };
-    let dual = ChiangParams::default();
+    let dual = ChiangParams {
+        multiple_scattering: pelage_scene::MultipleScattering::Dual,
+        ..Default::default()
+    };
     let single_t = tables(&gpu, &single);
     let dual_t = tables(&gpu, &dual);
     let mut cases = Vec::new();
@@ -274,6 +277,14 @@ fn dual_scattering_limits() {
 }
 
 /// The CPU twin of a fibre with `params`' roughness and tilt and absorption `sigma_a`.
+/// `params` with dual scattering (the tests of the dual term; the default is `volume`).
+fn dual(params: ChiangParams) -> ChiangParams {
+    ChiangParams {
+        multiple_scattering: pelage_scene::MultipleScattering::Dual,
+        ..params
+    }
+}
+
 fn twin(params: &ChiangParams, sigma_a: Vec3) -> pelage_reference::chiang::ChiangFibre {
     pelage_reference::chiang::ChiangFibre {
         sigma_a: sigma_a.as_dvec3(),
@@ -490,7 +501,7 @@ fn dual_matches_cpu_twin() {
     ];
     let color = Vec3::ONE;
     let mut worst_p99: f64 = 0.0;
-    for (name, params) in configs {
+    for (name, params) in configs.map(|(name, p)| (name, dual(p))) {
         let sigma = params.sigma_a_for(color);
         let fibre = twin(&params, sigma);
         let tab = tables(&gpu, &params);
@@ -563,12 +574,12 @@ fn dual_matches_cpu_twin() {
 #[test]
 fn dual_forward_transmittance_is_af_to_the_n() {
     let gpu = gpu();
-    let params = ChiangParams {
+    let params = dual(ChiangParams {
         beta_m: 1.0,
         beta_n: 0.3,
         alpha_deg: 0.0,
         ..ChiangParams::melanin(0.3, 0.0)
-    };
+    });
     let tab = tables(&gpu, &params);
     let sigma = params.sigma_a_for(Vec3::ONE);
     let fibre = twin(&params, sigma);

@@ -64,7 +64,11 @@ fn models() -> Vec<(&'static str, Vec3, ShadingModel)> {
         lut,
     };
     vec![
-        ("kajiya-kay", brown, ShadingModel::default()),
+        (
+            "kajiya-kay",
+            brown,
+            ShadingModel::KajiyaKay(KajiyaKayParams::default()),
+        ),
         (
             "kajiya-kay shifted",
             brown,
