@@ -34,7 +34,8 @@ pub struct Scene {
     /// `mesh` from them ([`GuideStrands`]); `None` draws the groom's own strands.
     pub guides: Option<GuideParams>,
     /// Strand dynamics: `Some` simulates the hair (grown or the groom) with
-    /// [`SimulateStrands`]; `None` (the default) bends it by the stateless wind.
+    /// [`SimulateStrands`](pelage_strands::SimulateStrands); `None` (the default) bends it
+    /// by the stateless wind.
     pub dynamics: Option<DynamicsParams>,
     /// A rigid motion of the mesh over time (written into the mesh buffers every
     /// frame: the hair on it, its colliders and its drawing follow); `None` keeps it still.
