@@ -8,6 +8,7 @@
 //! ([`Frame::after_submit`]) takes readbacks and grows pools without ever waiting.
 
 use glam::Vec3;
+use pelage_gpu::audit;
 use pelage_gpu::{FramePlan, Gpu, GpuTimer, PassInfo, ShaderBinding, wgpu};
 use pelage_scene::{
     Camera, CameraMatrices, DynamicsParams, GuideParams, Light, Mesh, MeshMotion, Resampled,
@@ -293,6 +294,13 @@ impl Frame {
         }
         let draw_mesh = target.draw_mesh && !groom_only;
         let (mesh, strands) = StrandSource::of(scene).build(gpu, scene, mesh, groom_only)?;
+        // The resources that cross stages, named as the plan names them (for an audit of
+        // what each pass binds: pelage_gpu::audit; nothing happens outside one).
+        for buffer in [&mesh.positions, &mesh.normals, &mesh.indices] {
+            audit::name_buffer(buffer, pelage_strands::MESH);
+        }
+        audit::name_buffer(&strands.buffers().vertices, pelage_strands::STRAND_VERTICES);
+        audit::name_buffer(&strands.buffers().roots, pelage_strands::STRAND_ROOTS);
         let skin = match skin {
             Some(skin) => Some((
                 MeshSkin::new(gpu, &scene.mesh, skin, &mesh)?,
@@ -316,6 +324,9 @@ impl Frame {
                 stride,
             )?),
         };
+        if let Some(buffer) = &visibility {
+            audit::name_buffer(buffer, pelage_shade::VISIBILITY);
+        }
         let mut shadows = Vec::new();
         for index in 0..scene.lights.len() as u32 {
             let Some(buffer) = &visibility else {
@@ -544,6 +555,15 @@ impl Frame {
         views: &TargetViews<'_>,
         timer: Option<&mut GpuTimer>,
     ) -> crate::Result<()> {
+        for view in [Some(views.color), views.resolve].into_iter().flatten() {
+            audit::name_view(view, pelage_shade::TARGET_COLOR);
+        }
+        for view in [Some(views.depth), views.depth_sampled]
+            .into_iter()
+            .flatten()
+        {
+            audit::name_view(view, pelage_shade::TARGET_DEPTH);
+        }
         Ok(self.hair.encode(encoder, &self.prepared()?, views, timer)?)
     }
 

@@ -3,8 +3,11 @@
 //! records (its labels against the GPU timer's), and a plan in the wrong order is
 //! refused, naming the pass to record first.
 
+use pelage::gpu::audit::Audit;
 use pelage::gpu::{Gpu, PlanError};
-use pelage::scene::{ShadowParams, Transparency};
+use std::path::Path;
+
+use pelage::scene::{DynamicsParams, Named, ShadowParams, Transparency};
 use pelage::{Renderer, Scene, frame_plan};
 
 fn scene(shadow: ShadowParams, transparency: Transparency, lights: usize) -> Scene {
@@ -17,13 +20,9 @@ fn scene(shadow: ShadowParams, transparency: Transparency, lights: usize) -> Sce
     scene
 }
 
-#[test]
-fn the_plan_declares_the_passes_a_frame_records() {
-    let gpu = Gpu::headless().unwrap_or_else(|e| panic!("this test needs a GPU adapter: {e}"));
-    if !gpu.has_timestamps() {
-        panic!("this test compares with timestamp labels; the adapter has no timestamp queries");
-    }
-    let cases = [
+/// The shadow x transparency x light-count combinations every plan test runs.
+fn cases() -> Vec<(ShadowParams, Transparency, usize)> {
+    vec![
         (ShadowParams::None, Transparency::Opaque, 1),
         (ShadowParams::default(), Transparency::Opaque, 2),
         (
@@ -48,8 +47,16 @@ fn the_plan_declares_the_passes_a_frame_records() {
             1,
         ),
         (ShadowParams::default(), Transparency::strand_raster(), 2),
-    ];
-    for (shadow, method, lights) in cases {
+    ]
+}
+
+#[test]
+fn the_plan_declares_the_passes_a_frame_records() {
+    let gpu = Gpu::headless().unwrap_or_else(|e| panic!("this test needs a GPU adapter: {e}"));
+    if !gpu.has_timestamps() {
+        panic!("this test compares with timestamp labels; the adapter has no timestamp queries");
+    }
+    for (shadow, method, lights) in cases() {
         let s = scene(shadow.clone(), method.clone(), lights);
         let mut renderer = match Renderer::new(&gpu, &s, 96, 72) {
             Ok(r) => r,
@@ -83,6 +90,104 @@ fn the_plan_declares_the_passes_a_frame_records() {
             );
         }
     }
+}
+
+/// A frame's name of light i's shadow resource (`shadow0.grid`) as its shadow method
+/// named it (`shadow.grid`).
+fn as_named(declared: &str) -> String {
+    match declared.strip_prefix("shadow") {
+        Some(rest) => {
+            let digits = rest.chars().take_while(char::is_ascii_digit).count();
+            if digits > 0 && rest[digits..].starts_with('.') {
+                format!("shadow{}", &rest[digits..])
+            } else {
+                declared.to_string()
+            }
+        }
+        None => declared.to_string(),
+    }
+}
+
+#[test]
+fn every_pass_binds_only_what_the_plan_declares() {
+    let gpu = Gpu::headless().unwrap_or_else(|e| panic!("this test needs a GPU adapter: {e}"));
+    if !gpu.has_timestamps() {
+        panic!(
+            "this test attributes bindings to passes by their timer scopes; the adapter has no timestamp queries"
+        );
+    }
+    let mut failures = Vec::new();
+    let mut scenes: Vec<(String, Scene)> = cases()
+        .into_iter()
+        .map(|(shadow, method, lights)| {
+            (
+                format!(
+                    "{} / {} / {lights} light(s)",
+                    shadow.method_name(),
+                    method.name()
+                ),
+                scene(shadow, method, lights),
+            )
+        })
+        .collect();
+    // Every stage 1 method: a simulation, a groom, a simulated groom, guides, a skin.
+    let mut simulated = scene(ShadowParams::default(), Transparency::default(), 1);
+    simulated.dynamics = Some(DynamicsParams::default());
+    scenes.push(("simulated fur".into(), simulated));
+    for file in [
+        "long_hair.toml",
+        "head_turn.toml",
+        "guides.toml",
+        "creature_skinned.toml",
+    ] {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("scenes")
+            .join(file);
+        let mut s = Scene::from_file(&path).unwrap_or_else(|e| panic!("{file}: {e}"));
+        s.hair.roots.count = s.hair.roots.count.min(1500);
+        scenes.push((file.into(), s));
+    }
+    for (name, s) in scenes {
+        let audit = Audit::start();
+        let mut renderer = match Renderer::new(&gpu, &s, 96, 72) {
+            Ok(r) => r,
+            Err(pelage::Error::Shade(pelage::shade::ShadeError::Unsupported(why))) => {
+                println!("{name}: skipped, this adapter cannot run it: {why}");
+                continue;
+            }
+            Err(e) => panic!("{name}: {e}"),
+        };
+        audit.clear_passes();
+        renderer.render(&gpu, 0.0, &s.camera).unwrap();
+        let bound = audit.finish();
+        let plan = renderer.plan();
+        let labels: Vec<&str> = bound.iter().map(|p| p.label.as_str()).collect();
+        assert_eq!(
+            plan.labels(),
+            labels,
+            "{name}: the audited passes differ from the plan's"
+        );
+        for pass in &bound {
+            let declared = plan.passes().iter().filter(|p| p.label == pass.label);
+            let (mut reads, mut writes) = (Vec::new(), Vec::new());
+            for p in declared {
+                reads.extend(p.reads.iter().cloned());
+                writes.extend(p.writes.iter().cloned());
+            }
+            println!("{name}: {}: {:?}", pass.label, pass.bound);
+            for missing in pass.undeclared(&reads, &writes, as_named) {
+                failures.push(format!("{name}: {missing}"));
+            }
+            for extra in pass.unbound(&reads, &writes, as_named) {
+                failures.push(format!("{name}: {extra}"));
+            }
+        }
+    }
+    assert!(
+        failures.is_empty(),
+        "passes bind what their declarations do not name:\n{}",
+        failures.join("\n")
+    );
 }
 
 #[test]

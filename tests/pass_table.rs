@@ -7,7 +7,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use pelage::gpu::{FramePlan, Gpu, PassInfo};
-use pelage::scene::{DynamicsParams, ShadowParams, Transparency};
+use pelage::scene::{DynamicsParams, Named, ShadowParams, Transparency};
 use pelage::{Renderer, Scene};
 
 /// Where the generated page lives, from the repository root.
@@ -106,10 +106,24 @@ fn generate(gpu: &Gpu) -> Result<String, String> {
     );
 
     let default = small(Scene::default());
-    out.push_str(
-        "### The default frame\n\n`Scene::default()`: grown fur, voxel shadows for one \
-         light, Kajiya-Kay, opaque with 4x MSAA.\n\n",
-    );
+    // Described from the scene itself, so that a change of defaults cannot leave it stale.
+    let multiple = match &default.shade.model {
+        pelage::scene::ShadingModel::Chiang(p) => {
+            format!(
+                " with `{}` multiple scattering",
+                p.multiple_scattering.method_name()
+            )
+        }
+        _ => String::new(),
+    };
+    out.push_str(&format!(
+        "### The default frame\n\n`Scene::default()`: grown fur, `{}` shadows for {} \
+         light(s), the `{}` model{multiple}, the `{}` hair pass.\n\n",
+        default.shadow.method_name(),
+        default.lights.len(),
+        default.shade.model.name(),
+        default.shade.transparency.name(),
+    ));
     out.push_str(&full_table(&plan_of(gpu, &default)?));
 
     out.push_str(

@@ -52,7 +52,9 @@ pub fn create_bind_group(
     desc: &wgpu::BindGroupDescriptor<'_>,
 ) -> wgpu::BindGroup {
     count(&BIND_GROUPS);
-    device.create_bind_group(desc)
+    let group = device.create_bind_group(desc);
+    crate::audit::group_created(&group, desc);
+    group
 }
 
 /// `device.create_buffer(desc)`, counted.

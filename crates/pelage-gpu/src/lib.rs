@@ -14,6 +14,7 @@
 
 #![warn(missing_docs)]
 
+pub mod audit;
 pub mod binding;
 pub mod buffers;
 pub mod context;
@@ -25,6 +26,7 @@ pub mod readback;
 pub mod shaders;
 pub mod timer;
 
+pub use audit::set_bind_group;
 pub use binding::{BoundResource, ShaderBinding};
 pub use buffers::{UniformBuffer, storage_buffer, write_storage, zeroed_storage};
 pub use context::{Gpu, WANTED_FEATURES, feature_names};

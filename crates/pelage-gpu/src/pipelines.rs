@@ -119,10 +119,12 @@ impl BindLayout {
 
     /// Creates the layout on `device`.
     pub fn build(&self, device: &wgpu::Device) -> wgpu::BindGroupLayout {
-        device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some(&self.label),
             entries: &self.entries,
-        })
+        });
+        crate::audit::layout_created(&layout, &self.entries);
+        layout
     }
 }
 

@@ -143,6 +143,7 @@ impl GpuTimer {
     /// begin and end timestamps, or `None` when all `max_scopes` are taken
     /// this frame (the pass then runs untimed; [`TimerReport::dropped`] counts it).
     fn next_scope(&mut self, label: &str) -> Option<(u32, u32)> {
+        crate::audit::pass_begun(label);
         let index = u32::try_from(self.labels.len()).ok()?;
         if index >= self.max_scopes {
             self.dropped += 1;

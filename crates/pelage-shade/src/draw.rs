@@ -124,11 +124,11 @@ impl Draw {
         pass.set_pipeline(&self.pipeline);
         for (group, bind_group) in self.groups.iter().enumerate() {
             if let Some(bind_group) = bind_group {
-                pass.set_bind_group(group as u32, bind_group, &[]);
+                pelage_gpu::set_bind_group(pass, group as u32, bind_group);
             }
         }
         if let Some((group, bind_group)) = extra {
-            pass.set_bind_group(group, bind_group, &[]);
+            pelage_gpu::set_bind_group(pass, group, bind_group);
         }
         pass.draw(0..self.vertices.get(), 0..1);
     }
@@ -266,15 +266,17 @@ impl Common {
                 }
                 (v.stride, v.buffer.clone())
             }
-            None => (
-                0,
-                pelage_gpu::zeroed_storage(
+            None => {
+                // Never written: every vertex lit (the shaders skip it without a shadow).
+                let none = pelage_gpu::zeroed_storage(
                     gpu,
                     "pelage no visibility",
                     16,
                     wgpu::BufferUsages::STORAGE,
-                )?,
-            ),
+                )?;
+                pelage_gpu::audit::constant(&[&none]);
+                (0, none)
+            }
         };
         let model = HairModel::new(gpu, &params.model)?;
         let volume = match (model.volume(), model.chiang()) {
@@ -576,13 +578,24 @@ impl Common {
     /// A hair pass labelled `label`: reads the strands, the visibility (when bound), the
     /// volume grid's fluence (when the model reads it) and the depth target.
     pub fn hair_pass(&self, label: &str) -> PassInfo {
-        let mut pass = PassInfo::new(label)
-            .reads([
-                pelage_strands::STRAND_VERTICES,
-                pelage_strands::STRAND_ROOTS,
-            ])
-            .reads([TARGET_DEPTH]);
-        if self.volume.is_some() {
+        self.hair_shading(label, true).reads([TARGET_DEPTH])
+    }
+
+    /// A depth-tested hair pass that binds no model (a depth-only pass):
+    /// [`Common::hair_pass`] without the volume grid.
+    pub fn hair_geometry_pass(&self, label: &str) -> PassInfo {
+        self.hair_shading(label, false).reads([TARGET_DEPTH])
+    }
+
+    /// A compute pass shading the strands (no depth target): the strands, the
+    /// visibility when bound, and the volume grid's fluence when `model` and the model
+    /// reads it.
+    pub fn hair_shading(&self, label: &str, model: bool) -> PassInfo {
+        let mut pass = PassInfo::new(label).reads([
+            pelage_strands::STRAND_VERTICES,
+            pelage_strands::STRAND_ROOTS,
+        ]);
+        if model && self.volume.is_some() {
             pass = pass.reads([VOLUME_FLUENCE]);
         }
         if self.visibility_stride > 0 {
@@ -612,42 +625,45 @@ impl Common {
         }
         let far = self.target.far_depth();
         let bg = self.params.background;
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some(self.mesh_draw.label),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: target.color,
-                depth_slice: None,
-                resolve_target: resolve,
-                ops: wgpu::Operations {
-                    load: if target.load {
-                        wgpu::LoadOp::Load
-                    } else {
-                        wgpu::LoadOp::Clear(wgpu::Color {
-                            r: f64::from(bg.x),
-                            g: f64::from(bg.y),
-                            b: f64::from(bg.z),
-                            a: 1.0,
-                        })
+        let mut pass = pelage_gpu::audit::begin_render_pass(
+            &mut *encoder,
+            &wgpu::RenderPassDescriptor {
+                label: Some(self.mesh_draw.label),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: target.color,
+                    depth_slice: None,
+                    resolve_target: resolve,
+                    ops: wgpu::Operations {
+                        load: if target.load {
+                            wgpu::LoadOp::Load
+                        } else {
+                            wgpu::LoadOp::Clear(wgpu::Color {
+                                r: f64::from(bg.x),
+                                g: f64::from(bg.y),
+                                b: f64::from(bg.z),
+                                a: 1.0,
+                            })
+                        },
+                        store: wgpu::StoreOp::Store,
                     },
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: target.depth,
-                depth_ops: Some(wgpu::Operations {
-                    load: if target.load {
-                        wgpu::LoadOp::Load
-                    } else {
-                        wgpu::LoadOp::Clear(far)
-                    },
-                    store: wgpu::StoreOp::Store,
+                })],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: target.depth,
+                    depth_ops: Some(wgpu::Operations {
+                        load: if target.load {
+                            wgpu::LoadOp::Load
+                        } else {
+                            wgpu::LoadOp::Clear(far)
+                        },
+                        store: wgpu::StoreOp::Store,
+                    }),
+                    stencil_ops: None,
                 }),
-                stencil_ops: None,
-            }),
-            timestamp_writes: timer.and_then(|t| t.render_pass(self.mesh_draw.label)),
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
+                timestamp_writes: timer.and_then(|t| t.render_pass(self.mesh_draw.label)),
+                occlusion_query_set: None,
+                multiview_mask: None,
+            },
+        );
         if self.draw_mesh {
             self.mesh_draw.record(&mut pass, None);
         }

@@ -288,6 +288,8 @@ impl MarschnerLut {
             plane * u64::from(info.slices),
             usage,
         )?;
+        // Filled once by the build pass below; every frame only reads them.
+        pelage_gpu::audit::constant(&[&m, &n0, &n1]);
         let model = UniformBuffer::new(
             gpu,
             "pelage marschner lut model",
@@ -358,7 +360,7 @@ impl MarschnerLut {
             timestamp_writes: None,
         });
         pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, &self.build_group, &[]);
+        pelage_gpu::set_bind_group(&mut pass, 0, &self.build_group);
         pass.dispatch_workgroups(groups, groups, 2 + self.info.slices);
     }
 
@@ -583,6 +585,8 @@ impl ChiangTables {
         let dual_bytes = u64::from(Self::THETA * Self::SIGMA * 2) * TEXEL_BYTES;
         let n = zeroed_storage(gpu, "pelage chiang N", n_bytes, usage)?;
         let dual = zeroed_storage(gpu, "pelage chiang dual", dual_bytes, usage)?;
+        // Filled once by the table pass below; every frame only reads them.
+        pelage_gpu::audit::constant(&[&n, &dual]);
         let module = crate::SHADERS
             .library()
             .module(gpu, "shade/models/chiang_tables.wgsl")?;
@@ -637,7 +641,7 @@ impl ChiangTables {
             label: Some("pelage chiang tables"),
             timestamp_writes: None,
         });
-        pass.set_bind_group(0, &self.group, &[]);
+        pelage_gpu::set_bind_group(&mut pass, 0, &self.group);
         pass.set_pipeline(&self.pipelines[0]);
         pass.dispatch_workgroups(Self::PHI.div_ceil(64), Self::THETA, Self::SIGMA);
         pass.set_pipeline(&self.pipelines[1]);

@@ -63,6 +63,10 @@ const ACCUM_U32: u64 = 8;
 /// The frame resource of the grid's fluence (what the hair passes read).
 pub const VOLUME_FLUENCE: &str = "volume.fluence";
 
+/// The grid pass's own buffers (bounds, splat accumulator, medium, propagation states):
+/// written and read within the pass.
+pub const VOLUME_SCRATCH: &str = "volume.scratch";
+
 /// The grid's uniform and fluence: what the shading reads (bound by
 /// [`HairModel`](crate::HairModel) at group 2, bindings 3 and 4).
 #[derive(Debug)]
@@ -125,6 +129,7 @@ impl VolumeField {
             16 + cells(n) * CELL_BYTES,
             wgpu::BufferUsages::STORAGE,
         )?;
+        pelage_gpu::audit::name_buffer(&fluence, VOLUME_FLUENCE);
         Ok(Self {
             uniform,
             value,
@@ -198,6 +203,9 @@ impl VolumeGrid {
             zeroed_storage(gpu, "pelage volume state a", n * CELL_BYTES, usage)?,
             zeroed_storage(gpu, "pelage volume state b", n * CELL_BYTES, usage)?,
         ];
+        for buffer in [&bounds, &accum, &medium, &states[0], &states[1]] {
+            pelage_gpu::audit::name_buffer(buffer, VOLUME_SCRATCH);
+        }
         let module = crate::SHADERS.library().module(gpu, "shade/volume.wgsl")?;
         let c = wgpu::ShaderStages::COMPUTE;
         let built = gpu.scoped(|device| {
@@ -399,7 +407,7 @@ impl VolumeGrid {
             label: Some(PASS),
             timestamp_writes: timer.and_then(|t| t.compute_pass(PASS)),
         });
-        pass.set_bind_group(0, &self.fit_group, &[]);
+        pelage_gpu::set_bind_group(&mut pass, 0, &self.fit_group);
         pass.set_pipeline(&self.fit[0]);
         pass.dispatch_workgroups(FIT_INVOCATIONS / 256, 1, 1);
         pass.set_pipeline(&self.fit[1]);
@@ -407,18 +415,18 @@ impl VolumeGrid {
         let segments = u64::from(v.strand_count) * u64::from(v.segments);
         if segments > 0 {
             let (x, y) = dispatch_size(limits, segments, 64);
-            pass.set_bind_group(0, &self.splat_group, &[]);
+            pelage_gpu::set_bind_group(&mut pass, 0, &self.splat_group);
             pass.set_pipeline(&self.splat);
             pass.dispatch_workgroups(x, y, 1);
         }
         let (x, y) = dispatch_size(limits, cells(v.resolution), 64);
-        pass.set_bind_group(0, &self.inject_group, &[]);
-        pass.set_bind_group(2, &self.chiang_group, &[]);
+        pelage_gpu::set_bind_group(&mut pass, 0, &self.inject_group);
+        pelage_gpu::set_bind_group(&mut pass, 2, &self.chiang_group);
         pass.set_pipeline(&self.inject);
         pass.dispatch_workgroups(x, y, 1);
         pass.set_pipeline(&self.propagate);
         for step in 0..v.iterations as usize {
-            pass.set_bind_group(0, &self.propagate_groups[step % 2], &[]);
+            pelage_gpu::set_bind_group(&mut pass, 0, &self.propagate_groups[step % 2]);
             pass.dispatch_workgroups(x, y, 1);
         }
     }
@@ -430,7 +438,7 @@ impl VolumeGrid {
                 pelage_strands::STRAND_VERTICES,
                 pelage_strands::STRAND_ROOTS,
             ])
-            .writes([VOLUME_FLUENCE])
+            .writes([VOLUME_SCRATCH, VOLUME_FLUENCE])
     }
 
     /// The uniform as last written by [`VolumeGrid::prepare`].

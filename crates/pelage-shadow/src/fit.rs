@@ -135,6 +135,8 @@ impl LightFit {
         let usage = wgpu::BufferUsages::STORAGE;
         let bounds = zeroed_storage(gpu, "pelage light bounds", 24, usage)?;
         let grid = zeroed_storage(gpu, "pelage light grid", LightGrid::min_size().get(), usage)?;
+        pelage_gpu::audit::name_buffer(&bounds, crate::SHADOW_BOUNDS);
+        pelage_gpu::audit::name_buffer(&grid, crate::SHADOW_GRID);
         let module = crate::SHADERS
             .library()
             .module(gpu, "shadow/light_fit.wgsl")?;
@@ -227,10 +229,10 @@ impl LightFit {
             timestamp_writes: timer.and_then(|t| t.compute_pass(label)),
         });
         pass.set_pipeline(&self.pipelines[0]);
-        pass.set_bind_group(0, &self.groups[0], &[]);
+        pelage_gpu::set_bind_group(&mut pass, 0, &self.groups[0]);
         pass.dispatch_workgroups(FIT_INVOCATIONS / 256, 1, 1);
         pass.set_pipeline(&self.pipelines[1]);
-        pass.set_bind_group(0, &self.groups[1], &[]);
+        pelage_gpu::set_bind_group(&mut pass, 0, &self.groups[1]);
         pass.dispatch_workgroups(1, 1, 1);
     }
 
@@ -239,7 +241,7 @@ impl LightFit {
     pub fn pass_info(&self, label: &str) -> PassInfo {
         PassInfo::new(label)
             .reads([pelage_strands::STRAND_VERTICES])
-            .writes([crate::SHADOW_GRID])
+            .writes([crate::SHADOW_BOUNDS, crate::SHADOW_GRID])
     }
 
     /// The uniforms (binding 0 of every light-space pass).

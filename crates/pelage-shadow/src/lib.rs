@@ -61,6 +61,8 @@ pub static SHADERS: ShaderSources = pelage_gpu::wgsl_sources!(
 pub const SHADOW_GRID: &str = "shadow.grid";
 /// The frame resource of the voxel method's optical depth volume.
 pub const SHADOW_VOLUME: &str = "shadow.volume";
+/// The hair's light-space bounds the fit pass reduces (scratch of that pass).
+pub const SHADOW_BOUNDS: &str = "shadow.bounds";
 /// The frame resource of a shadow map's front-most hair depth.
 pub const SHADOW_DEPTH: &str = "shadow.depth";
 /// The frame resource of the deep opacity maps' layers.
@@ -108,7 +110,8 @@ pub trait ShadowMethod: std::fmt::Debug + wgpu::WasmNotSendSync {
     fn lookup(&self) -> Vec<String> {
         let mut names: Vec<String> = Vec::new();
         for name in self.passes().into_iter().flat_map(|p| p.writes) {
-            if !names.contains(&name) {
+            // The fit's bounds are its own scratch, not part of the binding.
+            if name != SHADOW_BOUNDS && !names.contains(&name) {
                 names.push(name);
             }
         }

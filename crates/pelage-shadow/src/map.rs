@@ -158,6 +158,7 @@ impl LightMap {
                     .create_view(&Default::default())
             };
             let depth = texture("pelage hair depth from the light", DEPTH_FORMAT, size);
+            pelage_gpu::audit::name_view(&depth, crate::SHADOW_DEPTH);
             // hair_light.wgsl: grid uniforms and grid, vertices, roots, map uniforms; the
             // opacity pass also reads the front depth (5), which the depth pass writes, so
             // each pass has its own layout.
@@ -255,6 +256,9 @@ impl LightMap {
                     texture("pelage deep opacity layers 0-3", format, size),
                     texture("pelage deep opacity layers 4-7", format, second_side),
                 ];
+                for view in &views {
+                    pelage_gpu::audit::name_view(view, crate::SHADOW_LAYERS);
+                }
                 let mut entries: Vec<wgpu::BindGroupEntry<'_>> = common
                     .iter()
                     .zip(0..)
@@ -320,25 +324,28 @@ impl LightMap {
         self.fit
             .encode(encoder, timer.as_deref_mut(), "shadow: fit");
         {
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("pelage hair depth from the light"),
-                color_attachments: &[],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &self.depth,
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(1.0),
-                        store: wgpu::StoreOp::Store,
+            let mut pass = pelage_gpu::audit::begin_render_pass(
+                &mut *encoder,
+                &wgpu::RenderPassDescriptor {
+                    label: Some("pelage hair depth from the light"),
+                    color_attachments: &[],
+                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                        view: &self.depth,
+                        depth_ops: Some(wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(1.0),
+                            store: wgpu::StoreOp::Store,
+                        }),
+                        stencil_ops: None,
                     }),
-                    stencil_ops: None,
-                }),
-                timestamp_writes: timer
-                    .as_deref_mut()
-                    .and_then(|t| t.render_pass("shadow: depth")),
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
+                    timestamp_writes: timer
+                        .as_deref_mut()
+                        .and_then(|t| t.render_pass("shadow: depth")),
+                    occlusion_query_set: None,
+                    multiview_mask: None,
+                },
+            );
             pass.set_pipeline(&self.depth_pipeline);
-            pass.set_bind_group(0, &self.depth_group, &[]);
+            pelage_gpu::set_bind_group(&mut pass, 0, &self.depth_group);
             pass.draw(0..self.drawn_vertices(), 0..1);
         }
         if let Some(layers) = &self.layers {
@@ -361,18 +368,21 @@ impl LightMap {
                     None
                 },
             ];
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("pelage deep opacity layers"),
-                color_attachments: &attachments,
-                depth_stencil_attachment: None,
-                timestamp_writes: timer
-                    .as_deref_mut()
-                    .and_then(|t| t.render_pass("shadow: opacity")),
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
+            let mut pass = pelage_gpu::audit::begin_render_pass(
+                &mut *encoder,
+                &wgpu::RenderPassDescriptor {
+                    label: Some("pelage deep opacity layers"),
+                    color_attachments: &attachments,
+                    depth_stencil_attachment: None,
+                    timestamp_writes: timer
+                        .as_deref_mut()
+                        .and_then(|t| t.render_pass("shadow: opacity")),
+                    occlusion_query_set: None,
+                    multiview_mask: None,
+                },
+            );
             pass.set_pipeline(&layers.pipeline);
-            pass.set_bind_group(0, &layers.group, &[]);
+            pelage_gpu::set_bind_group(&mut pass, 0, &layers.group);
             pass.draw(0..self.drawn_vertices(), 0..1);
         }
         self.mesh_map.encode(encoder, timer);

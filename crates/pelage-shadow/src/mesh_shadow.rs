@@ -135,6 +135,7 @@ impl MeshShadowMap {
             });
             (texture.create_view(&Default::default()), sampler, draw)
         })?;
+        pelage_gpu::audit::name_view(&view, crate::SHADOW_MESH_MAP);
         Ok(Self {
             size,
             pcf_radius,
@@ -180,23 +181,26 @@ impl MeshShadowMap {
         let Some((pipeline, bind_group, vertices)) = &self.draw else {
             return;
         };
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("pelage mesh shadow map"),
-            color_attachments: &[],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: &self.view,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(1.0),
-                    store: wgpu::StoreOp::Store,
+        let mut pass = pelage_gpu::audit::begin_render_pass(
+            &mut *encoder,
+            &wgpu::RenderPassDescriptor {
+                label: Some("pelage mesh shadow map"),
+                color_attachments: &[],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &self.view,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(1.0),
+                        store: wgpu::StoreOp::Store,
+                    }),
+                    stencil_ops: None,
                 }),
-                stencil_ops: None,
-            }),
-            timestamp_writes: timer.and_then(|t| t.render_pass("shadow: mesh map")),
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
+                timestamp_writes: timer.and_then(|t| t.render_pass("shadow: mesh map")),
+                occlusion_query_set: None,
+                multiview_mask: None,
+            },
+        );
         pass.set_pipeline(pipeline);
-        pass.set_bind_group(0, bind_group, &[]);
+        pelage_gpu::set_bind_group(&mut pass, 0, bind_group);
         pass.draw(0..*vertices, 0..1);
     }
 

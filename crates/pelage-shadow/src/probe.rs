@@ -80,9 +80,9 @@ impl TransmittanceProbe {
             timestamp_writes: None,
         });
         pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, &own, &[]);
+        pelage_gpu::set_bind_group(&mut pass, 0, &own);
         if let Some(group) = &self.shadow_group {
-            pass.set_bind_group(1, group, &[]);
+            pelage_gpu::set_bind_group(&mut pass, 1, group);
         }
         pass.dispatch_workgroups(groups.0, groups.1, 1);
         Ok(())

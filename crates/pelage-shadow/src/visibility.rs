@@ -166,9 +166,9 @@ impl LightVisibility {
             timestamp_writes: timer.and_then(|t| t.compute_pass(&self.label)),
         });
         pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, &self.own, &[]);
+        pelage_gpu::set_bind_group(&mut pass, 0, &self.own);
         if let Some(group) = &self.shadow {
-            pass.set_bind_group(1, group, &[]);
+            pelage_gpu::set_bind_group(&mut pass, 1, group);
         }
         // Only the vertices stage 1 grew this frame.
         let groups = dispatch_size(&self.limits, layout.vertices(), 64);

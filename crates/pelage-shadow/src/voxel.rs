@@ -69,6 +69,7 @@ impl VoxelShadow {
             voxels * 4,
             wgpu::BufferUsages::STORAGE,
         )?;
+        pelage_gpu::audit::name_buffer(&volume, crate::SHADOW_VOLUME);
         let mesh_map = MeshShadowMap::new(
             gpu,
             mesh,
@@ -159,7 +160,7 @@ impl VoxelShadow {
             timestamp_writes: timer.and_then(|t| t.compute_pass("shadow: splat")),
         });
         pass.set_pipeline(&self.splat);
-        pass.set_bind_group(0, &self.splat_group, &[]);
+        pelage_gpu::set_bind_group(&mut pass, 0, &self.splat_group);
         // The segments stage 1 grew this frame (see LightFit::drawn).
         let groups = dispatch_size(&self.limits, self.fit.drawn().segment_count(), 64);
         pass.dispatch_workgroups(groups.0, groups.1, 1);
@@ -173,7 +174,7 @@ impl VoxelShadow {
             timestamp_writes: timer.and_then(|t| t.compute_pass("shadow: scan")),
         });
         pass.set_pipeline(&self.scan);
-        pass.set_bind_group(0, &self.scan_group, &[]);
+        pelage_gpu::set_bind_group(&mut pass, 0, &self.scan_group);
         let base = self.fit.base();
         pass.dispatch_workgroups(
             base.resolution_x.div_ceil(8),
@@ -245,7 +246,7 @@ impl ShadowMethod for VoxelShadow {
                 .reads([crate::SHADOW_GRID, STRAND_VERTICES, STRAND_ROOTS])
                 .writes([crate::SHADOW_VOLUME]),
             PassInfo::new("shadow: scan")
-                .reads([crate::SHADOW_GRID, crate::SHADOW_VOLUME])
+                .reads([crate::SHADOW_VOLUME])
                 .writes([crate::SHADOW_VOLUME]),
         ];
         passes.extend(self.mesh_map.passes());

@@ -162,6 +162,7 @@ impl GroomStrands {
         let rest_gpu: Vec<glam::Vec4> = shape.rest.iter().map(|p| p.extend(0.0)).collect();
         let rest_buffer = storage_buffer(gpu, "pelage groom rest points", &rest_gpu, storage)?;
         let rest_roots = storage_buffer(gpu, "pelage groom rest roots", &shape.roots, storage)?;
+        pelage_gpu::audit::constant(&[&rest_buffer, &rest_roots]);
         let pass = StrandPass::new(
             gpu,
             label,

@@ -357,6 +357,7 @@ impl GrowStrands {
         let storage = wgpu::BufferUsages::STORAGE;
         let rest_roots = storage_buffer(gpu, "pelage strand rest roots", &roots, storage)?;
         let shapes_buffer = storage_buffer(gpu, "pelage strand region shapes", &shapes, storage)?;
+        pelage_gpu::audit::constant(&[&rest_roots, &shapes_buffer]);
         let pass = StrandPass::new(
             gpu,
             "strands: grow",
@@ -471,6 +472,8 @@ pub struct StrandPass {
     /// The frame inputs the pass reads besides its own buffers (see
     /// [`StrandStage::passes`]).
     pub(crate) inputs: &'static [&'static str],
+    /// What the pass keeps from frame to frame and rewrites (a simulation's state).
+    pub(crate) state: &'static [&'static str],
     pub(crate) params: HairParams,
     pipeline: wgpu::ComputePipeline,
     bind_group: wgpu::BindGroup,
@@ -532,6 +535,8 @@ impl StrandPass {
         // What later stages read: the roots with this frame's LOD width.
         let roots_buffer = storage_buffer(gpu, "pelage strand roots", roots, storage)?;
         let vertices = zeroed_storage(gpu, "pelage strand vertices", vertex_bytes, storage)?;
+        pelage_gpu::audit::name_buffer(&vertices, crate::STRAND_VERTICES);
+        pelage_gpu::audit::name_buffer(&roots_buffer, crate::STRAND_ROOTS);
         let module = crate::SHADERS.library().module(gpu, shader)?;
         let (pipeline, bind_group) = gpu.scoped(|device| {
             // grow.wgsl / groom.wgsl: the uniforms (force.wgsl), the read-only inputs,
@@ -575,6 +580,7 @@ impl StrandPass {
         Ok(Self {
             label,
             inputs: &[],
+            state: &[],
             params: params.clone(),
             pipeline,
             bind_group,
@@ -624,7 +630,7 @@ impl StrandPass {
             timestamp_writes,
         });
         compute.set_pipeline(&self.pipeline);
-        compute.set_bind_group(0, &self.bind_group, &[]);
+        pelage_gpu::set_bind_group(&mut compute, 0, &self.bind_group);
         let groups = dispatch_size(&self.limits, u64::from(strands), WORKGROUP);
         compute.dispatch_workgroups(groups.0, groups.1, 1);
         Ok(())
@@ -789,7 +795,8 @@ pub trait StrandStage: std::fmt::Debug + wgpu::WasmNotSendSync {
         vec![
             PassInfo::new(pass.label)
                 .reads(pass.inputs.iter().copied())
-                .writes([STRAND_VERTICES, STRAND_ROOTS]),
+                .writes([STRAND_VERTICES, STRAND_ROOTS])
+                .writes(pass.state.iter().copied()),
         ]
     }
 

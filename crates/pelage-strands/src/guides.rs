@@ -312,6 +312,10 @@ impl GuideStrands {
         let flat: Vec<u32> = records.iter().flatten().copied().collect();
         let records_buffer = storage_buffer(gpu, "pelage guide records", &flat, storage)?;
         let constants_buffer = UniformBuffer::new(gpu, "pelage guide uniforms", &constants)?;
+        pelage_gpu::audit::constant(&[&rest_roots, &records_buffer]);
+        // The guides' own strands are the guide buffer, not the frame's strands.
+        pelage_gpu::audit::name_buffer(&guide_stage.buffers().vertices, GUIDE_VERTICES);
+        pelage_gpu::audit::name_buffer(&guide_stage.buffers().roots, GUIDE_VERTICES);
         let mesh_bounds = mesh_buffers.bounds;
         let reach = reach_around(
             guide_stage.buffers().reach,

@@ -51,8 +51,8 @@ pub use mesh_buffers::MeshBuffers;
 pub use roots::{
     StrandRoot, hash_to_unit, pcg_hash, root_region, root_tint, sample_roots, strand_brightness,
 };
-pub use simulate::{ColliderUniform, STATE_HEADER, SimUniforms, SimulateStrands};
-pub use skin::{MeshSkin, SKIN_LABEL, SkinUniforms};
+pub use simulate::{ColliderUniform, SIMULATION_STATE, STATE_HEADER, SimUniforms, SimulateStrands};
+pub use skin::{MeshSkin, SKIN_LABEL, SKIN_NON_FINITE, SkinUniforms};
 
 use pelage_gpu::{GpuError, ShaderSources};
 use pelage_scene::{MeshError, ParamError};

@@ -18,6 +18,10 @@ use crate::{LodLevel, MeshBuffers, StrandFrame, StrandRoot, StrandsError};
 /// the root's position (w = 1 once posed), normal and tangent in the last frame.
 pub const STATE_HEADER: u32 = 3;
 
+/// The frame resource of a simulation's state (positions and velocities of the last
+/// substep, the held-strand count), kept from frame to frame.
+pub const SIMULATION_STATE: &str = "strands.state";
+
 /// `collider` as the shader reads it.
 fn collider_uniform(collider: &Collider) -> ColliderUniform {
     let (a, b) = collider.axis();
@@ -314,6 +318,9 @@ impl SimulateStrands {
         let state = storage_buffer(gpu, "pelage simulation state", &state, storage)?;
         let held = zeroed_storage(gpu, "pelage simulation held strands", 4, storage)?;
         let rest_roots = storage_buffer(gpu, "pelage simulation rest roots", &roots, storage)?;
+        pelage_gpu::audit::name_buffer(&state, SIMULATION_STATE);
+        pelage_gpu::audit::name_buffer(&held, SIMULATION_STATE);
+        pelage_gpu::audit::constant(&[&rest_roots]);
         let last_uniforms = SimUniforms::new(dynamics, &[], 0.0, None);
         let sim = UniformBuffer::new(gpu, "pelage simulation uniforms", &last_uniforms)?;
         // A strand reaches at most its length from its root point (which sits its rest
@@ -349,6 +356,7 @@ impl SimulateStrands {
             None,
         )?;
         pass.inputs = &[MESH];
+        pass.state = &[SIMULATION_STATE];
         Ok(Self {
             roots,
             rest_local,

@@ -18,6 +18,9 @@ const WORKGROUP: u32 = 64;
 
 /// The timestamp label of the skinning pass.
 pub const SKIN_LABEL: &str = "strands: skin";
+/// The frame resource of the skin pass's count of vertices it kept at their bind pose
+/// (their skinned position was not finite).
+pub const SKIN_NON_FINITE: &str = "strands.skin_non_finite";
 
 /// The uniforms of `skin.wgsl` (`SkinUniforms` there).
 #[derive(Clone, Copy, Debug, PartialEq, ShaderType)]
@@ -79,6 +82,16 @@ impl MeshSkin {
         let identity = vec![Mat4::IDENTITY; skin.joint_count as usize];
         let joint_matrices = storage_buffer(gpu, "pelage skin joint matrices", &identity, storage)?;
         let non_finite = zeroed_storage(gpu, "pelage skin non-finite vertices", 4, storage)?;
+        // The joint matrices are written by the caller (CPU or its own copies), never by
+        // a pelage pass.
+        pelage_gpu::audit::constant(&[
+            &bind_positions,
+            &bind_normals,
+            &joints,
+            &weights,
+            &joint_matrices,
+        ]);
+        pelage_gpu::audit::name_buffer(&non_finite, SKIN_NON_FINITE);
         let uniforms = UniformBuffer::new(
             gpu,
             "pelage skin uniforms",
@@ -172,14 +185,14 @@ impl MeshSkin {
             timestamp_writes,
         });
         compute.set_pipeline(&self.pipeline);
-        compute.set_bind_group(0, &self.bind_group, &[]);
+        pelage_gpu::set_bind_group(&mut compute, 0, &self.bind_group);
         let groups = dispatch_size(&self.limits, u64::from(self.vertex_count), WORKGROUP);
         compute.dispatch_workgroups(groups.0, groups.1, 1);
     }
 
     /// The pass [`MeshSkin::encode`] records: it writes [`MESH`].
     pub fn pass(&self) -> PassInfo {
-        PassInfo::new(SKIN_LABEL).writes([MESH])
+        PassInfo::new(SKIN_LABEL).writes([MESH, SKIN_NON_FINITE])
     }
 
     /// The vertices the last frame run wrote at their bind pose because their skinned

@@ -69,29 +69,32 @@ impl HairPass for Opaque {
         self.common.encode_volume(encoder, timer.as_deref_mut());
         self.common
             .encode_mesh(encoder, target, None, timer.as_deref_mut());
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some(self.hair.label),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: target.color,
-                depth_slice: None,
-                resolve_target: target.resolve,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Load,
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: target.depth,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Load,
-                    store: wgpu::StoreOp::Store,
+        let mut pass = pelage_gpu::audit::begin_render_pass(
+            &mut *encoder,
+            &wgpu::RenderPassDescriptor {
+                label: Some(self.hair.label),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: target.color,
+                    depth_slice: None,
+                    resolve_target: target.resolve,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Load,
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: target.depth,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Load,
+                        store: wgpu::StoreOp::Store,
+                    }),
+                    stencil_ops: None,
                 }),
-                stencil_ops: None,
-            }),
-            timestamp_writes: timer.and_then(|t| t.render_pass(self.hair.label)),
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
+                timestamp_writes: timer.and_then(|t| t.render_pass(self.hair.label)),
+                occlusion_query_set: None,
+                multiview_mask: None,
+            },
+        );
         self.hair.record(&mut pass, None);
         Ok(())
     }

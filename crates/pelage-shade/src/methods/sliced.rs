@@ -320,7 +320,12 @@ impl Sliced {
                 let label = pass.draw.label;
                 let info = match pass.kind {
                     PassKind::Storage | PassKind::DepthOnly => {
-                        let info = common.hair_pass(label).writes([OIT_STORAGE]);
+                        // A depth-only pass shades nothing: no model resources.
+                        let info = match pass.kind {
+                            PassKind::DepthOnly => common.hair_geometry_pass(label),
+                            _ => common.hair_pass(label),
+                        };
+                        let info = info.writes([OIT_STORAGE]);
                         let info = if started {
                             info.reads([OIT_STORAGE])
                         } else {
@@ -330,11 +335,20 @@ impl Sliced {
                         info
                     }
                     PassKind::OpaqueHair => {
-                        common.hair_pass(label).writes([TARGET_COLOR, TARGET_DEPTH])
+                        let info = common.hair_pass(label).writes([TARGET_COLOR, TARGET_DEPTH]);
+                        // Per-pixel storage it binds (read_write, as every binding of
+                        // shade/oit/*.wgsl: the DBK fallback only reads its nearest depth).
+                        if pass.bindings.iter().any(|&b| b >= 2) {
+                            info.reads([OIT_STORAGE]).writes([OIT_STORAGE])
+                        } else {
+                            info
+                        }
                     }
+                    // The resolve also clears what it composited (slots, heads, the
+                    // nearest depths) for the next frame: it writes the storage too.
                     PassKind::Resolve => PassInfo::new(label)
-                        .reads([OIT_STORAGE, TARGET_COLOR, TARGET_DEPTH])
-                        .writes([TARGET_COLOR]),
+                        .reads([OIT_STORAGE, TARGET_COLOR])
+                        .writes([TARGET_COLOR, OIT_STORAGE]),
                 };
                 infos.push(info);
             }
@@ -348,6 +362,9 @@ impl Sliced {
         gpu: &Gpu,
         depth: &wgpu::TextureView,
     ) -> crate::Result<Vec<wgpu::BindGroup>> {
+        for (_, buffer) in &self.buffers {
+            pelage_gpu::audit::name_buffer(buffer, crate::OIT_STORAGE);
+        }
         Ok(gpu.scoped(|device| {
             let mut groups = Vec::new();
             for slice in 0..self.count {
@@ -455,14 +472,17 @@ impl Sliced {
                     }),
                     PassKind::Resolve => None,
                 };
-                let mut render = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                    label: Some(label),
-                    color_attachments: &color_attachments,
-                    depth_stencil_attachment,
-                    timestamp_writes,
-                    occlusion_query_set: None,
-                    multiview_mask: None,
-                });
+                let mut render = pelage_gpu::audit::begin_render_pass(
+                    &mut *encoder,
+                    &wgpu::RenderPassDescriptor {
+                        label: Some(label),
+                        color_attachments: &color_attachments,
+                        depth_stencil_attachment,
+                        timestamp_writes,
+                        occlusion_query_set: None,
+                        multiview_mask: None,
+                    },
+                );
                 render.set_scissor_rect(0, y0, target.width, rows.max(1));
                 pass.draw.record(&mut render, Some((3, group)));
             }

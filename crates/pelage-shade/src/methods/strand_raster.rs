@@ -240,6 +240,25 @@ struct Storage {
     composite_view: wgpu::TextureView,
 }
 
+impl Storage {
+    /// Names every buffer and view the method's passes bind `oit.storage` for an audit
+    /// (`pelage_gpu::audit`).
+    fn name_for_audit(&self) {
+        for buffer in [
+            &self.shaded,
+            &self.segments,
+            &self.counts,
+            &self.offsets,
+            &self.block_sums,
+            &self.header,
+            &self.tile_depth,
+        ] {
+            pelage_gpu::audit::name_buffer(buffer, crate::OIT_STORAGE);
+        }
+        pelage_gpu::audit::name_view(&self.composite_view, crate::OIT_STORAGE);
+    }
+}
+
 /// What [`StrandRaster::capture`] reads back.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RasterCapture {
@@ -398,6 +417,8 @@ impl StrandRaster {
             composite_view,
         };
         let pool_buffer = storage_buffer("pelage strand raster pool", u64::from(capacity) * 4)?;
+        storage.name_for_audit();
+        pelage_gpu::audit::name_buffer(&pool_buffer, crate::OIT_STORAGE);
 
         let uniforms_value = StrandRasterUniforms {
             width,
@@ -736,11 +757,11 @@ impl StrandRaster {
             if *label == PASSES[0].0 {
                 for (index, g) in self.shade_groups.iter().enumerate() {
                     if let Some(g) = g {
-                        pass.set_bind_group(index as u32, g, &[]);
+                        pelage_gpu::set_bind_group(&mut pass, index as u32, g);
                     }
                 }
             }
-            pass.set_bind_group(3, group, &[]);
+            pelage_gpu::set_bind_group(&mut pass, 3, group);
             if x > 0 && y > 0 {
                 pass.dispatch_workgroups(x, y, 1);
             }
@@ -755,22 +776,25 @@ impl StrandRaster {
         timer: Option<&mut GpuTimer>,
     ) {
         {
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some(RESOLVE),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: target.color,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Load,
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
-                depth_stencil_attachment: None,
-                timestamp_writes: timer.and_then(|t| t.render_pass(RESOLVE)),
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
+            let mut pass = pelage_gpu::audit::begin_render_pass(
+                &mut *encoder,
+                &wgpu::RenderPassDescriptor {
+                    label: Some(RESOLVE),
+                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                        view: target.color,
+                        depth_slice: None,
+                        resolve_target: None,
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Load,
+                            store: wgpu::StoreOp::Store,
+                        },
+                    })],
+                    depth_stencil_attachment: None,
+                    timestamp_writes: timer.and_then(|t| t.render_pass(RESOLVE)),
+                    occlusion_query_set: None,
+                    multiview_mask: None,
+                },
+            );
             self.resolve
                 .record(&mut pass, Some((3, &self.resolve_group)));
         }
@@ -815,6 +839,7 @@ impl StrandRaster {
             u64::from(capacity) * 4,
             wgpu::BufferUsages::STORAGE,
         )?;
+        pelage_gpu::audit::name_buffer(&pool.buffer, crate::OIT_STORAGE);
         pool.capacity = capacity;
         pool.groups = None;
         let mut prepared = self.prepared.lock().map_err(|_| {
@@ -938,7 +963,10 @@ impl HairPass for StrandRaster {
     }
 
     fn passes(&self, lookup: &[String]) -> Vec<PassInfo> {
-        let shade = self.common.hair_pass(PASSES[0].0).writes([OIT_STORAGE]);
+        let shade = self
+            .common
+            .hair_shading(PASSES[0].0, true)
+            .writes([OIT_STORAGE]);
         let tile_depth = PassInfo::new(PASSES[1].0)
             .reads([OIT_STORAGE, TARGET_DEPTH])
             .writes([OIT_STORAGE]);

@@ -18,8 +18,10 @@ pub struct Wboit {
     common: Common,
     accum: Draw,
     resolve: Sliced,
-    accumulation: wgpu::Texture,
-    revealage: wgpu::Texture,
+    /// The accumulation target (a view made once: recording creates nothing).
+    accumulation: wgpu::TextureView,
+    /// The revealage target.
+    revealage: wgpu::TextureView,
     bind_accum: wgpu::BindGroup,
     bind_resolve: wgpu::BindGroup,
     width: u32,
@@ -134,6 +136,12 @@ impl Wboit {
             };
             let accumulation = texture("pelage wboit accumulation", ACCUMULATION_FORMAT);
             let revealage = texture("pelage wboit revealage", REVEALAGE_FORMAT);
+            let (accumulation_view, revealage_view) = (
+                accumulation.create_view(&Default::default()),
+                revealage.create_view(&Default::default()),
+            );
+            pelage_gpu::audit::name_view(&accumulation_view, crate::OIT_STORAGE);
+            pelage_gpu::audit::name_view(&revealage_view, crate::OIT_STORAGE);
             let bind = pelage_gpu::create_bind_group(
                 device,
                 &wgpu::BindGroupDescriptor {
@@ -142,15 +150,11 @@ impl Wboit {
                     entries: &[
                         wgpu::BindGroupEntry {
                             binding: 1,
-                            resource: wgpu::BindingResource::TextureView(
-                                &accumulation.create_view(&Default::default()),
-                            ),
+                            resource: wgpu::BindingResource::TextureView(&accumulation_view),
                         },
                         wgpu::BindGroupEntry {
                             binding: 2,
-                            resource: wgpu::BindingResource::TextureView(
-                                &revealage.create_view(&Default::default()),
-                            ),
+                            resource: wgpu::BindingResource::TextureView(&revealage_view),
                         },
                     ],
                 },
@@ -166,7 +170,7 @@ impl Wboit {
                     }],
                 },
             );
-            (accumulation, revealage, bind_accum, bind)
+            (accumulation_view, revealage_view, bind_accum, bind)
         })?;
         Ok(Self {
             common,
@@ -212,8 +216,7 @@ impl HairPass for Wboit {
         self.common.encode_volume(encoder, timer.as_deref_mut());
         self.common
             .encode_mesh(encoder, target, None, timer.as_deref_mut());
-        let accumulation = self.accumulation.create_view(&Default::default());
-        let revealage = self.revealage.create_view(&Default::default());
+        let (accumulation, revealage) = (&self.accumulation, &self.revealage);
         {
             let attachment = |view, clear| {
                 Some(wgpu::RenderPassColorAttachment {
@@ -226,42 +229,48 @@ impl HairPass for Wboit {
                     },
                 })
             };
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some(self.accum.label),
-                color_attachments: &[
-                    attachment(&accumulation, wgpu::Color::TRANSPARENT),
-                    attachment(&revealage, wgpu::Color::WHITE),
-                ],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: target.depth,
-                    depth_ops: None,
-                    stencil_ops: None,
-                }),
-                timestamp_writes: timer
-                    .as_deref_mut()
-                    .and_then(|t| t.render_pass(self.accum.label)),
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
+            let mut pass = pelage_gpu::audit::begin_render_pass(
+                &mut *encoder,
+                &wgpu::RenderPassDescriptor {
+                    label: Some(self.accum.label),
+                    color_attachments: &[
+                        attachment(accumulation, wgpu::Color::TRANSPARENT),
+                        attachment(revealage, wgpu::Color::WHITE),
+                    ],
+                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                        view: target.depth,
+                        depth_ops: None,
+                        stencil_ops: None,
+                    }),
+                    timestamp_writes: timer
+                        .as_deref_mut()
+                        .and_then(|t| t.render_pass(self.accum.label)),
+                    occlusion_query_set: None,
+                    multiview_mask: None,
+                },
+            );
             self.accum.record(&mut pass, Some((3, &self.bind_accum)));
         }
         let resolve = &self.resolve.passes[0].draw;
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some(resolve.label),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: target.color,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Load,
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
-            depth_stencil_attachment: None,
-            timestamp_writes: timer.and_then(|t| t.render_pass(resolve.label)),
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
+        let mut pass = pelage_gpu::audit::begin_render_pass(
+            &mut *encoder,
+            &wgpu::RenderPassDescriptor {
+                label: Some(resolve.label),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: target.color,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Load,
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: None,
+                timestamp_writes: timer.and_then(|t| t.render_pass(resolve.label)),
+                occlusion_query_set: None,
+                multiview_mask: None,
+            },
+        );
         resolve.record(&mut pass, Some((3, &self.bind_resolve)));
         Ok(())
     }
