@@ -145,6 +145,7 @@ pub fn app(view: View) -> Result<(App, Handle<Image>)> {
                 _ => Default::default(),
             },
             draw_mesh: true,
+            skin_reach: None,
         },
         Transform::default(),
     ));
