@@ -536,7 +536,9 @@ fn extract_furs(
     bindposes: Extract<Option<Res<Assets<SkinnedMeshInverseBindposes>>>>,
     lights: Extract<Query<(&DirectionalLight, &GlobalTransform)>>,
     mut joint_globals: Local<Vec<GlobalTransform>>,
+    mut cpu: ResMut<PelageCpuTime>,
 ) {
+    let start = std::time::Instant::now();
     extracted.time = time.elapsed_secs();
     extracted.furs.clear();
     for (entity, source, transform, skinned) in &furs {
@@ -567,6 +569,7 @@ fn extract_furs(
             light.illuminance,
         )
     });
+    cpu.extract = start.elapsed();
 }
 
 /// A skinned mesh's joint matrices in its own space this frame ([`skin_joint_matrices`]
@@ -592,11 +595,13 @@ fn extract_joints(
 }
 
 /// The CPU time the plugin spent in Bevy's last frame (a render-world resource):
-/// preparing (uniform writes, and building stages when a fur or camera is new) and
-/// recording into Bevy's encoder, summed over cameras. Neither includes a wait for the
-/// GPU: the plugin never waits.
+/// extracting (and a skinned mesh's joint matrices), preparing (uniform writes, and
+/// building stages when a fur or camera is new) and recording into Bevy's encoder,
+/// summed over cameras. None includes a wait for the GPU: the plugin never waits.
 #[derive(Resource, Clone, Copy, Debug, Default)]
 pub struct PelageCpuTime {
+    /// The `ExtractSchedule`: furred entities, light and joint matrices read.
+    pub extract: std::time::Duration,
     /// `RenderSystems::PrepareBindGroups`: stages built or prepared.
     pub prepare: std::time::Duration,
     /// The `Core3d` schedules: passes recorded.
@@ -926,4 +931,52 @@ fn draw_fur(
         state.failed.insert(entity, generation);
     }
     cpu.record += start.elapsed();
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A two-joint skin of the unit icosphere: the upper half on joint 1.
+    fn sphere_skin() -> (pelage::scene::Mesh, Skin) {
+        let mesh = pelage::scene::Mesh::icosphere(1.0, 1).unwrap();
+        let joints = (mesh.positions.iter())
+            .map(|p| if p.y > 0.0 { [1, 0, 0, 0] } else { [0; 4] })
+            .collect();
+        let skin = Skin {
+            joints,
+            weights: vec![[1.0, 0.0, 0.0, 0.0]; mesh.positions.len()],
+            joint_count: 2,
+        };
+        (mesh, skin)
+    }
+
+    #[test]
+    fn a_pose_that_may_leave_the_reach_box_is_seen() {
+        let (mesh, skin) = sphere_skin();
+        let fur = Fur::default();
+        let skin = FurSkin::new(&fur, &mesh, skin);
+        // The default box: the bind box grown by a quarter of its diagonal.
+        let (lo, hi) = mesh.bounds();
+        let grow = (hi - lo).length() * 0.25;
+        assert_eq!(skin.reach, (lo - grow, hi + grow));
+        let still = [::glam::Mat4::IDENTITY; 2];
+        assert!(!skin.may_leave_reach(&still));
+        // The upper half turned about the centre stays inside; moved up by 1 it leaves.
+        let turned = [::glam::Mat4::IDENTITY, ::glam::Mat4::from_rotation_z(1.0)];
+        assert!(!skin.may_leave_reach(&turned));
+        let lifted = [
+            ::glam::Mat4::IDENTITY,
+            ::glam::Mat4::from_translation(::glam::Vec3::Y),
+        ];
+        assert!(skin.may_leave_reach(&lifted));
+        // The caller's box is used as given.
+        let tight = Fur {
+            skin_reach: Some((::glam::Vec3::splat(-1.0), ::glam::Vec3::splat(1.0))),
+            ..Fur::default()
+        };
+        let (mesh, bend) = sphere_skin();
+        let tight = FurSkin::new(&tight, &mesh, bend);
+        assert!(tight.may_leave_reach(&turned));
+    }
 }

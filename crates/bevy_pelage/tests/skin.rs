@@ -292,3 +292,66 @@ fn bad_skins_are_errors_that_name_what_is_wrong() {
     let m = skin_joint_matrices(&placed, &[placed], &[Mat4::IDENTITY]).unwrap();
     assert!(m[0].abs_diff_eq(glam::Mat4::IDENTITY, 1e-6), "{}", m[0]);
 }
+
+#[test]
+fn an_entity_with_a_bad_skin_grows_no_fur_and_the_others_still_do() {
+    let (mut app, _target) = character::app(true).unwrap();
+    let world = app.world_mut();
+    let joints = vec![
+        world.spawn(Transform::default()).id(),
+        world.spawn(Transform::from_xyz(0.0, 1.0, 0.0)).id(),
+    ];
+    let two = world
+        .resource_mut::<Assets<SkinnedMeshInverseBindposes>>()
+        .add(SkinnedMeshInverseBindposes::from(vec![Mat4::IDENTITY; 2]));
+    let good = [[1.0, 0.0, 0.0, 0.0]; 3];
+    let mut meshes = world.resource_mut::<Assets<Mesh>>();
+    // A joint index (5) past the SkinnedMesh's two joints.
+    let past = meshes.add(triangle([[0; 4], [0, 0, 5, 0], [1, 0, 0, 0]], good));
+    let fine = meshes.add(triangle([[0; 4], [1, 0, 0, 0], [1, 0, 0, 0]], good));
+    let past = world
+        .spawn((
+            Mesh3d(past),
+            SkinnedMesh {
+                inverse_bindposes: two.clone(),
+                joints: joints.clone(),
+            },
+            Fur::default(),
+        ))
+        .id();
+    // Three joints, two inverse bind matrices.
+    let short = world
+        .spawn((
+            Mesh3d(fine.clone()),
+            SkinnedMesh {
+                inverse_bindposes: two.clone(),
+                joints: vec![joints[0], joints[1], joints[1]],
+            },
+            Fur::default(),
+        ))
+        .id();
+    // The same skin, well made: it gets fur.
+    let ok = world
+        .spawn((
+            Mesh3d(fine),
+            SkinnedMesh {
+                inverse_bindposes: two,
+                joints,
+            },
+            Fur::default(),
+        ))
+        .id();
+    for _ in 0..3 {
+        app.update();
+    }
+    let world = app.world();
+    let has_fur = |e: Entity| world.get::<bevy_pelage::FurSource>(e).is_some();
+    assert!(!has_fur(past), "a joint index past the joints grew fur");
+    assert!(!has_fur(short), "too few inverse bind matrices grew fur");
+    assert!(has_fur(ok), "a good skin grew no fur");
+    let character = world
+        .iter_entities()
+        .find(|e| e.contains::<Fur>() && e.contains::<SkinnedMesh>() && e.id() != ok)
+        .map(|e| e.id());
+    assert!(character.is_some_and(has_fur));
+}
