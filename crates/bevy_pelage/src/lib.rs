@@ -527,7 +527,7 @@ struct ExtractedFurs {
 }
 
 /// This frame's furred entities (with a skinned mesh's joint matrices), time and light.
-#[allow(clippy::type_complexity)]
+#[allow(clippy::type_complexity, clippy::too_many_arguments)]
 fn extract_furs(
     mut extracted: ResMut<ExtractedFurs>,
     time: Extract<Res<Time>>,
