@@ -383,6 +383,20 @@ impl FurSkin {
     }
 }
 
+/// Whether `mesh` has morph targets (which the fur does not follow). Only Bevy's
+/// `morph` feature (this crate's `morph`) lets a mesh have them: without it, `false`.
+fn has_morph_targets(mesh: &Mesh) -> bool {
+    #[cfg(feature = "morph")]
+    {
+        mesh.try_has_morph_targets().unwrap_or(false)
+    }
+    #[cfg(not(feature = "morph"))]
+    {
+        let _ = mesh;
+        false
+    }
+}
+
 /// An entity's fur as read from the main world: the parameters, pelage's copy of the
 /// mesh and, for a skinned mesh, its skin.
 #[derive(Debug)]
@@ -457,8 +471,7 @@ fn read_fur_meshes(
             continue; // the inverse bind matrices are not loaded yet: tried again
         }
         *generation += 1;
-        #[cfg(feature = "morph")]
-        if mesh.try_has_morph_targets().unwrap_or(false) {
+        if has_morph_targets(mesh) {
             warn!(
                 "pelage: the mesh of {entity} has morph targets; the fur grows on it without them"
             );
@@ -978,5 +991,16 @@ mod tests {
         let (mesh, bend) = sphere_skin();
         let tight = FurSkin::new(&tight, &mesh, bend);
         assert!(tight.may_leave_reach(&turned));
+    }
+
+    /// With Bevy's `morph` feature a mesh with morph targets is seen (and logged).
+    #[cfg(feature = "morph")]
+    #[test]
+    fn morph_targets_are_seen() {
+        let mesh = bevy_mesh(&pelage::scene::Mesh::icosphere(1.0, 0).unwrap());
+        assert!(!has_morph_targets(&mesh));
+        // One target of 12 vertices (the icosahedron's), displacing nothing.
+        let target = vec![bevy::mesh::morph::MorphAttributes::default(); 12];
+        assert!(has_morph_targets(&mesh.with_morph_targets(target)));
     }
 }
