@@ -38,8 +38,9 @@
 //!   fewer inverse bind matrices than joints, a despawned joint or a non-finite matrix
 //!   are errors (logged once, as below). pelage bounds its shadow and reach by a box the
 //!   skinned mesh must stay in, in mesh space: [`Fur::skin_reach`] (by default the bind
-//!   pose's box grown by a quarter of its diagonal on every side); a pose that leaves it
-//!   is logged once with `warn!` (the fur is still drawn, its shadow may be clipped).
+//!   pose's box grown by a quarter of its diagonal on every side); a pose that may
+//!   leave it (bounded by each joint's transformed box of the vertices it moves) is
+//!   logged once with `warn!` (the fur is still drawn, its shadow may be clipped).
 //! - Morph targets are not applied: the fur grows on the mesh without its morph
 //!   weights. With this crate's `morph` feature (which turns on Bevy's) a mesh with
 //!   morph targets is logged once with `warn!`; without it Bevy's mesh cannot tell.
