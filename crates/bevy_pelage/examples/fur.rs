@@ -145,6 +145,7 @@ pub fn app(view: View) -> Result<(App, Handle<Image>)> {
                 _ => Default::default(),
             },
             draw_mesh: true,
+            skin_reach: None,
         },
         Transform::default(),
     ));
@@ -218,7 +219,7 @@ fn run() -> Result<()> {
         update_ms.push(start.elapsed().as_secs_f64() * 1e3);
         let render = app.sub_app(bevy::render::RenderApp).world();
         if let Some(cpu) = render.get_resource::<bevy_pelage::PelageCpuTime>() {
-            plugin_ms.push((cpu.prepare + cpu.record).as_secs_f64() * 1e3);
+            plugin_ms.push((cpu.extract + cpu.prepare + cpu.record).as_secs_f64() * 1e3);
         }
         let picture = read(&mut app, &image)?;
         let path = out.join(format!("fur_{frame:04}.png"));
@@ -240,7 +241,7 @@ fn run() -> Result<()> {
     if let Some(update) = median(update_ms) {
         println!("App::update: median {update:.2} ms ({which} the plugin)");
     }
-    // The plugin's own systems (PelageCpuTime: preparing and recording).
+    // The plugin's own systems (PelageCpuTime: extracting, preparing and recording).
     if let Some(plugin) = median(plugin_ms) {
         println!("the plugin's systems: median {plugin:.3} ms of CPU per frame");
     }

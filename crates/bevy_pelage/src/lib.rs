@@ -21,8 +21,29 @@
 //! What this first version does and does not do:
 //! - The mesh is read once from `Assets<Mesh>` (positions, normals, triangle-list
 //!   indices) and uploaded into pelage's own buffers; it is read again only when the
-//!   entity's [`Fur`] or [`Mesh3d`] changes, not when the asset is edited in place
-//!   (skinned or morphed meshes keep their first pose).
+//!   entity's [`Fur`], [`Mesh3d`] or [`SkinnedMesh`] changes, not when the asset is
+//!   edited in place.
+//! - A skinned mesh (an entity with a [`SkinnedMesh`] whose mesh has
+//!   `ATTRIBUTE_JOINT_INDEX` and `ATTRIBUTE_JOINT_WEIGHT`) is skinned by pelage on the
+//!   GPU every frame ([`pelage::Frame::with_skin`]: linear blend skinning of the mesh
+//!   buffers before the strands grow): the roots ride on the skinned surface. Its joint
+//!   indices and weights are read once ([`pelage_skin`]); each frame the extraction
+//!   reads the joints' [`GlobalTransform`]s and the inverse bind matrices and hands
+//!   pelage `mesh_from_world · world_from_joint · inverse_bindpose` per joint
+//!   ([`skin_joint_matrices`]; Bevy skins with `world_from_joint · inverse_bindpose`
+//!   and ignores the mesh entity's own transform, pelage works in the mesh's space and
+//!   the view matrix carries that transform back), written into the frame's
+//!   joint-matrix buffer in prepare (a queue write: no new buffer or bind group). Weights
+//!   that do not sum to 1 within 1 %, joint indices past the [`SkinnedMesh`]'s joints,
+//!   fewer inverse bind matrices than joints, a despawned joint or a non-finite matrix
+//!   are errors (logged once, as below). pelage bounds its shadow and reach by a box the
+//!   skinned mesh must stay in, in mesh space: [`Fur::skin_reach`] (by default the bind
+//!   pose's box grown by a quarter of its diagonal on every side); a pose that may
+//!   leave it (bounded by each joint's transformed box of the vertices it moves) is
+//!   logged once with `warn!` (the fur is still drawn, its shadow may be clipped).
+//! - Morph targets are not applied: the fur grows on the mesh without its morph
+//!   weights. With this crate's `morph` feature (which turns on Bevy's) a mesh with
+//!   morph targets is logged once with `warn!`; without it Bevy's mesh cannot tell.
 //! - The entity's [`GlobalTransform`] is applied through the camera matrices: pelage
 //!   grows, winds and shadows in the mesh's own space and the view matrix carries the
 //!   model matrix, so [`HairParams::wind`] blows in mesh space and the light is turned
@@ -57,7 +78,8 @@ use bevy::core_pipeline::core_3d::main_transparent_pass_3d;
 use bevy::core_pipeline::schedule::{Core3d, Core3dSystems};
 use bevy::ecs::query::QueryItem;
 use bevy::light::DirectionalLight;
-use bevy::log::error;
+use bevy::log::{error, warn};
+use bevy::mesh::skinning::{SkinnedMesh, SkinnedMeshInverseBindposes};
 use bevy::mesh::{Indices, Mesh, Mesh3d, PrimitiveTopology, VertexAttributeValues};
 use bevy::prelude::*;
 use bevy::render::camera::ExtractedCamera;
@@ -69,7 +91,9 @@ use bevy::render::view::{ExtractedView, ViewDepthStencilTexture, ViewTarget};
 use bevy::render::{Extract, ExtractSchedule, Render, RenderApp, RenderSystems};
 
 use pelage::gpu::Gpu;
-use pelage::scene::{CameraMatrices, HairParams, Light, ShadeParams, ShadowParams, VoxelParams};
+use pelage::scene::{
+    CameraMatrices, HairParams, Light, ShadeParams, ShadowParams, Skin, VoxelParams,
+};
 use pelage::shade::{TargetFormat, TargetViews};
 use pelage::{Frame, FrameTarget, Scene};
 
@@ -82,6 +106,10 @@ pub enum FurError {
     /// pelage refused the mesh, the parameters or the targets.
     #[error(transparent)]
     Pelage(#[from] pelage::Error),
+    /// A [`SkinnedMesh`] pelage cannot skin: its joint attributes, inverse bind matrices
+    /// or joint entities (pelage's own checks of the skin are [`FurError::Pelage`]).
+    #[error("skin: {0}")]
+    Skin(String),
 }
 
 /// Fur on the [`Mesh3d`] of the same entity.
@@ -99,6 +127,11 @@ pub struct Fur {
     /// pelage draws the mesh too (in `shade.mesh_color`, shadowed by the fur); `false`
     /// when the application draws the mesh itself.
     pub draw_mesh: bool,
+    /// For a skinned mesh: a box (min, max corners, in the mesh's own space) the skinned
+    /// mesh stays in, in every pose; the voxel shadow and pelage's reach size themselves
+    /// from it. `None`: the bind pose's box grown by a quarter of its diagonal on every
+    /// side. A pose outside it is logged once. Unused for a mesh without a skin.
+    pub skin_reach: Option<(::glam::Vec3, ::glam::Vec3)>,
 }
 
 impl Default for Fur {
@@ -108,6 +141,7 @@ impl Default for Fur {
             shade: ShadeParams::default(),
             voxel: VoxelParams::default(),
             draw_mesh: true,
+            skin_reach: None,
         }
     }
 }
@@ -217,12 +251,168 @@ pub fn bevy_mesh(mesh: &pelage::scene::Mesh) -> Mesh {
     bevy_mesh.with_inserted_attribute(Mesh::ATTRIBUTE_UV_0, uvs)
 }
 
-/// What the render world builds an entity's fur from, made when [`Fur`] or the mesh
-/// changes: the parameters and pelage's copy of the mesh, with a number that changes
-/// with them.
+/// Reads a skinned Bevy mesh's `ATTRIBUTE_JOINT_INDEX` (`Uint16x4`) and
+/// `ATTRIBUTE_JOINT_WEIGHT` (`Float32x4`, or `Unorm16x4` as Bevy's quantisation leaves
+/// it) as pelage's [`Skin`] of `joint_count` joints (the [`SkinnedMesh`]'s joint
+/// entities), checked by pelage ([`Skin::validate`]): a joint index past the joint
+/// count, a negative or non-finite weight, or weights not summing to 1 within
+/// [`pelage::scene::skin::WEIGHT_SUM_TOLERANCE`] (1 %) is an error naming the vertex
+/// (`skin.joints[17][2]`); sums within it are normalised on upload.
+pub fn pelage_skin(mesh: &Mesh, joint_count: usize) -> Result<Skin, FurError> {
+    let joints: Vec<[u32; 4]> = match mesh.try_attribute(Mesh::ATTRIBUTE_JOINT_INDEX) {
+        Ok(VertexAttributeValues::Uint16x4(v)) => v.iter().map(|j| j.map(u32::from)).collect(),
+        Ok(_) => return Err(FurError::Skin("joint indices are not Uint16x4".into())),
+        Err(e) => return Err(FurError::Skin(format!("no joint indices: {e}"))),
+    };
+    let weights: Vec<[f32; 4]> = match mesh.try_attribute(Mesh::ATTRIBUTE_JOINT_WEIGHT) {
+        Ok(VertexAttributeValues::Float32x4(v)) => v.clone(),
+        Ok(VertexAttributeValues::Unorm16x4(v)) => v
+            .iter()
+            .map(|w| w.map(|x| f32::from(x) / f32::from(u16::MAX)))
+            .collect(),
+        Ok(_) => {
+            return Err(FurError::Skin(
+                "joint weights are neither Float32x4 nor Unorm16x4".into(),
+            ));
+        }
+        Err(e) => return Err(FurError::Skin(format!("no joint weights: {e}"))),
+    };
+    let skin = Skin {
+        joints,
+        weights,
+        // Past u32 (or MAX_JOINTS) pelage refuses it by name below.
+        joint_count: u32::try_from(joint_count).unwrap_or(u32::MAX),
+    };
+    let vertices = mesh
+        .try_attribute(Mesh::ATTRIBUTE_POSITION)
+        .map_err(|e| FurError::Mesh(format!("no positions: {e}")))?
+        .len();
+    skin.validate(vertices).map_err(pelage::Error::from)?;
+    Ok(skin)
+}
+
+/// The joint matrices pelage skins a mesh with, in the mesh's own space: per joint
+/// `mesh_from_world · world_from_joint · inverse_bindpose`. Bevy skins a vertex with
+/// `world_from_joint · inverse_bindpose` (its `SkinnedMesh` convention, glTF's: the
+/// inverse bind matrix takes the mesh's bind-pose space into the joint's) and ignores
+/// the mesh entity's own [`GlobalTransform`]; pelage grows in the mesh's space and the
+/// view matrix multiplies the entity's transform back in, so the entity's inverse is
+/// folded in here. `inverse_bindposes` needs at least one matrix per joint (extra ones
+/// are unused, as in Bevy).
+pub fn skin_joint_matrices(
+    world_from_mesh: &GlobalTransform,
+    world_from_joints: &[GlobalTransform],
+    inverse_bindposes: &[Mat4],
+) -> Result<Vec<::glam::Mat4>, FurError> {
+    if inverse_bindposes.len() < world_from_joints.len() {
+        return Err(FurError::Skin(format!(
+            "{} joints but {} inverse bind matrices: needs one per joint",
+            world_from_joints.len(),
+            inverse_bindposes.len()
+        )));
+    }
+    let mesh_from_world = Mat4::from(world_from_mesh.affine().inverse());
+    Ok(world_from_joints
+        .iter()
+        .zip(inverse_bindposes)
+        .map(|(joint, bindpose)| {
+            let m = mesh_from_world * Mat4::from(joint.affine()) * *bindpose;
+            ::glam::Mat4::from_cols_array(&m.to_cols_array())
+        })
+        .collect())
+}
+
+/// A skinned mesh's skin as the render world takes it.
+#[derive(Debug)]
+struct FurSkin {
+    skin: Skin,
+    /// The box the skinned mesh stays in (mesh space): [`Fur::skin_reach`] or its default.
+    reach: (::glam::Vec3, ::glam::Vec3),
+    /// Per joint, the bind-pose box of the vertices it moves (`None`: none). A vertex is a
+    /// convex combination of its joints' transforms of it, so the union of each joint's
+    /// transformed box holds the skinned mesh: the check of [`FurSkin::reach`].
+    joint_boxes: Vec<Option<(::glam::Vec3, ::glam::Vec3)>>,
+}
+
+impl FurSkin {
+    fn new(fur: &Fur, mesh: &pelage::scene::Mesh, skin: Skin) -> Self {
+        let mut joint_boxes = vec![None; skin.joint_count as usize];
+        for ((p, joints), weights) in mesh.positions.iter().zip(&skin.joints).zip(&skin.weights) {
+            for (&j, &w) in joints.iter().zip(weights) {
+                if w > 0.0 {
+                    let b = &mut joint_boxes[j as usize];
+                    *b = Some(
+                        b.map_or((*p, *p), |(lo, hi): (::glam::Vec3, ::glam::Vec3)| {
+                            (lo.min(*p), hi.max(*p))
+                        }),
+                    );
+                }
+            }
+        }
+        let reach = fur.skin_reach.unwrap_or_else(|| {
+            let (lo, hi) = mesh.bounds();
+            let grow = ::glam::Vec3::splat((hi - lo).length() * 0.25);
+            (lo - grow, hi + grow)
+        });
+        Self {
+            skin,
+            reach,
+            joint_boxes,
+        }
+    }
+
+    /// Whether the mesh skinned by `matrices` may leave the reach box: the union of the
+    /// joints' transformed boxes does (a bound, never an underestimate).
+    fn may_leave_reach(&self, matrices: &[::glam::Mat4]) -> bool {
+        let (lo, hi) = self.reach;
+        let slack = (hi - lo).length() * 1e-5;
+        self.joint_boxes
+            .iter()
+            .zip(matrices)
+            .filter_map(|(b, m)| b.map(|b| (b, m)))
+            .any(|((blo, bhi), m)| {
+                (0..8).any(|corner| {
+                    let c = ::glam::Vec3::new(
+                        if corner & 1 == 0 { blo.x } else { bhi.x },
+                        if corner & 2 == 0 { blo.y } else { bhi.y },
+                        if corner & 4 == 0 { blo.z } else { bhi.z },
+                    );
+                    let p = m.transform_point3(c);
+                    !(p.cmpge(lo - slack).all() && p.cmple(hi + slack).all())
+                })
+            })
+    }
+}
+
+/// Whether `mesh` has morph targets (which the fur does not follow). Only Bevy's
+/// `morph` feature (this crate's `morph`) lets a mesh have them: without it, `false`.
+fn has_morph_targets(mesh: &Mesh) -> bool {
+    #[cfg(feature = "morph")]
+    {
+        mesh.try_has_morph_targets().unwrap_or(false)
+    }
+    #[cfg(not(feature = "morph"))]
+    {
+        let _ = mesh;
+        false
+    }
+}
+
+/// An entity's fur as read from the main world: the parameters, pelage's copy of the
+/// mesh and, for a skinned mesh, its skin.
+#[derive(Debug)]
+struct FurSetup {
+    fur: Fur,
+    mesh: pelage::scene::Mesh,
+    skin: Option<FurSkin>,
+}
+
+/// What the render world builds an entity's fur from, made when [`Fur`], the mesh or
+/// its [`SkinnedMesh`] changes: the parameters, pelage's copy of the mesh and its skin,
+/// with a number that changes with them.
 #[derive(Component, Clone, Debug)]
 pub struct FurSource {
-    setup: Arc<(Fur, pelage::scene::Mesh)>,
+    setup: Arc<FurSetup>,
     generation: u64,
 }
 
@@ -230,34 +420,92 @@ pub struct FurSource {
 #[derive(Component)]
 struct FurSourceOf(AssetId<Mesh>);
 
-/// Reads the mesh of every entity whose [`Fur`] or [`Mesh3d`] is new or changed (or
-/// whose mesh had not loaded yet) into a [`FurSource`]; logs a mesh that cannot carry
-/// fur once.
+/// Reads the mesh (and the skin of a [`SkinnedMesh`]) of every entity whose [`Fur`],
+/// [`Mesh3d`] or [`SkinnedMesh`] is new or changed (or whose mesh or inverse bind
+/// matrices had not loaded yet) into a [`FurSource`]; logs a mesh that cannot carry fur
+/// once.
 #[allow(clippy::type_complexity)]
 fn read_fur_meshes(
     mut commands: Commands,
     meshes: Res<Assets<Mesh>>,
+    bindposes: Option<Res<Assets<SkinnedMeshInverseBindposes>>>,
     furs: Query<
-        (Entity, Ref<Fur>, Ref<Mesh3d>, Option<&FurSourceOf>),
-        Or<(Changed<Fur>, Changed<Mesh3d>, Without<FurSourceOf>)>,
+        (
+            Entity,
+            Ref<Fur>,
+            Ref<Mesh3d>,
+            Option<Ref<SkinnedMesh>>,
+            Option<&FurSourceOf>,
+        ),
+        Or<(
+            Changed<Fur>,
+            Changed<Mesh3d>,
+            Changed<SkinnedMesh>,
+            Without<FurSourceOf>,
+        )>,
     >,
+    mut unskinned: RemovedComponents<SkinnedMesh>,
     mut generation: Local<u64>,
 ) {
-    for (entity, fur, mesh3d, done) in &furs {
+    // An entity that lost its skin is read again (next frame) as a rigid mesh.
+    for entity in unskinned.read() {
+        if let Ok(mut e) = commands.get_entity(entity) {
+            e.remove::<FurSourceOf>();
+        }
+    }
+    for (entity, fur, mesh3d, skinned, done) in &furs {
         let id = mesh3d.id();
-        let changed = fur.is_changed() || mesh3d.is_changed();
+        let changed = fur.is_changed()
+            || mesh3d.is_changed()
+            || skinned.as_ref().is_some_and(|s| s.is_changed());
         if done.is_some_and(|d| d.0 == id) && !changed {
             continue;
         }
         let Some(mesh) = meshes.get(id) else {
             continue; // not loaded yet: tried again next frame
         };
+        if let Some(skinned) = &skinned
+            && bindposes
+                .as_ref()
+                .is_none_or(|b| b.get(&skinned.inverse_bindposes).is_none())
+        {
+            continue; // the inverse bind matrices are not loaded yet: tried again
+        }
         *generation += 1;
-        match pelage_mesh(mesh) {
-            Ok(pelage_mesh) => {
+        if has_morph_targets(mesh) {
+            warn!(
+                "pelage: the mesh of {entity} has morph targets; the fur grows on it without them"
+            );
+        }
+        let setup = pelage_mesh(mesh).and_then(|pelage_mesh| {
+            let skin = match &skinned {
+                Some(skinned) => {
+                    let bindposes = bindposes
+                        .as_ref()
+                        .and_then(|b| b.get(&skinned.inverse_bindposes))
+                        .map_or(0, |b| b.len());
+                    if bindposes < skinned.joints.len() {
+                        return Err(FurError::Skin(format!(
+                            "{} joints but {bindposes} inverse bind matrices: needs one per joint",
+                            skinned.joints.len()
+                        )));
+                    }
+                    let skin = pelage_skin(mesh, skinned.joints.len())?;
+                    Some(FurSkin::new(&fur, &pelage_mesh, skin))
+                }
+                None => None,
+            };
+            Ok(FurSetup {
+                fur: (*fur).clone(),
+                mesh: pelage_mesh,
+                skin,
+            })
+        });
+        match setup {
+            Ok(setup) => {
                 commands.entity(entity).insert((
                     FurSource {
-                        setup: Arc::new(((*fur).clone(), pelage_mesh)),
+                        setup: Arc::new(setup),
                         generation: *generation,
                     },
                     FurSourceOf(id),
@@ -279,6 +527,8 @@ struct ExtractedFur {
     entity: Entity,
     source: FurSource,
     world_from_model: Mat4,
+    /// A skinned mesh's joint matrices (mesh space) this frame, or why there are none.
+    joints: Option<Result<Vec<::glam::Mat4>, String>>,
 }
 
 /// This frame's furred entities, time and key light.
@@ -290,19 +540,39 @@ struct ExtractedFurs {
     light: Option<(Vec3, Vec3, f32)>,
 }
 
+/// This frame's furred entities (with a skinned mesh's joint matrices), time and light.
+#[allow(clippy::type_complexity, clippy::too_many_arguments)]
 fn extract_furs(
     mut extracted: ResMut<ExtractedFurs>,
     time: Extract<Res<Time>>,
-    furs: Extract<Query<(Entity, &FurSource, &GlobalTransform)>>,
+    furs: Extract<Query<(Entity, &FurSource, &GlobalTransform, Option<&SkinnedMesh>)>>,
+    transforms: Extract<Query<&GlobalTransform>>,
+    bindposes: Extract<Option<Res<Assets<SkinnedMeshInverseBindposes>>>>,
     lights: Extract<Query<(&DirectionalLight, &GlobalTransform)>>,
+    mut joint_globals: Local<Vec<GlobalTransform>>,
+    mut cpu: ResMut<PelageCpuTime>,
 ) {
+    let start = std::time::Instant::now();
     extracted.time = time.elapsed_secs();
     extracted.furs.clear();
-    for (entity, source, transform) in &furs {
+    for (entity, source, transform, skinned) in &furs {
+        let joints = match (&source.setup.skin, skinned) {
+            (Some(_), Some(skinned)) => Some(extract_joints(
+                transform,
+                skinned,
+                &transforms,
+                bindposes.as_deref(),
+                &mut joint_globals,
+            )),
+            // Removed this frame: `read_fur_meshes` reads the mesh again without it.
+            (Some(_), None) => None,
+            (None, _) => None,
+        };
         extracted.furs.push(ExtractedFur {
             entity,
             source: source.clone(),
             world_from_model: transform.to_matrix(),
+            joints,
         });
     }
     extracted.light = lights.iter().next().map(|(light, transform)| {
@@ -313,14 +583,39 @@ fn extract_furs(
             light.illuminance,
         )
     });
+    cpu.extract = start.elapsed();
+}
+
+/// A skinned mesh's joint matrices in its own space this frame ([`skin_joint_matrices`]
+/// of its joints' [`GlobalTransform`]s, gathered into `joint_globals`), or why not.
+fn extract_joints(
+    world_from_mesh: &GlobalTransform,
+    skinned: &SkinnedMesh,
+    transforms: &Query<&GlobalTransform>,
+    bindposes: Option<&Assets<SkinnedMeshInverseBindposes>>,
+    joint_globals: &mut Vec<GlobalTransform>,
+) -> Result<Vec<::glam::Mat4>, String> {
+    joint_globals.clear();
+    for &joint in &skinned.joints {
+        let global = transforms
+            .get(joint)
+            .map_err(|_| format!("joint entity {joint} has no GlobalTransform"))?;
+        joint_globals.push(*global);
+    }
+    let bindposes = bindposes
+        .and_then(|b| b.get(&skinned.inverse_bindposes))
+        .ok_or("the inverse bind matrices are gone")?;
+    skin_joint_matrices(world_from_mesh, joint_globals, bindposes).map_err(|e| e.to_string())
 }
 
 /// The CPU time the plugin spent in Bevy's last frame (a render-world resource):
-/// preparing (uniform writes, and building stages when a fur or camera is new) and
-/// recording into Bevy's encoder, summed over cameras. Neither includes a wait for the
-/// GPU: the plugin never waits.
+/// extracting (and a skinned mesh's joint matrices), preparing (uniform writes, and
+/// building stages when a fur or camera is new) and recording into Bevy's encoder,
+/// summed over cameras. None includes a wait for the GPU: the plugin never waits.
 #[derive(Resource, Clone, Copy, Debug, Default)]
 pub struct PelageCpuTime {
+    /// The `ExtractSchedule`: furred entities, light and joint matrices read.
+    pub extract: std::time::Duration,
     /// `RenderSystems::PrepareBindGroups`: stages built or prepared.
     pub prepare: std::time::Duration,
     /// The `Core3d` schedules: passes recorded.
@@ -334,7 +629,9 @@ struct PelageGpu(Gpu);
 /// An entity's fur in the render world: one pelage [`Frame`] per camera.
 struct FurInstance {
     generation: u64,
-    setup: Arc<(Fur, pelage::scene::Mesh)>,
+    setup: Arc<FurSetup>,
+    /// A pose left [`FurSkin::reach`] and was logged.
+    left_reach: bool,
     /// Per view (render-world camera entity): the fur's frame for its targets.
     views: HashMap<Entity, ViewFur>,
 }
@@ -384,7 +681,7 @@ impl FurInstance {
         format: TargetFormat,
         size: (u32, u32),
     ) -> Result<ViewFur, FurError> {
-        let (fur, mesh) = &*self.setup;
+        let FurSetup { fur, mesh, skin } = &*self.setup;
         let mut shade = fur.shade.clone();
         if shade.transparency == pelage::scene::Transparency::Opaque {
             shade.sample_count = format.samples;
@@ -406,10 +703,14 @@ impl FurInstance {
             draw_mesh: fur.draw_mesh,
             ..FrameTarget::new(format, size.0, size.1)
         };
+        let frame = match skin {
+            Some(skin) => Frame::with_skin(gpu, &scene, &skin.skin, skin.reach, &target)?,
+            None => Frame::new(gpu, &scene, &target)?,
+        };
         Ok(ViewFur {
             format,
             size,
-            frame: Frame::new(gpu, &scene, &target)?,
+            frame,
             ready: false,
         })
     }
@@ -488,6 +789,7 @@ fn prepare_furs(
                 FurInstance {
                     generation,
                     setup: fur.source.setup.clone(),
+                    left_reach: false,
                     views: HashMap::new(),
                 },
             );
@@ -505,7 +807,8 @@ fn prepare_furs(
 }
 
 /// One fur's frame for each camera: the last frame's after-submit step (Bevy has
-/// submitted it), the light in the mesh's space, then every stage's uniforms.
+/// submitted it), the joint matrices of a skinned mesh, the light in the mesh's space,
+/// then every stage's uniforms.
 fn prepare_instance(
     gpu: &Gpu,
     instance: &mut FurInstance,
@@ -524,6 +827,23 @@ fn prepare_instance(
         .transform_vector3(direction)
         .normalize_or(Vec3::NEG_Y);
     let v3 = |v: Vec3| ::glam::Vec3::from_array(v.to_array());
+    let joints = match &fur.joints {
+        Some(Ok(joints)) => Some(joints.as_slice()),
+        Some(Err(e)) => return Err(FurError::Skin(e.clone())),
+        None => None,
+    };
+    if let (Some(skin), Some(joints)) = (&instance.setup.skin, joints)
+        && !instance.left_reach
+        && skin.may_leave_reach(joints)
+    {
+        instance.left_reach = true;
+        let (lo, hi) = skin.reach;
+        warn!(
+            "pelage: the skinned mesh of {} may leave its reach box {lo} .. {hi} (mesh space): \
+             its fur's shadow may be clipped; set Fur::skin_reach to a box that holds every pose",
+            fur.entity
+        );
+    }
 
     for view in instance.views.values_mut() {
         view.ready = false;
@@ -563,6 +883,9 @@ fn prepare_instance(
         };
         let frame = &mut view_fur.frame;
         frame.after_submit(gpu)?;
+        if let Some(joints) = joints {
+            frame.set_joint_matrices(&gpu.queue, joints)?;
+        }
         frame.set_lights(&[Light::Directional(pelage::scene::DirectionalLight {
             direction: v3(direction),
             color: v3(color),
@@ -622,4 +945,63 @@ fn draw_fur(
         state.failed.insert(entity, generation);
     }
     cpu.record += start.elapsed();
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A two-joint skin of the unit icosphere: the upper half on joint 1.
+    fn sphere_skin() -> (pelage::scene::Mesh, Skin) {
+        let mesh = pelage::scene::Mesh::icosphere(1.0, 1).unwrap();
+        let joints = (mesh.positions.iter())
+            .map(|p| if p.y > 0.0 { [1, 0, 0, 0] } else { [0; 4] })
+            .collect();
+        let skin = Skin {
+            joints,
+            weights: vec![[1.0, 0.0, 0.0, 0.0]; mesh.positions.len()],
+            joint_count: 2,
+        };
+        (mesh, skin)
+    }
+
+    #[test]
+    fn a_pose_that_may_leave_the_reach_box_is_seen() {
+        let (mesh, skin) = sphere_skin();
+        let fur = Fur::default();
+        let skin = FurSkin::new(&fur, &mesh, skin);
+        // The default box: the bind box grown by a quarter of its diagonal.
+        let (lo, hi) = mesh.bounds();
+        let grow = (hi - lo).length() * 0.25;
+        assert_eq!(skin.reach, (lo - grow, hi + grow));
+        let still = [::glam::Mat4::IDENTITY; 2];
+        assert!(!skin.may_leave_reach(&still));
+        // The upper half turned about the centre stays inside; moved up by 1 it leaves.
+        let turned = [::glam::Mat4::IDENTITY, ::glam::Mat4::from_rotation_z(1.0)];
+        assert!(!skin.may_leave_reach(&turned));
+        let lifted = [
+            ::glam::Mat4::IDENTITY,
+            ::glam::Mat4::from_translation(::glam::Vec3::Y),
+        ];
+        assert!(skin.may_leave_reach(&lifted));
+        // The caller's box is used as given.
+        let tight = Fur {
+            skin_reach: Some((::glam::Vec3::splat(-1.0), ::glam::Vec3::splat(1.0))),
+            ..Fur::default()
+        };
+        let (mesh, bend) = sphere_skin();
+        let tight = FurSkin::new(&tight, &mesh, bend);
+        assert!(tight.may_leave_reach(&turned));
+    }
+
+    /// With Bevy's `morph` feature a mesh with morph targets is seen (and logged).
+    #[cfg(feature = "morph")]
+    #[test]
+    fn morph_targets_are_seen() {
+        let mesh = bevy_mesh(&pelage::scene::Mesh::icosphere(1.0, 0).unwrap());
+        assert!(!has_morph_targets(&mesh));
+        // One target of 12 vertices (the icosahedron's), displacing nothing.
+        let target = vec![bevy::mesh::morph::MorphAttributes::default(); 12];
+        assert!(has_morph_targets(&mesh.with_morph_targets(target)));
+    }
 }
