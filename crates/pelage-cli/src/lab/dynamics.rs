@@ -1,6 +1,7 @@
 //! The dynamics lab: the same long hair simulated and under the stateless wind, while the
-//! head turns and nods. Issue 20 asks that fur keep the stateless wind unless a scene
-//! needs more; this lab says how much more the simulation shows, and what it costs.
+//! head turns and nods, and the same for fur on a running creature. Issue 20 asks that fur
+//! keep the stateless wind unless a scene needs more; this lab says how much more the
+//! simulation shows, and what it costs.
 //!
 //! ```text
 //! pelage lab dynamics [--quick] [--out DIR] [--scene FILE]
@@ -21,6 +22,11 @@
 //!   this looks no different. (`--scene` with a groom: none, a groom's strands are the
 //!   file's.)
 //!
+//! A second comparison, `fur`, does the same for [`FUR_SCENE`]: the creature of
+//! `scenes/creature_skinned.toml` (its body bent and twisted by a two-joint rig, skinned
+//! on the GPU every frame; 20 000 strands, `--quick` 2 000) with a `[dynamics]` table at
+//! its defaults against the same fur stateless.
+//!
 //! `--scene FILE` takes a scene file with a `[dynamics]` table (`scenes/head_turn.toml`)
 //! instead, compared with the same scene without the table.
 //!
@@ -34,9 +40,10 @@
 //! end, each renderer's strand stage submitted alone (median of the repeats), one frame
 //! step past the last.
 //!
-//! Writes `DIR/dynamics.csv` (a row per frame), `DIR/dynamics_summary.csv` (means over
-//! the frames after the first second, when the head has moved, and the cost ratios) and
-//! `DIR/dynamics_sheet.png` (stateless over simulated at six times).
+//! Writes `DIR/dynamics.csv` (a row per frame and comparison), `DIR/dynamics_summary.csv`
+//! (means over the frames after the first second, when the body has moved, and the cost
+//! ratios; a column per comparison), `DIR/dynamics_sheet.png` and, for the fur,
+//! `DIR/dynamics_sheet_fur.png` (stateless over simulated at six times).
 
 use std::path::Path;
 use std::time::Instant;
@@ -134,45 +141,88 @@ const STATELESS_FORCE_WEIGHT: f32 = 0.12;
 /// Frames per second of the lab's animation.
 const FPS: f32 = 30.0;
 
-/// The scenes the lab compares: stateless, simulated and (grown hair only) the stateless
-/// hair from other roots. `path`: a scene file with a `[dynamics]` table instead of
-/// [`SCENE`]; its strand count is kept.
-fn scenes(path: Option<&Path>, strands: u32) -> LabResult<(Scene, Scene, Option<Scene>)> {
-    let simulated = match path {
-        Some(path) => {
-            let scene = Scene::from_file(path)?;
-            if scene.dynamics.is_none() {
-                return Err(format!(
-                    "{}: the scene has no [dynamics] table, so there is no simulation to \
-                     compare with its stateless wind; add one (see the book's Dynamics page, docs/src/dynamics.md)",
-                    path.display()
-                )
-                .into());
-            }
-            scene
+/// `scenes/creature_skinned.toml` (the creature's fur on its skinned, bending body) with
+/// a `[dynamics]` table at its defaults: the lab's fur row. A copy, as [`SCENE`]; the test
+/// `the_built_in_fur_is_the_skinned_creature_simulated` keeps the two the same.
+pub const FUR_SCENE: &str = r#"
+[skin]
+origin = [0.0, 0.1, 0.2]
+axis = [0.0, 0.0, 1.0]
+bend_axis = [0.0, 1.0, 0.0]
+blend = 0.25
+bend = 0.6
+bend_frequency = 0.5
+twist = 0.3
+twist_frequency = 0.7
+
+[hair.roots]
+count = 20000
+
+[hair.wind]
+strength = 0.3
+
+[dynamics]
+"#;
+
+/// One comparison of the lab: the same hair stateless and simulated, and (grown hair
+/// only) the stateless hair from other roots.
+struct Scenario {
+    /// Its name in the tables (`hair` or `fur`, or `scene` for `--scene`).
+    name: &'static str,
+    stateless: Scene,
+    simulated: Scene,
+    floor: Option<Scene>,
+}
+
+/// The comparisons the lab runs: with `path` (a scene file with a `[dynamics]` table,
+/// its strand count kept) that scene alone; otherwise [`SCENE`]'s long hair on the
+/// turning head with `strands` strands and [`FUR_SCENE`]'s fur on the running creature
+/// with `fur_strands`.
+fn scenarios(path: Option<&Path>, strands: u32, fur_strands: u32) -> LabResult<Vec<Scenario>> {
+    if let Some(path) = path {
+        let scene = Scene::from_file(path)?;
+        if scene.dynamics.is_none() {
+            return Err(format!(
+                "{}: the scene has no [dynamics] table, so there is no simulation to \
+                 compare with its stateless wind; add one (see the book's Dynamics page, docs/src/dynamics.md)",
+                path.display()
+            )
+            .into());
         }
-        None => {
-            let file = SceneFile::parse(SCENE)?;
-            let mut scene = Scene::from_scene_file(&file, Path::new("lab dynamics"))?;
-            scene.hair.roots.count = strands;
-            // The stateless hair's wind force weight. A scene file with [dynamics] may
-            // not set it (the simulation's rest shape is grown without gravity or wind,
-            // so there it has no effect), but the stateless comparison uses it.
-            scene.hair.growth.force_weight = STATELESS_FORCE_WEIGHT;
-            scene
-        }
-    };
+        return Ok(vec![compared("scene", scene)]);
+    }
+    let file = SceneFile::parse(SCENE)?;
+    let mut hair = Scene::from_scene_file(&file, Path::new("lab dynamics"))?;
+    hair.hair.roots.count = strands;
+    // The stateless hair's wind force weight. A scene file with [dynamics] may not set it
+    // (the simulation's rest shape is grown without gravity or wind, so there it has no
+    // effect), but the stateless comparison uses it.
+    hair.hair.growth.force_weight = STATELESS_FORCE_WEIGHT;
+    let file = SceneFile::parse(FUR_SCENE)?;
+    let mut fur = Scene::from_scene_file(&file, Path::new("lab dynamics fur"))?;
+    fur.hair.roots.count = fur_strands;
+    Ok(vec![compared("hair", hair), compared("fur", fur)])
+}
+
+/// The scenes one comparison draws: `simulated`, the same without its `[dynamics]`, and
+/// (grown hair only: a groom's strands are the file's) the stateless hair from other
+/// roots.
+fn compared(name: &'static str, simulated: Scene) -> Scenario {
     let stateless = Scene {
         dynamics: None,
         ..simulated.clone()
     };
-    // A groom's strands are the file's: other roots exist only for grown hair.
     let floor = simulated.groom.is_none().then(|| {
         let mut floor = stateless.clone();
         floor.hair.roots.seed = floor.hair.roots.seed.wrapping_add(1000);
         floor
     });
-    Ok((stateless, simulated, floor))
+    Scenario {
+        name,
+        stateless,
+        simulated,
+        floor,
+    }
 }
 
 /// Every strand's vertices (xyz) from the renderer's strand buffers, strand after strand.
@@ -233,36 +283,46 @@ struct Row {
     wall_ms: [f64; 2],
 }
 
-/// Runs the lab: writes `dynamics.csv`, `dynamics_summary.csv` and `dynamics_sheet.png`
-/// under `opts.out`.
-pub fn run(opts: &LabOpts, scene: Option<&Path>) -> LabResult<()> {
-    let started = Instant::now();
-    let (size, strands, seconds, repeats) = if opts.quick {
-        ((160, 120), 600, 1.0, 3)
-    } else {
-        ((320, 240), 3000, 4.0, 9)
-    };
-    let frames = (seconds * FPS).round() as usize;
-    let (stateless, simulated, floor) = scenes(scene, strands)?;
-    let gpu = Gpu::headless()?;
-    println!("adapter: {}", gpu.describe());
-    crate::report::notice_gl_compile(&gpu);
+/// What one comparison measured.
+struct Outcome {
+    rows: Vec<Row>,
+    /// Each renderer's strand stage alone (ms): stateless, simulated.
+    strand_ms: [f64; 2],
+    /// The contact sheet's cells (stateless over simulated at six times).
+    cells: Vec<(String, image::RgbaImage)>,
+}
+
+/// Draws `scenario`'s renderers `frames` frames at [`FPS`] at `size`, measuring every
+/// frame, then each strand stage alone (`repeats`).
+fn measure(
+    gpu: &Gpu,
+    scenario: &Scenario,
+    size: (u32, u32),
+    frames: usize,
+    repeats: usize,
+) -> LabResult<Outcome> {
+    let Scenario {
+        name,
+        stateless,
+        simulated,
+        floor,
+    } = scenario;
     let camera = stateless.camera.clone();
-    let bg = background(&stateless);
-    let mut renderers = [&stateless, &simulated]
+    let bg = background(stateless);
+    let mut renderers = [stateless, simulated]
         .into_iter()
-        .chain(&floor)
-        .map(|scene| Renderer::new(&gpu, scene, size.0, size.1))
+        .chain(floor)
+        .map(|scene| Renderer::new(gpu, scene, size.0, size.1))
         .collect::<Result<Vec<_>, _>>()?;
     // What each variant's frames drop (a pool of the scene's method too small).
     let mut dropped = renderers
         .iter()
-        .map(|r| DroppedWork::start(r, &gpu))
+        .map(|r| DroppedWork::start(r, gpu))
         .collect::<Result<Vec<_>, _>>()?;
     let roots = renderers[0].strands().roots();
     let lengths: Vec<f64> = roots.iter().map(|r| f64::from(r.length)).collect();
     println!(
-        "{} strands x {} segments, {}x{}, {frames} frames at {FPS} fps{}",
+        "{name}: {} strands x {} segments, {}x{}, {frames} frames at {FPS} fps{}",
         roots.len(),
         renderers[0].strands().buffers().segments,
         size.0,
@@ -284,21 +344,21 @@ pub fn run(opts: &LabOpts, scene: Option<&Path>) -> LabResult<()> {
         let mut images = Vec::with_capacity(3);
         for (i, (renderer, dropped)) in renderers.iter_mut().zip(&mut dropped).enumerate() {
             let began = Instant::now();
-            renderer.render(&gpu, t, &camera)?;
-            renderer.finish(&gpu)?;
+            renderer.render(gpu, t, &camera)?;
+            renderer.finish(gpu)?;
             if let Some(ms) = wall_ms.get_mut(i) {
                 *ms = began.elapsed().as_secs_f64() * 1e3;
             }
-            dropped.after_frame(renderer, &gpu, frame as u32)?;
-            images.push(renderer.image(&gpu)?);
+            dropped.after_frame(renderer, gpu, frame as u32)?;
+            images.push(renderer.image(gpu)?);
         }
         let flip_sim = flip_scores(&images[0], &images[1], bg)?;
         let flip_floor = match images.get(2) {
             Some(other) => flip_scores(&images[0], other, bg)?,
             None => (f64::NAN, f64::NAN),
         };
-        let (a, per_strand) = read_strands(&gpu, &renderers[0])?;
-        let (b, _) = read_strands(&gpu, &renderers[1])?;
+        let (a, per_strand) = read_strands(gpu, &renderers[0])?;
+        let (b, _) = read_strands(gpu, &renderers[1])?;
         let distances: Vec<f64> = (a.chunks_exact(per_strand).zip(b.chunks_exact(per_strand)))
             .zip(&lengths)
             .map(|((a, b), &length)| {
@@ -324,21 +384,21 @@ pub fn run(opts: &LabOpts, scene: Option<&Path>) -> LabResult<()> {
             cells.push((format!("simulated t = {t:.2} s"), images[1].clone()));
         }
         bar.set_message(format!(
-            "t = {t:.2} s  FLIP {:.3} (floor {:.3}), largest turn {:.0} / {:.0} deg",
+            "{name}: t = {t:.2} s  FLIP {:.3} (floor {:.3}), largest turn {:.0} / {:.0} deg",
             row.flip_sim.1, row.flip_floor.1, row.turn[0], row.turn[1]
         ));
         rows.push(row);
         bar.inc(1);
     }
     bar.finish_and_clear();
-    let variants = [&stateless, &simulated].into_iter().chain(&floor);
-    for ((dropped, name), scene) in dropped
+    let variants = [stateless, simulated].into_iter().chain(floor);
+    for ((dropped, variant), scene) in dropped
         .iter()
         .zip(["stateless", "simulated", "other roots"])
         .zip(variants)
     {
         if let Some(line) = dropped.report(&scene.shade.transparency) {
-            eprintln!("{name}: {line}");
+            eprintln!("{name}, {variant}: {line}");
         }
     }
     // Each strand stage alone, one frame step past the last (the simulation steps 1/FPS
@@ -346,14 +406,86 @@ pub fn run(opts: &LabOpts, scene: Option<&Path>) -> LabResult<()> {
     let t_next = frames as f32 / FPS;
     let mut strand_ms = [0.0; 2];
     for (renderer, ms) in renderers.iter_mut().zip(&mut strand_ms) {
-        let stages = renderer.stage_wall_times(&gpu, t_next, &camera, repeats)?;
+        let stages = renderer.stage_wall_times(gpu, t_next, &camera, repeats)?;
         *ms = stages
             .iter()
             .find(|(stage, _)| stage == "strands")
             .map_or(f64::NAN, |(_, ms)| *ms);
     }
+    Ok(Outcome {
+        rows,
+        strand_ms,
+        cells,
+    })
+}
+
+/// The summary of one comparison: each measure over the frames after the first second
+/// (the body has moved; before it the simulation starts from rest and the two differ
+/// only by the wind's treatment), in the order of [`SUMMARY`].
+fn summarise(outcome: &Outcome) -> Vec<f64> {
+    let rows = &outcome.rows;
+    let moving: Vec<&Row> = rows.iter().filter(|r| r.t >= 1.0).collect();
+    let moving = if moving.is_empty() {
+        rows.iter().collect()
+    } else {
+        moving
+    };
+    let frame_ratio = median(moving.iter().map(|r| r.wall_ms[1]).collect())
+        / median(moving.iter().map(|r| r.wall_ms[0]).collect());
+    let strand_ms = outcome.strand_ms;
+    vec![
+        mean(moving.iter().map(|r| r.flip_sim.0)),
+        mean(moving.iter().map(|r| r.flip_sim.1)),
+        mean(moving.iter().map(|r| r.flip_floor.0)),
+        mean(moving.iter().map(|r| r.flip_floor.1)),
+        mean(moving.iter().map(|r| r.tip_mean)),
+        moving.iter().map(|r| r.tip_max).fold(0.0, f64::max),
+        mean(moving.iter().map(|r| r.turn[0])),
+        mean(moving.iter().map(|r| r.turn[1])),
+        frame_ratio,
+        strand_ms[1] / strand_ms[0],
+        strand_ms[0],
+        strand_ms[1],
+    ]
+}
+
+/// The measures of the summary, in [`summarise`]'s order.
+const SUMMARY: [&str; 12] = [
+    "mean FLIP, simulated vs stateless (image)",
+    "mean FLIP, simulated vs stateless (body and hair)",
+    "mean FLIP, other roots vs stateless (image): the floor",
+    "mean FLIP, other roots vs stateless (body and hair): the floor",
+    "tip distance, mean over strands and frames (strand lengths)",
+    "tip distance, largest (strand lengths)",
+    "largest turn between segments, stateless (degrees, mean over strands)",
+    "largest turn between segments, simulated (degrees, mean over strands)",
+    "frame wall clock, simulated over stateless (median)",
+    "strand stage alone, simulated over stateless (median)",
+    "strand stage alone, stateless (ms)",
+    "strand stage alone, simulated (ms)",
+];
+
+/// Runs the lab: writes `dynamics.csv`, `dynamics_summary.csv`, `dynamics_sheet.png`
+/// and (built-in scenes) `dynamics_sheet_fur.png` under `opts.out`.
+pub fn run(opts: &LabOpts, scene: Option<&Path>) -> LabResult<()> {
+    let started = Instant::now();
+    let (size, strands, fur_strands, seconds, repeats) = if opts.quick {
+        ((160, 120), 600, 2_000, 1.0, 3)
+    } else {
+        ((320, 240), 3000, 20_000, 4.0, 9)
+    };
+    let frames = (seconds * FPS).round() as usize;
+    let scenarios = scenarios(scene, strands, fur_strands)?;
+    let gpu = Gpu::headless()?;
+    println!("adapter: {}", gpu.describe());
+    crate::report::notice_gl_compile(&gpu);
+    let mut outcomes = Vec::new();
+    for scenario in &scenarios {
+        outcomes.push(measure(&gpu, scenario, size, frames, repeats)?);
+    }
 
     let mut table = Table::new(&[
+        "scenario",
         "t_s",
         "flip_simulated",
         "flip_simulated_subject",
@@ -366,94 +498,47 @@ pub fn run(opts: &LabOpts, scene: Option<&Path>) -> LabResult<()> {
         "frame_ms_stateless",
         "frame_ms_simulated",
     ]);
-    for r in &rows {
-        table.push(vec![
-            format!("{:.4}", r.t),
-            format!("{:.4}", r.flip_sim.0),
-            format!("{:.4}", r.flip_sim.1),
-            format!("{:.4}", r.flip_floor.0),
-            format!("{:.4}", r.flip_floor.1),
-            format!("{:.4}", r.tip_mean),
-            format!("{:.4}", r.tip_max),
-            format!("{:.2}", r.turn[0]),
-            format!("{:.2}", r.turn[1]),
-            format!("{:.2}", r.wall_ms[0]),
-            format!("{:.2}", r.wall_ms[1]),
-        ])?;
+    for (scenario, outcome) in scenarios.iter().zip(&outcomes) {
+        for r in &outcome.rows {
+            table.push(vec![
+                scenario.name.to_string(),
+                format!("{:.4}", r.t),
+                format!("{:.4}", r.flip_sim.0),
+                format!("{:.4}", r.flip_sim.1),
+                format!("{:.4}", r.flip_floor.0),
+                format!("{:.4}", r.flip_floor.1),
+                format!("{:.4}", r.tip_mean),
+                format!("{:.4}", r.tip_max),
+                format!("{:.2}", r.turn[0]),
+                format!("{:.2}", r.turn[1]),
+                format!("{:.2}", r.wall_ms[0]),
+                format!("{:.2}", r.wall_ms[1]),
+            ])?;
+        }
     }
     table.write_csv(&opts.out.join("dynamics.csv"))?;
 
-    // The summary: frames after the first second (the head has turned; before it the
-    // simulation starts from rest and the two differ only by the wind's treatment).
-    let moving: Vec<&Row> = rows.iter().filter(|r| r.t >= 1.0).collect();
-    let moving = if moving.is_empty() {
-        rows.iter().collect()
-    } else {
-        moving
-    };
-    let frame_ratio = median(moving.iter().map(|r| r.wall_ms[1]).collect())
-        / median(moving.iter().map(|r| r.wall_ms[0]).collect());
-    let summary_rows = [
-        (
-            "mean FLIP, simulated vs stateless (image)",
-            mean(moving.iter().map(|r| r.flip_sim.0)),
-        ),
-        (
-            "mean FLIP, simulated vs stateless (head and hair)",
-            mean(moving.iter().map(|r| r.flip_sim.1)),
-        ),
-        (
-            "mean FLIP, other roots vs stateless (image): the floor",
-            mean(moving.iter().map(|r| r.flip_floor.0)),
-        ),
-        (
-            "mean FLIP, other roots vs stateless (head and hair): the floor",
-            mean(moving.iter().map(|r| r.flip_floor.1)),
-        ),
-        (
-            "tip distance, mean over strands and frames (strand lengths)",
-            mean(moving.iter().map(|r| r.tip_mean)),
-        ),
-        (
-            "tip distance, largest (strand lengths)",
-            moving.iter().map(|r| r.tip_max).fold(0.0, f64::max),
-        ),
-        (
-            "largest turn between segments, stateless (degrees, mean over strands)",
-            mean(moving.iter().map(|r| r.turn[0])),
-        ),
-        (
-            "largest turn between segments, simulated (degrees, mean over strands)",
-            mean(moving.iter().map(|r| r.turn[1])),
-        ),
-        (
-            "frame wall clock, simulated over stateless (median)",
-            frame_ratio,
-        ),
-        (
-            "strand stage alone, simulated over stateless (median)",
-            strand_ms[1] / strand_ms[0],
-        ),
-        ("strand stage alone, stateless (ms)", strand_ms[0]),
-        ("strand stage alone, simulated (ms)", strand_ms[1]),
-    ];
-    let mut summary = Table::new(&["measure", "value"]);
-    for (name, value) in summary_rows {
-        summary.push(vec![name.into(), format!("{value:.4}")])?;
+    let mut header = vec!["measure"];
+    header.extend(scenarios.iter().map(|s| s.name));
+    let mut summary = Table::new(&header);
+    let values: Vec<Vec<f64>> = outcomes.iter().map(summarise).collect();
+    for (m, name) in SUMMARY.iter().enumerate() {
+        let mut row = vec![name.to_string()];
+        row.extend(values.iter().map(|v| format!("{:.4}", v[m])));
+        summary.push(row)?;
     }
     summary.write_csv(&opts.out.join("dynamics_summary.csv"))?;
-    pelage::save_png(
-        &contact_sheet(&cells, 2)?,
-        &opts.out.join("dynamics_sheet.png"),
-    )?;
-    println!(
-        "frames from t = {:.1} s on ({} of {frames}):",
-        moving.first().map_or(0.0, |r| r.t),
-        moving.len()
-    );
+    for (scenario, outcome) in scenarios.iter().zip(&outcomes) {
+        let file = match scenario.name {
+            "fur" => "dynamics_sheet_fur.png",
+            _ => "dynamics_sheet.png",
+        };
+        pelage::save_png(&contact_sheet(&outcome.cells, 2)?, &opts.out.join(file))?;
+    }
+    println!("frames from t = 1.0 s on (all frames if the run is shorter), {frames} frames:");
     println!("{}", summary.to_text());
     println!(
-        "wrote {}/dynamics.csv, dynamics_summary.csv and dynamics_sheet.png in {:.0} s",
+        "wrote {}/dynamics.csv, dynamics_summary.csv and the sheets in {:.0} s",
         opts.out.display(),
         started.elapsed().as_secs_f64()
     );
@@ -463,6 +548,17 @@ pub fn run(opts: &LabOpts, scene: Option<&Path>) -> LabResult<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// [`FUR_SCENE`] is `scenes/creature_skinned.toml` with a `[dynamics]` table.
+    #[test]
+    fn the_built_in_fur_is_the_skinned_creature_simulated() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/creature_skinned.toml");
+        let mut creature = SceneFile::load(&path).unwrap();
+        let lab = SceneFile::parse(FUR_SCENE).unwrap();
+        assert!(lab.dynamics.is_some());
+        creature.dynamics = lab.dynamics.clone();
+        assert_eq!(lab, creature);
+    }
 
     /// [`SCENE`] is `scenes/head_turn.toml` but for the hair grown instead of the groom.
     #[test]

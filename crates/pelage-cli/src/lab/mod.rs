@@ -105,7 +105,8 @@ pub enum Lab {
                       blond, 16 spp (under 2 minutes)."
     )]
     Scattering(ScatteringOpts),
-    /// Simulated hair against the stateless wind while the head turns and nods.
+    /// Simulated hair against the stateless wind while the head turns and nods, and
+    /// simulated fur on a running, skinned creature.
     #[command(
         long_about = "Long hair grown on a head that turns and nods (scenes/head_turn.toml's \
                       motion, wind and dynamics), rendered twice from the same roots: stateless \
@@ -118,10 +119,15 @@ pub enum Lab {
                       tips as a fraction of its length) and how kinked each is (its largest turn \
                       between segments); each variant's frame wall clock and, at the end, its \
                       strand stage alone. --scene FILE compares a scene file's [dynamics] with \
-                      its stateless wind instead (a groom has no floor of other roots).\n\n\
-                      Writes DIR/dynamics.csv (a row per frame), DIR/dynamics_summary.csv and \
-                      DIR/dynamics_sheet.png (stateless over simulated at six times). About 1.5 \
-                      minutes in a release build on 2 CPU cores; --quick: 1 s of frames, smaller."
+                      its stateless wind instead (a groom has no floor of other roots). Without \
+                      --scene a second row does the same for fur: scenes/creature_skinned.toml's \
+                      creature (20 000 strands; its body bent and twisted by a two-joint rig, \
+                      skinned on the GPU) with a [dynamics] table at its defaults.\n\n\
+                      Writes DIR/dynamics.csv (a row per frame and scenario), \
+                      DIR/dynamics_summary.csv (a column per scenario), DIR/dynamics_sheet.png \
+                      and DIR/dynamics_sheet_fur.png (stateless over simulated at six times). \
+                      A few minutes in a release build on 2 CPU cores; --quick: 1 s of frames, \
+                      smaller."
     )]
     Dynamics(DynamicsOpts),
 }
