@@ -346,7 +346,7 @@ impl SimulateStrands {
                 Input::ReadWrite(&state),
                 Input::ReadWrite(&held),
             ],
-            None,
+            &[],
         )?;
         pass.inputs = &[MESH];
         Ok(Self {
