@@ -1,6 +1,9 @@
-//! Mirror of `wgsl/strands/guides.wgsl`, loop for loop: render strands interpolated from
-//! bent guides (the guides themselves are bent by
-//! [`deform_groom`](crate::strands::deform_groom), the mirror of the first pass).
+//! Mirror of `wgsl/strands/guides.wgsl`: render strands interpolated from bent guides (the
+//! guides themselves are bent by [`deform_groom`](crate::strands::deform_groom), the
+//! mirror of the first pass). It evaluates the whole formula at every vertex, all four
+//! guides, the noise and the clumping, where the shader leaves out the terms that add
+//! exactly 0 (the root vertex's offsets, guides past `k`, no noise, no clumping): the two
+//! agreeing checks that those terms are 0.
 
 use glam::{Vec3, Vec4};
 use pelage_scene::Mesh;
@@ -66,7 +69,7 @@ pub fn interpolate_strand(
         .map(|v| {
             let i = v * step;
             let s = i as f32 / u.segments as f32;
-            // All four guides, as the shader: a guide past k has weight 0 and adds 0.
+            // All four guides: a guide past k has weight 0 and adds 0 (the shader skips it).
             let nearest = point(first[0] + i);
             let mut blend = r;
             for (&start, &w) in first.iter().zip(&weight) {

@@ -5,7 +5,7 @@ use encase::ShaderType;
 use glam::Vec3;
 use pelage_gpu::{
     BindLayout, Gpu, GpuTimer, PassInfo, UniformBuffer, bind_buffers,
-    compute_pipeline_with_layouts, dispatch_size, storage_buffer, wgpu, zeroed_storage,
+    compute_pipeline_with_constants, dispatch_size, storage_buffer, wgpu, zeroed_storage,
 };
 use pelage_scene::{
     Camera, GrowthParams, HairParams, HairType, Mesh, ParamError, SurfaceInterpolation, WindParams,
@@ -509,11 +509,11 @@ impl StrandPass {
         inputs: &[&wgpu::Buffer],
     ) -> crate::Result<Self> {
         let inputs: Vec<Input> = inputs.iter().copied().map(Input::Read).collect();
-        Self::with_inputs(gpu, label, shader, params, reach, roots, &inputs, None)
+        Self::with_inputs(gpu, label, shader, params, reach, roots, &inputs, &[])
     }
 
-    /// [`StrandPass::new`] with inputs of any [`Input`] kind, and optionally a uniform
-    /// buffer of the method's own constants bound after the drawn roots.
+    /// [`StrandPass::new`] with inputs of any [`Input`] kind, and values for the shader's
+    /// pipeline-overridable constants, by name (the method's own constants).
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn with_inputs(
         gpu: &Gpu,
@@ -523,7 +523,7 @@ impl StrandPass {
         reach: (Vec3, Vec3),
         roots: &[StrandRoot],
         inputs: &[Input<'_>],
-        constants: Option<&wgpu::Buffer>,
+        overrides: &[(&str, f64)],
     ) -> crate::Result<Self> {
         let vertex_bytes = Self::vertex_bytes(gpu, params)?;
         let uniforms = UniformBuffer::new(
@@ -542,7 +542,7 @@ impl StrandPass {
             // grow.wgsl / groom.wgsl: the uniforms (force.wgsl), the read-only inputs,
             // then the vertices and drawn roots written.
             let inputs_end = inputs.len() as u32 + 1;
-            let mut layout = (1..inputs_end)
+            let layout = (1..inputs_end)
                 .zip(inputs)
                 .fold(
                     BindLayout::new(label, wgpu::ShaderStages::COMPUTE).uniform(0),
@@ -553,20 +553,22 @@ impl StrandPass {
                     },
                 )
                 .storage_rw(inputs_end)
-                .storage_rw(inputs_end + 1);
-            if constants.is_some() {
-                layout = layout.uniform(inputs_end + 2);
-            }
-            let layout = layout.build(device);
-            let pipeline =
-                compute_pipeline_with_layouts(device, label, &module, "main", &[Some(&layout)]);
+                .storage_rw(inputs_end + 1)
+                .build(device);
+            let pipeline = compute_pipeline_with_constants(
+                device,
+                label,
+                &module,
+                "main",
+                &[Some(&layout)],
+                overrides,
+            );
             let mut entries = vec![&uniforms.buffer];
             entries.extend(inputs.iter().map(|input| match input {
                 Input::Read(b) | Input::ReadWrite(b) | Input::Uniform(b) => *b,
             }));
             entries.push(&vertices);
             entries.push(&roots_buffer);
-            entries.extend(constants);
             let bind_group = bind_buffers(device, label, &layout, &entries);
             (pipeline, bind_group)
         })?;

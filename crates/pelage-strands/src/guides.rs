@@ -2,9 +2,8 @@
 //! (`wgsl/strands/groom.wgsl`), then render strands rooted on the mesh interpolated from
 //! them (`wgsl/strands/guides.wgsl`), two compute passes every frame.
 
-use encase::ShaderType;
 use glam::Vec3;
-use pelage_gpu::{Gpu, GpuTimer, PassInfo, UniformBuffer, storage_buffer, wgpu};
+use pelage_gpu::{Gpu, GpuTimer, PassInfo, storage_buffer, wgpu};
 use pelage_scene::{
     Camera, DynamicsParams, GuideParams, HairParams, MAX_GUIDES, Mesh, ParamError, Resampled,
     SurfaceInterpolation, WindParams,
@@ -24,8 +23,11 @@ use crate::{
 /// [`GuideStrands`] writes and the second reads.
 pub const GUIDE_VERTICES: &str = "strands.guides";
 
-/// The constants of `guides.wgsl` (`GuideUniforms` there), written once.
-#[derive(Clone, Copy, Debug, PartialEq, ShaderType)]
+/// The constants of `guides.wgsl`: its pipeline-overridable constants `K`, `CLUMP` and
+/// `NOISE` ([`GuideUniforms::overrides`]), fixed when the pipeline is built, so that the
+/// compiler leaves out the terms that add exactly 0 (guides past `k`, no noise, no
+/// clumping).
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct GuideUniforms {
     /// Guides blended per strand (1 to 4; fewer when the groom has fewer guides).
     pub k: u32,
@@ -33,6 +35,17 @@ pub struct GuideUniforms {
     pub clump: f32,
     /// Per-strand noise, a fraction of the strand's length.
     pub noise: f32,
+}
+
+impl GuideUniforms {
+    /// The values of `guides.wgsl`'s overridable constants, by name.
+    pub fn overrides(&self) -> [(&'static str, f64); 3] {
+        [
+            ("K", f64::from(self.k)),
+            ("CLUMP", f64::from(self.clump)),
+            ("NOISE", f64::from(self.noise)),
+        ]
+    }
 }
 
 /// What one render strand keeps to be interpolated: four 16-bit guide indices (nearest
@@ -311,7 +324,6 @@ impl GuideStrands {
         let rest_roots = storage_buffer(gpu, "pelage guided rest roots", &roots, storage)?;
         let flat: Vec<u32> = records.iter().flatten().copied().collect();
         let records_buffer = storage_buffer(gpu, "pelage guide records", &flat, storage)?;
-        let constants_buffer = UniformBuffer::new(gpu, "pelage guide uniforms", &constants)?;
         pelage_gpu::audit::constant(&[&rest_roots, &records_buffer]);
         // The guides' own strands are the guide buffer, not the frame's strands.
         pelage_gpu::audit::name_buffer(&guide_stage.buffers().vertices, GUIDE_VERTICES);
@@ -337,7 +349,7 @@ impl GuideStrands {
                 Input::Read(&records_buffer),
                 Input::Read(&guide_stage.buffers().vertices),
             ],
-            Some(&constants_buffer.buffer),
+            &constants.overrides(),
         )?;
         Ok(Self {
             first,

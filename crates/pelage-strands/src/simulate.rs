@@ -353,7 +353,7 @@ impl SimulateStrands {
                 Input::ReadWrite(&state),
                 Input::ReadWrite(&held),
             ],
-            None,
+            &[],
         )?;
         pass.inputs = &[MESH];
         pass.state = &[SIMULATION_STATE];

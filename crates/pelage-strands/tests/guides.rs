@@ -1,5 +1,6 @@
 //! Guide strands on a real adapter: the interpolated strands equal the CPU mirror
-//! (`pelage_reference::guides`), one guide gives copies of itself, full clumping brings
+//! (`pelage_reference::guides`) for every k with and without noise and clumping, one
+//! guide gives copies of itself, full clumping brings
 //! the tips onto the nearest guide, a build is deterministic, bad input is a typed error,
 //! a device with WebGPU's default limits runs it, the memory against storing every
 //! strand, and simulated guides drive the render strands (`pelage_reference::simulate`
@@ -202,6 +203,44 @@ fn interpolated_strands_equal_the_cpu_mirror_in_wind_and_at_a_lower_level_of_det
         }
         let want = drawn_width(root, i as u32, &u);
         assert!((gpu_root.width - want).abs() <= 1e-6 * want.max(1.0));
+    }
+}
+
+/// `guides.wgsl` is built per `k`, noise and clumping, with the terms that add exactly 0
+/// left out: every combination equals the mirror, which evaluates the whole formula.
+#[test]
+fn every_k_with_and_without_noise_and_clumping_equals_the_cpu_mirror() {
+    let gpu = gpu();
+    let built = build(&gpu, 40, 8);
+    let tolerance = 1e-5 * size(&built.guides);
+    let mut hair = windy();
+    hair.roots.seed = 11;
+    for k in 1..=4 {
+        let mut outputs = Vec::new();
+        for (clump, noise) in [(0.0, 0.0), (0.4, 0.0), (0.0, 0.2), (0.4, 0.2)] {
+            let params = GuideParams {
+                strands: 300,
+                k,
+                clump,
+                noise,
+                ..GuideParams::default()
+            };
+            let mut strands = built.strands(&gpu, &hair, &params);
+            assert_eq!(strands.constants().k, k);
+            let out = grow_on_gpu(&gpu, &mut strands, 0.7);
+            let cpu = mirror(&strands, &built.mesh, 0.7);
+            let err = worst(&out, &cpu);
+            println!("k={k} clump={clump} noise={noise}: max |GPU - CPU| = {err:.2e}");
+            assert!(
+                err <= tolerance,
+                "k={k} clump={clump} noise={noise}: {err} > {tolerance}"
+            );
+            outputs.push(out);
+        }
+        // Each of clumping and noise changes the strands (the shader does not leave it out).
+        for other in &outputs[1..] {
+            assert!(worst(&outputs[0], other) > 1e-3, "k={k}");
+        }
     }
 }
 

@@ -6,8 +6,10 @@
 //         one GuideRecord per render strand (3 u32: four 16-bit guide indices, nearest
 //         first, and three 10-bit weights; the last used weight is 1 minus the others),
 //         the bent guides (`guides`: segments + 1 vec4 per guide, written by the first
-//         pass this frame), the frame's GrowUniforms (strand count, step, level of
-//         detail; nothing of the wind) and the GuideUniforms (k, clump, noise).
+//         pass this frame) and the frame's GrowUniforms (strand count, step, level of
+//         detail; nothing of the wind). The interpolation's constants (K, CLUMP, NOISE:
+//         GuideUniforms in guides.rs) are pipeline-overridable constants, fixed when the
+//         pipeline is built.
 // Writes: `vertices`, (segments / step + 1) vec4 per strand, one strand after the other:
 //         xyz = position, w = strand parameter in [0, 1] (0 at the root, 1 at the tip);
 //         and `drawn[strand].width`, the rest width times the level of detail's width
@@ -22,6 +24,14 @@
 //   p(s)     = blend(s) + clump * s * (G_0(s) - blend(s))
 // where j is a vector in [-1, 1]^3 drawn from the strand's seed. Offsets are blended in
 // world space, so one guide gives copies of itself translated to the roots.
+//
+// What it costs on lavapipe (Mesa 22.3's llvmpipe): a storage load or store at a
+// per-lane address is a loop over the 8 lanes of a SIMD row with a bounds test per
+// component, and a branch on a uniform runs both sides under a mask. So the terms that
+// add exactly 0 are not computed: p(0) is r, without reading the guides; guides past K,
+// the noise when NOISE is 0 and the clumping when CLUMP is 0 are left out by `if`s on
+// the constants, which the compiler removes with their loads and arithmetic. Each term
+// that remains is computed as the formula above writes it: the same values.
 // The CPU mirror of this file is `interpolate` in pelage-reference/src/guides.rs:
 // change both together.
 
@@ -29,26 +39,22 @@
 #import strands/force.wgsl
 #import strands/lod.wgsl
 
-struct GuideUniforms {
-    // Guides blended per strand (1 to 4).
-    k: u32,
-    // Clumping toward the nearest guide, in [0, 1].
-    clump: f32,
-    // Per-strand noise, a fraction of the strand's length.
-    noise: f32,
-}
+// The interpolation's constants (GuideUniforms in guides.rs): guides blended per
+// strand (1 to 4), clumping toward the nearest guide in [0, 1], and per-strand noise, a
+// fraction of the strand's length.
+override K: u32;
+override CLUMP: f32;
+override NOISE: f32;
 
 @group(0) @binding(1) var<storage, read> positions: array<f32>;
 @group(0) @binding(2) var<storage, read> indices: array<u32>;
 @group(0) @binding(3) var<storage, read> roots: array<StrandRoot>;
 @group(0) @binding(4) var<storage, read> records: array<u32>;
 // Declared vec3 (stride 16, the buffer's vec4 layout): a load reads the three used
-// components, not four. On lavapipe every component of a load at a per-lane address
-// is a gathered load of its own, and the guides' points are most of this pass's loads.
+// components, not four.
 @group(0) @binding(5) var<storage, read> guides: array<vec3<f32>>;
 @group(0) @binding(6) var<storage, read_write> vertices: array<vec4<f32>>;
 @group(0) @binding(7) var<storage, read_write> drawn: array<StrandRoot>;
-@group(0) @binding(8) var<uniform> g: GuideUniforms;
 
 // Salt of the hash the noise direction is drawn from.
 const NOISE_SALT: u32 = 0x6a09e667u;
@@ -59,13 +65,15 @@ fn load_position(i: u32) -> vec3<f32> {
 
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let strand = gid.y * groups.x * 64u + gid.x;
-    if strand >= u.strand_count {
-        return;
-    }
+    // An invocation past the drawn strands computes the last one and writes nothing:
+    // loads and arithmetic under no mask, only the stores behind `drawn_strand` (on
+    // lavapipe an early return costs more, every later load running under its mask).
+    let id = gid.y * groups.x * 64u + gid.x;
+    let drawn_strand = id < u.strand_count;
+    let strand = min(id, max(u.strand_count, 1u) - 1u);
     let root = roots[strand];
     let x = (f32(strand) + 0.5) / f32(u.strand_total);
-    drawn[strand].width = root.width * lod_scale(x, u.lod_lambda, u.lod_t_e, u.lod_s_max, u.lod_s_min);
+    let width = root.width * lod_scale(x, u.lod_lambda, u.lod_t_e, u.lod_s_max, u.lod_s_min);
 
     // The root on the triangle as the mesh is drawn (flat).
     let tri = root.triangle;
@@ -76,8 +84,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
 
     // The record: guide indices (nearest first) and weights summing to 1. Four guides
     // in named variables, never a private array indexed by a variable (which the
-    // compiler keeps in memory: on lavapipe that cost as much as growing the strand);
-    // a guide past k has weight 0 and adds exactly 0.
+    // compiler keeps in memory: on lavapipe that cost as much as growing the strand).
     let r0 = records[3u * strand];
     let r1 = records[3u * strand + 1u];
     let r2 = records[3u * strand + 2u];
@@ -86,7 +93,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     let a1 = (r0 >> 16u) * per_guide;
     let a2 = (r1 & 0xffffu) * per_guide;
     let a3 = (r1 >> 16u) * per_guide;
-    let k = clamp(g.k, 1u, 4u);
+    let k = clamp(K, 1u, 4u);
     let q0 = select(0.0, f32(r2 & 1023u) / 1023.0, k > 1u);
     let q1 = select(0.0, f32((r2 >> 10u) & 1023u) / 1023.0, k > 2u);
     let q2 = select(0.0, f32((r2 >> 20u) & 1023u) / 1023.0, k > 3u);
@@ -95,34 +102,63 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     let w1 = select(q1, rest, k == 2u);
     let w2 = select(q2, rest, k == 3u);
     let w3 = select(0.0, rest, k == 4u);
-    // The guides' roots, read once.
+    // The guides' roots, read once (a guide past k is never read).
     let o0 = guides[a0];
-    let o1 = guides[a1];
-    let o2 = guides[a2];
-    let o3 = guides[a3];
+    var o1 = vec3<f32>(0.0);
+    var o2 = vec3<f32>(0.0);
+    var o3 = vec3<f32>(0.0);
+    if k > 1u {
+        o1 = guides[a1];
+    }
+    if k > 2u {
+        o2 = guides[a2];
+    }
+    if k > 3u {
+        o3 = guides[a3];
+    }
 
     // The noise direction, from the strand's seed.
-    var h = pcg_hash(root.seed ^ NOISE_SALT);
-    let jx = 2.0 * hash_to_unit(h) - 1.0;
-    h = pcg_hash(h);
-    let jy = 2.0 * hash_to_unit(h) - 1.0;
-    h = pcg_hash(h);
-    let jz = 2.0 * hash_to_unit(h) - 1.0;
-    let drift = vec3<f32>(jx, jy, jz) * (g.noise * root.length);
+    var drift = vec3<f32>(0.0);
+    if NOISE != 0.0 {
+        var h = pcg_hash(root.seed ^ NOISE_SALT);
+        let jx = 2.0 * hash_to_unit(h) - 1.0;
+        h = pcg_hash(h);
+        let jy = 2.0 * hash_to_unit(h) - 1.0;
+        h = pcg_hash(h);
+        let jz = 2.0 * hash_to_unit(h) - 1.0;
+        drift = vec3<f32>(jx, jy, jz) * (NOISE * root.length);
+    }
 
     let segments = u.segments;
     let step = max(u.step, 1u);
     let base = strand * (segments / step + 1u);
-    for (var v = 0u; v <= segments / step; v++) {
+    if drawn_strand {
+        drawn[strand].width = width;
+        // s = 0: every offset, the drift and the clumping are 0.
+        vertices[base] = vec4<f32>(r, 0.0);
+    }
+    for (var v = 1u; v <= segments / step; v++) {
         let i = v * step;
         let s = f32(i) / f32(segments);
         let nearest = guides[a0 + i];
         var blend = r + (nearest - o0) * w0;
-        blend = blend + (guides[a1 + i] - o1) * w1;
-        blend = blend + (guides[a2 + i] - o2) * w2;
-        blend = blend + (guides[a3 + i] - o3) * w3;
-        blend = blend + drift * (s * s);
-        let p = blend + (nearest - blend) * (g.clump * s);
-        vertices[base + v] = vec4<f32>(p, s);
+        if k > 1u {
+            blend = blend + (guides[a1 + i] - o1) * w1;
+        }
+        if k > 2u {
+            blend = blend + (guides[a2 + i] - o2) * w2;
+        }
+        if k > 3u {
+            blend = blend + (guides[a3 + i] - o3) * w3;
+        }
+        if NOISE != 0.0 {
+            blend = blend + drift * (s * s);
+        }
+        if CLUMP != 0.0 {
+            blend = blend + (nearest - blend) * (CLUMP * s);
+        }
+        if drawn_strand {
+            vertices[base + v] = vec4<f32>(blend, s);
+        }
     }
 }
