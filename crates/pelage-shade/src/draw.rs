@@ -278,9 +278,15 @@ impl Common {
         };
         let model = HairModel::new(gpu, &params.model)?;
         let volume = match (model.volume(), model.chiang()) {
-            (Some(field), Some(tables)) => {
-                Some(VolumeGrid::new(gpu, field, tables, &frame.buffer, strands)?)
-            }
+            (Some(field), Some(tables)) => Some(VolumeGrid::new(
+                gpu,
+                field,
+                tables,
+                &frame.buffer,
+                strands,
+                Some(mesh),
+                params.mesh_color,
+            )?),
             _ => None,
         };
         let redirects: Vec<Redirect> = shadow
