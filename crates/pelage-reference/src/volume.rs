@@ -47,7 +47,7 @@ pub struct VolumeInput<'a> {
 }
 
 /// The body under the hair: it shadows the light and reflects it as a Lambertian of
-/// albedo `π · color` (the path tracer's mesh).
+/// albedo `π · color` (the path tracer's mesh), at most 1 per channel.
 #[derive(Clone, Copy, Debug)]
 pub struct VolumeMesh<'a> {
     /// Vertex positions.
@@ -268,7 +268,8 @@ pub fn volume_grid(input: &VolumeInput<'_>) -> VolumeGridCpu {
     let mut surface = vec![DVec3::ZERO; cells];
     let mut mesh_albedo = DVec3::ZERO;
     if let Some(mesh) = input.mesh {
-        mesh_albedo = mesh.color.as_dvec3() * PI;
+        // At most 1 (`VolumeGrid::new`): a brighter body would make light every step.
+        mesh_albedo = (mesh.color.as_dvec3() * PI).min(DVec3::ONE);
         splat_mesh(&mesh, origin, cell, n, &mut surface);
     }
     let solid = occupancy(&surface, n);

@@ -49,7 +49,7 @@ pub struct VolumeUniforms {
     pub triangle_count: u32,
     /// Padding.
     pub _pad1: u32,
-    /// The mesh's Lambertian albedo per channel (π times `shade.mesh_color`).
+    /// The mesh's Lambertian albedo per channel (π times `shade.mesh_color`, at most 1).
     pub mesh_albedo: glam::Vec3,
     /// Padding.
     pub _pad2: f32,
@@ -191,7 +191,8 @@ impl VolumeGrid {
     /// The passes filling `field` from `strands`, lit by the lights of the `frame`
     /// uniform (`FrameUniforms`), scattering with `tables` (Chiang's, of the same
     /// parameters), over `mesh` (the body under the hair: it shadows the light and
-    /// reflects it as a Lambertian of albedo `π · mesh_color`; `None`: no body).
+    /// reflects it as a Lambertian of albedo `π · mesh_color`, at most 1 per channel;
+    /// `None`: no body).
     pub fn new(
         gpu: &Gpu,
         field: &VolumeField,
@@ -210,7 +211,9 @@ impl VolumeGrid {
         };
         let mut value = *field.uniforms();
         value.triangle_count = triangle_count;
-        value.mesh_albedo = mesh_color * std::f32::consts::PI;
+        // At most 1: a brighter Lambertian makes light, and light that reaches the
+        // body's inside bounces there from cell to cell, so it would grow every step.
+        value.mesh_albedo = (mesh_color * std::f32::consts::PI).min(glam::Vec3::ONE);
         let bounds = zeroed_storage(gpu, "pelage volume bounds", 24, usage)?;
         let accum = zeroed_storage(gpu, "pelage volume accum", n * ACCUM_U32 * 4, usage)?;
         let medium = zeroed_storage(gpu, "pelage volume medium", n * CELL_BYTES, usage)?;

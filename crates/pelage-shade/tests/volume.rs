@@ -467,3 +467,22 @@ fn volume_white_body_keeps_energy_black_body_absorbs() {
     println!("total fluence: no body {none:.1}, black body {dark:.1}, white body {lit:.1}");
     assert!(dark < none && lit > dark, "{none} {dark} {lit}");
 }
+
+/// A body brighter than a Lambertian can be (`mesh_color` above 1/π, as
+/// `scenes/long_hair.toml`'s skin: albedo 1.73, 1.26, 1.04) under white fibres: no step
+/// gains energy (light that reaches the body's inside bounces there from cell to cell,
+/// and an albedo above 1 made it grow without bound: long hair 2.6x the path tracer's).
+#[test]
+fn volume_bright_body_gains_no_energy() {
+    let hair = wavy(800, 16, 1.0, 0.01);
+    let params = volume_params(12, 24, Vec3::ZERO);
+    let body = Body {
+        mesh: Mesh::icosphere(0.3, 2).unwrap(),
+        color: Vec3::new(0.55, 0.4, 0.33),
+    };
+    let cpu = mirror(&hair, &params, &lights(), 0.5, Some(&body));
+    let e = &cpu.step_energy;
+    let worst = e.windows(2).map(|w| w[1] / w[0]).fold(0.0f64, f64::max);
+    println!("bright body: largest step energy over the step before {worst:.4}");
+    assert!(worst <= 1.0 + 1e-9, "a step gained energy: x{worst}");
+}

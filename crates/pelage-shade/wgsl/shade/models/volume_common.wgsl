@@ -47,7 +47,7 @@ struct VolumeUniforms {
     triangle_count: u32,
     _pad1: u32,
     // The mesh's Lambertian albedo per channel (pi times shade.mesh_color, as the path
-    // tracer's).
+    // tracer's, at most 1: a brighter body would make light every propagation step).
     mesh_albedo: vec3<f32>,
     _pad2: f32,
 }
