@@ -549,6 +549,9 @@ impl Common {
                 _pad: 0.0,
             },
         )?;
+        if let Some(volume) = &self.volume {
+            volume.set_mesh_color(params.mesh_color);
+        }
         self.style_value.root_occlusion = params.root_occlusion;
         self.params = params.clone();
         Ok(())

@@ -159,6 +159,13 @@ impl VolumeField {
     }
 }
 
+/// The body's albedo in the grid: `π · mesh_color`, at most 1 per channel (a brighter
+/// Lambertian makes light, and light that reaches the body's inside bounces there from
+/// cell to cell, so it would grow every step).
+fn mesh_albedo(mesh_color: glam::Vec3) -> glam::Vec3 {
+    (mesh_color * std::f32::consts::PI).min(glam::Vec3::ONE)
+}
+
 fn cells(n: u32) -> u64 {
     u64::from(n).pow(3)
 }
@@ -211,9 +218,7 @@ impl VolumeGrid {
         };
         let mut value = *field.uniforms();
         value.triangle_count = triangle_count;
-        // At most 1: a brighter Lambertian makes light, and light that reaches the
-        // body's inside bounces there from cell to cell, so it would grow every step.
-        value.mesh_albedo = (mesh_color * std::f32::consts::PI).min(glam::Vec3::ONE);
+        value.mesh_albedo = mesh_albedo(mesh_color);
         let bounds = zeroed_storage(gpu, "pelage volume bounds", 24, usage)?;
         let accum = zeroed_storage(gpu, "pelage volume accum", n * ACCUM_U32 * 4, usage)?;
         let medium = zeroed_storage(gpu, "pelage volume medium", n * CELL_BYTES, usage)?;
@@ -417,6 +422,16 @@ impl VolumeGrid {
             max_segments: u64::from(strands.strand_count) * u64::from(strands.segments),
             bytes,
         })
+    }
+
+    /// Sets the body's colour (`shade.mesh_color`) for the frames that follow (the next
+    /// [`VolumeGrid::prepare`] writes it).
+    pub fn set_mesh_color(&self, mesh_color: glam::Vec3) {
+        let albedo = mesh_albedo(mesh_color);
+        match self.value.lock() {
+            Ok(mut v) => v.mesh_albedo = albedo,
+            Err(poisoned) => poisoned.into_inner().mesh_albedo = albedo,
+        }
     }
 
     /// Writes the uniform for this frame's strands (`layout`, of strands whose tips are
