@@ -27,11 +27,13 @@ const GOLDEN: &str = "tests/golden/default_scene.png";
 const W: u32 = 240;
 const H: u32 = 180;
 
-/// Mean FLIP above which the render differs from the golden image: a third of the
-/// smallest deliberate change measured (0.015), leaving room for another driver's
-/// rounding (for scale: a largest difference of 5e-4 in linear light, f16 rounding, is a
-/// mean FLIP of about 0.002 in `crates/pelage-shade/tests/oit_raster.rs`).
-const MEAN_FLIP_LIMIT: f64 = 0.005;
+/// Mean FLIP above which the render differs from the golden image: under the smallest
+/// deliberate change measured (the hair colour 5% darker: 0.0046 since the volume grid
+/// takes the skin's bounce, which the hair's colour does not change; 0.0068 before, and
+/// the limit was 0.005), leaving room for another driver's rounding (for scale: a
+/// largest difference of 5e-4 in linear light, f16 rounding, is a mean FLIP of about
+/// 0.002 in `crates/pelage-shade/tests/oit_raster.rs`).
+const MEAN_FLIP_LIMIT: f64 = 0.003;
 /// A pixel with a FLIP error above this is a visible difference.
 const LARGE_FLIP: f32 = 0.2;
 /// The share of pixels above [`LARGE_FLIP`] allowed: 0.1% (43 pixels).

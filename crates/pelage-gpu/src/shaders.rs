@@ -33,6 +33,7 @@ use crate::error::Result;
 /// implements it, and neither depends on the other).
 pub static SHADERS: ShaderSources = crate::wgsl_sources!(
     "shadow/none.wgsl",
+    "shared/bounds.wgsl",
     "shared/math.wgsl",
     "shared/noise.wgsl",
     "shared/ribbon.wgsl",

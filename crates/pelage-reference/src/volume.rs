@@ -42,6 +42,22 @@ pub struct VolumeInput<'a> {
     pub lights: &'a [Light],
     /// The fibre, the grid's size and its steps.
     pub params: &'a ChiangParams,
+    /// The body under the hair, if any.
+    pub mesh: Option<VolumeMesh<'a>>,
+}
+
+/// The body under the hair: it shadows the light and reflects it as a Lambertian of
+/// albedo `π · color` (the path tracer's mesh), at most 1 per channel.
+#[derive(Clone, Copy, Debug)]
+pub struct VolumeMesh<'a> {
+    /// Vertex positions.
+    pub positions: &'a [Vec3],
+    /// Vertex normals (they orient the triangles outward).
+    pub normals: &'a [Vec3],
+    /// Triangle list, three indices per triangle.
+    pub indices: &'a [u32],
+    /// `shade.mesh_color`.
+    pub color: Vec3,
 }
 
 /// The grid the passes leave: what the shading reads, and the per-cell medium.
@@ -55,6 +71,8 @@ pub struct VolumeGridCpu {
     pub cell: f64,
     /// Optical depth of each cell (over a cell edge, isotropic mean).
     pub depth: Vec<f64>,
+    /// The share of each cell inside the mesh.
+    pub solid: Vec<f64>,
     /// Per cell and channel: fluence and flux vector `(φ, Φ)`.
     pub fluence: Vec<[DVec4; 3]>,
     /// Total energy leaving the cells at each step (index 0: the injection), channels
@@ -245,6 +263,16 @@ pub fn volume_grid(input: &VolumeInput<'_>) -> VolumeGridCpu {
             }
         }
     }
+    // The mesh: the area-weighted outward normal per cell over the cell's face area
+    // (`splat_mesh`), and the share of each cell inside it (`occupy`).
+    let mut surface = vec![DVec3::ZERO; cells];
+    let mut mesh_albedo = DVec3::ZERO;
+    if let Some(mesh) = input.mesh {
+        // At most 1 (`VolumeGrid::new`): a brighter body would make light every step.
+        mesh_albedo = (mesh.color.as_dvec3() * PI).min(DVec3::ONE);
+        splat_mesh(&mesh, origin, cell, n, &mut surface);
+    }
+    let solid = occupancy(&surface, n);
     // The fibre's energies, one table per absorption met.
     let fibre_of = |sigma_a: DVec3| ChiangFibre {
         sigma_a,
@@ -293,7 +321,8 @@ pub fn volume_grid(input: &VolumeInput<'_>) -> VolumeGridCpu {
     for c in 0..cells {
         let kappa = depth[c];
         let meet = 1.0 - (-kappa).exp();
-        if meet <= 0.0 {
+        let lit_mesh = surface[c].length();
+        if meet <= 0.0 && lit_mesh <= 0.0 {
             continue;
         }
         let xyz = IVec3::new((c % n) as i32, ((c / n) % n) as i32, (c / (n * n)) as i32);
@@ -320,6 +349,7 @@ pub fn volume_grid(input: &VolumeInput<'_>) -> VolumeGridCpu {
             };
             let reach = reach.min(4.0 * n as f64 * cell);
             let mut tau = 0.0;
+            let mut clear = 1.0;
             for k in 1..4 * n {
                 if k as f64 * cell > reach {
                     break;
@@ -328,16 +358,28 @@ pub fn volume_grid(input: &VolumeInput<'_>) -> VolumeGridCpu {
                 if q.min_element() < 0.0 || q.max_element() >= n as f64 {
                     break;
                 }
-                tau += depth[index(q.floor().as_ivec3())];
+                let j = index(q.floor().as_ivec3());
+                tau += depth[j];
+                clear *= 1.0 - solid[j];
             }
             let theta = t.dot(l).abs().min(1.0).asin();
             let aligned = table.at(theta);
             let albedo = s * aligned.albedo + (1.0 - s) * iso[c].albedo;
-            let scattered = irradiance * ((-tau).exp() * meet) * albedo;
+            let scattered = irradiance * ((-tau).exp() * clear * meet) * albedo;
             for ch in 0..3 {
                 let dir = scatter_direction(-l, t, s, aligned.g[ch], iso[c].g[ch]);
                 let f = scattered[ch] * dir;
                 state[c][ch] += DVec4::new(scattered[ch], f.x, f.y, f.z);
+            }
+            if lit_mesh > 0.0 {
+                let bounce = irradiance
+                    * ((-tau - kappa).exp() * clear * surface[c].dot(l).max(0.0))
+                    * mesh_albedo;
+                let d = (2.0 / 3.0) * surface[c] / lit_mesh;
+                for ch in 0..3 {
+                    let f = bounce[ch] * d;
+                    state[c][ch] += DVec4::new(bounce[ch], f.x, f.y, f.z);
+                }
             }
         }
         for ch in 0..3 {
@@ -374,13 +416,25 @@ pub fn volume_grid(input: &VolumeInput<'_>) -> VolumeGridCpu {
             arrived += arrive[0].x + arrive[1].x + arrive[2].x;
             let keep = (-CHORD * depth[c]).exp();
             let (t, s) = (medium_t[c], medium_s[c]);
+            let sl = surface[c].length();
             for ch in 0..3 {
                 let a = arrive[ch];
+                let free = (1.0 - solid[c]) * a;
                 let scatter = (1.0 - keep) * iso[c].albedo[ch];
-                let flux = DVec3::new(a.y, a.z, a.w);
+                let bounce = solid[c] * a.x * mesh_albedo[ch];
+                let flux = DVec3::new(free.y, free.z, free.w);
+                let arriving = DVec3::new(a.y, a.z, a.w);
+                let normal = if sl > 0.0 {
+                    surface[c] / sl
+                } else if arriving.length() > 0.0 {
+                    -arriving / arriving.length()
+                } else {
+                    DVec3::ZERO
+                };
                 let f = keep * flux
-                    + scatter * scatter_direction(flux, t, s, iso[c].g[ch], iso[c].g[ch]);
-                let out = DVec4::new((keep + scatter) * a.x, f.x, f.y, f.z);
+                    + scatter * scatter_direction(flux, t, s, iso[c].g[ch], iso[c].g[ch])
+                    + bounce * (2.0 / 3.0) * normal;
+                let out = DVec4::new((keep + scatter) * free.x + bounce, f.x, f.y, f.z);
                 next[c][ch] = out;
                 fluence[c][ch] += half * (a + out);
             }
@@ -394,8 +448,92 @@ pub fn volume_grid(input: &VolumeInput<'_>) -> VolumeGridCpu {
         origin,
         cell,
         depth,
+        solid,
         fluence,
         step_energy,
         step_arrivals,
     }
+}
+
+/// `splat_mesh`: each triangle sampled at the centroids of its `m²` sub-triangles (`m`:
+/// its longest edge over half a cell, at most 64), each adding its share of the area
+/// times the outward normal (oriented as the vertex normals) over the cell's face area;
+/// samples outside the grid are dropped.
+fn splat_mesh(mesh: &VolumeMesh<'_>, origin: DVec3, cell: f64, n: usize, surface: &mut [DVec3]) {
+    let vertex = |k: u32, of: &[Vec3]| of.get(k as usize).map(|v| v.as_dvec3());
+    for tri in mesh.indices.chunks_exact(3) {
+        let (Some(a), Some(b), Some(c)) = (
+            vertex(tri[0], mesh.positions),
+            vertex(tri[1], mesh.positions),
+            vertex(tri[2], mesh.positions),
+        ) else {
+            continue;
+        };
+        let outward = [tri[0], tri[1], tri[2]]
+            .iter()
+            .filter_map(|&k| vertex(k, mesh.normals))
+            .sum::<DVec3>();
+        let (e1, e2) = (b - a, c - a);
+        let mut an = 0.5 * e1.cross(e2);
+        if an.dot(outward) < 0.0 {
+            an = -an;
+        }
+        let longest = e1.length().max(e2.length()).max((e2 - e1).length());
+        if !(longest < 1e30 && an.length() > 0.0) {
+            continue;
+        }
+        let m = (2.0 * longest / cell).ceil().clamp(1.0, 64.0) as usize;
+        let per = an / (cell * cell * (m * m) as f64);
+        for i in 0..m {
+            for j in 0..m - i {
+                for (flip, off) in [(false, 1.0 / 3.0), (true, 2.0 / 3.0)] {
+                    if flip && i + j + 1 >= m {
+                        continue;
+                    }
+                    let p =
+                        a + e1 * ((i as f64 + off) / m as f64) + e2 * ((j as f64 + off) / m as f64);
+                    let q = (p - origin) / cell;
+                    if q.min_element() < 0.0 || q.max_element() >= n as f64 {
+                        continue;
+                    }
+                    let c = q.floor().as_ivec3();
+                    surface[(c.z as usize * n + c.y as usize) * n + c.x as usize] += per;
+                }
+            }
+        }
+    }
+}
+
+/// `occupy`: the share of each cell inside the mesh from the normals alone (the inside
+/// indicator rises by `-n` per cell face area along a row): per axis the sum of `-n`
+/// over the cells before plus half of the cell's own from the low end, of `+n` from the
+/// high end, the larger clamped to [0, 1]; the median of the three axes.
+fn occupancy(surface: &[DVec3], n: usize) -> Vec<f64> {
+    let index = |c: [usize; 3]| (c[2] * n + c[1]) * n + c[0];
+    (0..surface.len())
+        .map(|i| {
+            let c = [i % n, (i / n) % n, i / (n * n)];
+            let own = surface[i];
+            let mut axes = [0.0; 3];
+            for (axis, out) in axes.iter_mut().enumerate() {
+                let (mut low, mut high) = (-0.5 * own[axis], 0.5 * own[axis]);
+                for k in 0..n {
+                    if k == c[axis] {
+                        continue;
+                    }
+                    let mut y = c;
+                    y[axis] = k;
+                    let s = surface[index(y)][axis];
+                    if k < c[axis] {
+                        low -= s;
+                    } else {
+                        high += s;
+                    }
+                }
+                *out = low.max(high).clamp(0.0, 1.0);
+            }
+            let [x, y, z] = axes;
+            x.min(y).max(x.max(y).min(z))
+        })
+        .collect()
 }

@@ -280,9 +280,15 @@ impl Common {
         };
         let model = HairModel::new(gpu, &params.model)?;
         let volume = match (model.volume(), model.chiang()) {
-            (Some(field), Some(tables)) => {
-                Some(VolumeGrid::new(gpu, field, tables, &frame.buffer, strands)?)
-            }
+            (Some(field), Some(tables)) => Some(VolumeGrid::new(
+                gpu,
+                field,
+                tables,
+                &frame.buffer,
+                strands,
+                Some(mesh),
+                params.mesh_color,
+            )?),
             _ => None,
         };
         let redirects: Vec<Redirect> = shadow
@@ -545,6 +551,9 @@ impl Common {
                 _pad: 0.0,
             },
         )?;
+        if let Some(volume) = &self.volume {
+            volume.set_mesh_color(params.mesh_color);
+        }
         self.style_value.root_occlusion = params.root_occlusion;
         self.params = params.clone();
         Ok(())

@@ -18,7 +18,7 @@ use pelage_gpu::{
     compute_pipeline_with_layouts, dispatch_size, wgpu, zeroed_storage,
 };
 use pelage_scene::{ChiangParams, MAX_VOLUME_GRID, MIN_VOLUME_GRID, ParamError};
-use pelage_strands::{StrandBuffers, StrandLayout};
+use pelage_strands::{MeshBuffers, StrandBuffers, StrandLayout};
 
 use crate::models::ChiangTables;
 
@@ -45,10 +45,14 @@ pub struct VolumeUniforms {
     pub inv_fixed_scale: f32,
     /// Smallest cell edge, world units.
     pub min_cell: f32,
-    /// Padding.
-    pub _pad0: u32,
+    /// Triangles of the mesh under the hair (0: none).
+    pub triangle_count: u32,
     /// Padding.
     pub _pad1: u32,
+    /// The mesh's Lambertian albedo per channel (π times `shade.mesh_color`, at most 1).
+    pub mesh_albedo: glam::Vec3,
+    /// Padding.
+    pub _pad2: f32,
 }
 
 /// Fixed-point units per unit of optical depth in the splat (2^16: a cell saturates at an
@@ -58,8 +62,8 @@ pub const VOLUME_FIXED_SCALE: f32 = 65_536.0;
 const FIT_INVOCATIONS: u32 = 256 * 64;
 /// Bytes per cell of the largest buffer (3 vec4: per channel fluence and flux).
 const CELL_BYTES: u64 = 48;
-/// u32 per cell of the splat accumulator.
-const ACCUM_U32: u64 = 8;
+/// u32 per cell of the splat accumulator (`VOLUME_ACCUM`).
+const ACCUM_U32: u64 = 12;
 /// The frame resource of the grid's fluence (what the hair passes read).
 pub const VOLUME_FLUENCE: &str = "volume.fluence";
 
@@ -119,8 +123,10 @@ impl VolumeField {
             fixed_scale: VOLUME_FIXED_SCALE,
             inv_fixed_scale: 1.0 / VOLUME_FIXED_SCALE,
             min_cell: 1e-6,
-            _pad0: 0,
+            triangle_count: 0,
             _pad1: 0,
+            mesh_albedo: glam::Vec3::ZERO,
+            _pad2: 0.0,
         };
         let uniform = UniformBuffer::new(gpu, "pelage volume", &value)?;
         let fluence = zeroed_storage(
@@ -158,6 +164,13 @@ impl VolumeField {
     }
 }
 
+/// The body's albedo in the grid: `π · mesh_color`, at most 1 per channel (a brighter
+/// Lambertian makes light, and light that reaches the body's inside bounces there from
+/// cell to cell, so it would grow every step).
+fn mesh_albedo(mesh_color: glam::Vec3) -> glam::Vec3 {
+    (mesh_color * std::f32::consts::PI).min(glam::Vec3::ONE)
+}
+
 fn cells(n: u32) -> u64 {
     u64::from(n).pow(3)
 }
@@ -172,6 +185,9 @@ pub struct VolumeGrid {
     medium: wgpu::Buffer,
     fit: [wgpu::ComputePipeline; 2],
     splat: wgpu::ComputePipeline,
+    splat_mesh: wgpu::ComputePipeline,
+    occupy: wgpu::ComputePipeline,
+    mesh_group: wgpu::BindGroup,
     inject: wgpu::ComputePipeline,
     propagate: wgpu::ComputePipeline,
     fit_group: wgpu::BindGroup,
@@ -186,16 +202,29 @@ pub struct VolumeGrid {
 impl VolumeGrid {
     /// The passes filling `field` from `strands`, lit by the lights of the `frame`
     /// uniform (`FrameUniforms`), scattering with `tables` (Chiang's, of the same
-    /// parameters).
+    /// parameters), over `mesh` (the body under the hair: it shadows the light and
+    /// reflects it as a Lambertian of albedo `π · mesh_color`, at most 1 per channel;
+    /// `None`: no body).
     pub fn new(
         gpu: &Gpu,
         field: &VolumeField,
         tables: &ChiangTables,
         frame: &wgpu::Buffer,
         strands: &StrandBuffers,
+        mesh: Option<&MeshBuffers>,
+        mesh_color: glam::Vec3,
     ) -> crate::Result<Self> {
         let n = cells(field.resolution());
         let usage = wgpu::BufferUsages::STORAGE;
+        let empty = zeroed_storage(gpu, "pelage volume no mesh", 16, usage)?;
+        pelage_gpu::audit::constant(&[&empty]);
+        let (positions, indices, normals, triangle_count) = match mesh {
+            Some(m) => (&m.positions, &m.indices, &m.normals, m.triangle_count),
+            None => (&empty, &empty, &empty, 0),
+        };
+        let mut value = *field.uniforms();
+        value.triangle_count = triangle_count;
+        value.mesh_albedo = mesh_albedo(mesh_color);
         let bounds = zeroed_storage(gpu, "pelage volume bounds", 24, usage)?;
         let accum = zeroed_storage(gpu, "pelage volume accum", n * ACCUM_U32 * 4, usage)?;
         let medium = zeroed_storage(gpu, "pelage volume medium", n * CELL_BYTES, usage)?;
@@ -235,8 +264,17 @@ impl VolumeGrid {
                 .storage(1)
                 .storage(2)
                 .build(device);
+            let mesh_layout = BindLayout::new("pelage volume mesh", c)
+                .uniform(0)
+                .storage_rw(5)
+                .storage_rw(9)
+                .storage(10)
+                .storage(11)
+                .storage(12)
+                .build(device);
             let propagate_layout = BindLayout::new("pelage volume propagate", c)
                 .uniform(0)
+                .storage_rw(5)
                 .storage_rw(6)
                 .storage(7)
                 .storage_rw(8)
@@ -250,6 +288,12 @@ impl VolumeGrid {
                 pipe("pelage volume finalize", "finalize", &[Some(&fit_layout)]),
             ];
             let splat = pipe("pelage volume splat", "splat", &[Some(&splat_layout)]);
+            let splat_mesh = pipe(
+                "pelage volume splat mesh",
+                "splat_mesh",
+                &[Some(&mesh_layout)],
+            );
+            let occupy = pipe("pelage volume occupy", "occupy", &[Some(&mesh_layout)]);
             let inject = pipe(
                 "pelage volume inject",
                 "inject",
@@ -278,6 +322,19 @@ impl VolumeGrid {
                     (3, &strands.roots),
                     (5, &accum),
                     (9, fl),
+                ],
+            );
+            let mesh_group = bind_numbered(
+                device,
+                "pelage volume mesh",
+                &mesh_layout,
+                &[
+                    (0, u),
+                    (5, &accum),
+                    (9, fl),
+                    (10, positions),
+                    (11, indices),
+                    (12, normals),
                 ],
             );
             let inject_group = bind_numbered(
@@ -310,6 +367,7 @@ impl VolumeGrid {
                     &propagate_layout,
                     &[
                         (0, u),
+                        (5, &accum),
                         (6, &medium),
                         (7, &states[from]),
                         (8, &states[1 - from]),
@@ -321,6 +379,8 @@ impl VolumeGrid {
             (
                 fit,
                 splat,
+                [splat_mesh, occupy],
+                mesh_group,
                 inject,
                 propagate,
                 fit_group,
@@ -333,6 +393,8 @@ impl VolumeGrid {
         let (
             fit,
             splat,
+            [splat_mesh, occupy],
+            mesh_group,
             inject,
             propagate,
             fit_group,
@@ -350,12 +412,15 @@ impl VolumeGrid {
             + field.uniform_buffer().size();
         Ok(Self {
             field_uniform: field.uniform_buffer().clone(),
-            value: std::sync::Mutex::new(*field.uniforms()),
+            value: std::sync::Mutex::new(value),
             bounds,
             accum,
             medium,
             fit,
             splat,
+            splat_mesh,
+            occupy,
+            mesh_group,
             inject,
             propagate,
             fit_group,
@@ -366,6 +431,16 @@ impl VolumeGrid {
             max_segments: u64::from(strands.strand_count) * u64::from(strands.segments),
             bytes,
         })
+    }
+
+    /// Sets the body's colour (`shade.mesh_color`) for the frames that follow (the next
+    /// [`VolumeGrid::prepare`] writes it).
+    pub fn set_mesh_color(&self, mesh_color: glam::Vec3) {
+        let albedo = mesh_albedo(mesh_color);
+        match self.value.lock() {
+            Ok(mut v) => v.mesh_albedo = albedo,
+            Err(poisoned) => poisoned.into_inner().mesh_albedo = albedo,
+        }
     }
 
     /// Writes the uniform for this frame's strands (`layout`, of strands whose tips are
@@ -419,7 +494,16 @@ impl VolumeGrid {
             pass.set_pipeline(&self.splat);
             pass.dispatch_workgroups(x, y, 1);
         }
+        if v.triangle_count > 0 {
+            let (x, y) = dispatch_size(limits, u64::from(v.triangle_count), 64);
+            pelage_gpu::set_bind_group(&mut pass, 0, &self.mesh_group);
+            pass.set_pipeline(&self.splat_mesh);
+            pass.dispatch_workgroups(x, y, 1);
+        }
         let (x, y) = dispatch_size(limits, cells(v.resolution), 64);
+        pelage_gpu::set_bind_group(&mut pass, 0, &self.mesh_group);
+        pass.set_pipeline(&self.occupy);
+        pass.dispatch_workgroups(x, y, 1);
         pelage_gpu::set_bind_group(&mut pass, 0, &self.inject_group);
         pelage_gpu::set_bind_group(&mut pass, 2, &self.chiang_group);
         pass.set_pipeline(&self.inject);
@@ -431,12 +515,14 @@ impl VolumeGrid {
         }
     }
 
-    /// The pass as the frame plan lists it: reads the strands, writes the fluence.
+    /// The pass as the frame plan lists it: reads the strands and the mesh, writes the
+    /// fluence.
     pub fn pass_info(&self) -> PassInfo {
         PassInfo::new(PASS)
             .reads([
                 pelage_strands::STRAND_VERTICES,
                 pelage_strands::STRAND_ROOTS,
+                pelage_strands::MESH,
             ])
             .writes([VOLUME_SCRATCH, VOLUME_FLUENCE])
     }
@@ -450,7 +536,7 @@ impl VolumeGrid {
     }
 
     /// Bytes of GPU memory a grid of `resolution`³ cells holds (what
-    /// [`VolumeGrid::memory_bytes`] reports): 224 bytes per cell and 88 more.
+    /// [`VolumeGrid::memory_bytes`] reports): 240 bytes per cell and 104 more.
     pub fn bytes_for(resolution: u32) -> u64 {
         let n = cells(resolution);
         24 + n * ACCUM_U32 * 4

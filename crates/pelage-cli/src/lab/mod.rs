@@ -159,6 +159,18 @@ pub struct ScatteringOpts {
         allow_hyphen_values = true
     )]
     pub spp: Option<u32>,
+    /// Measure a cause apart: the mesh black in both renderers (no bounce off the skin;
+    /// the body still occludes).
+    #[arg(long)]
+    pub black_mesh: bool,
+    /// Measure a cause apart: no sky in both renderers (pelage's `ambient` and background
+    /// 0, the path tracer's sky and background 0).
+    #[arg(long)]
+    pub no_sky: bool,
+    /// The key light and the sky only, as the lab was before the back light (the tables
+    /// of issue 36's causes were measured so).
+    #[arg(long)]
+    pub no_back_light: bool,
 }
 
 impl Lab {
@@ -177,7 +189,15 @@ impl Lab {
             Lab::Oit(opts) => oit::run(opts),
             Lab::Shading(opts) => shading::run(opts),
             Lab::Lod(opts) => lod::run(opts),
-            Lab::Scattering(opts) => scattering::run(&opts.lab, opts.spp),
+            Lab::Scattering(opts) => scattering::run(
+                &opts.lab,
+                opts.spp,
+                scattering::Variant {
+                    black_mesh: opts.black_mesh,
+                    no_sky: opts.no_sky,
+                    no_back_light: opts.no_back_light,
+                },
+            ),
             Lab::Dynamics(opts) => dynamics::run(&opts.lab, opts.scene.as_deref()),
         }
     }

@@ -1,7 +1,8 @@
 //! The scattering lab: pelage's Chiang fibres, single, dual and volume scattering, against an
 //! independent path tracer (`pelage_reference::path_tracer`: the real strand cylinders,
 //! Chiang's near-field BSDF at the true fibre offset, every bounce up to 16, the mesh as a
-//! diffuse occluder) on the same strands, camera, sun and sky.
+//! diffuse occluder) on the same strands, camera, lights (a key light, the sun over the
+//! camera's shoulder, and a back light from above and behind the hair) and sky.
 //!
 //! ```text
 //! pelage lab scattering [--quick] [--out DIR] [--spp N]
@@ -51,6 +52,28 @@ use crate::progress;
 
 /// Sky radiance of the lab's scenes (pelage's `ambient` is π times it, see `hair_ambient`).
 const SKY: f32 = 0.06;
+
+/// Switches that take one source of light out of both renderers, to measure its share of
+/// a method's error apart (`--black-mesh`, `--no-sky`).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Variant {
+    /// The mesh black (`shade.mesh_color` 0: nothing bounces off the skin).
+    pub black_mesh: bool,
+    /// No sky: `ambient`, the background and the path tracer's sky 0.
+    pub no_sky: bool,
+    /// No back light: the key light and the sky only.
+    pub no_back_light: bool,
+}
+
+impl Variant {
+    /// The sky radiance of the lab's scenes under this variant.
+    fn sky(self) -> f32 {
+        if self.no_sky { 0.0 } else { SKY }
+    }
+}
+
+/// Irradiance of the back light (the key light's is 2.5).
+const BACK_LIGHT: f32 = 1.5;
 
 /// The hair colours: name, eumelanin, pheomelanin (pbrt's coefficients).
 const HAIR: [(&str, f32, f32); 4] = [
@@ -116,6 +139,7 @@ fn scene(
     pheo: f32,
     quick: bool,
     method: fn(&mut ChiangParams),
+    variant: Variant,
 ) -> Result<Scene, Box<dyn std::error::Error>> {
     let mut params = ChiangParams::melanin(eu, pheo);
     method(&mut params);
@@ -167,14 +191,30 @@ fn scene(
     }
     scene.shade.model = ShadingModel::Chiang(params);
     scene.shade.transparency = Transparency::KBuffer { k: 8 };
-    scene.shade.background = Vec3::splat(SKY);
-    scene.shade.ambient = SKY * std::f32::consts::PI;
-    // The sun, from the upper left, behind the camera's shoulder.
-    scene.lights = vec![Light::Directional(DirectionalLight {
-        direction: Vec3::new(-0.7, -0.6, -0.4).normalize(),
-        color: Vec3::ONE,
-        intensity: 2.5,
-    })];
+    scene.shade.background = Vec3::splat(variant.sky());
+    scene.shade.ambient = variant.sky() * std::f32::consts::PI;
+    if variant.black_mesh {
+        scene.shade.mesh_color = Vec3::ZERO;
+    }
+    // The key light: the sun, from the upper left, behind the camera's shoulder. The
+    // back light: from above and behind the hair, toward the camera (the light the
+    // fibres carry forward, the TT lobe, rims the hair).
+    let toward_camera = (scene.camera.eye - scene.camera.target).normalize_or_zero();
+    scene.lights = vec![
+        Light::Directional(DirectionalLight {
+            direction: Vec3::new(-0.7, -0.6, -0.4).normalize(),
+            color: Vec3::ONE,
+            intensity: 2.5,
+        }),
+        Light::Directional(DirectionalLight {
+            direction: (toward_camera + Vec3::new(0.3, -0.6, 0.0)).normalize(),
+            color: Vec3::ONE,
+            intensity: BACK_LIGHT,
+        }),
+    ];
+    if variant.no_back_light {
+        scene.lights.truncate(1);
+    }
     Ok(scene)
 }
 
@@ -208,13 +248,15 @@ struct Traced {
 }
 
 /// Path-traces the strands `renderer` drew for `scene`: twice (seeds 1 and 2) with 16
-/// bounces, once per bounce cap of [`BOUNCE_CAPS`] and once with [`DEEP_BOUNCES`] (seed 1). The sky that lights the hair and the background camera rays see are both [`SKY`].
+/// bounces, once per bounce cap of [`BOUNCE_CAPS`] and once with [`DEEP_BOUNCES`] (seed 1). The sky that lights the hair and the background camera rays see are both the
+/// variant's sky ([`SKY`], or 0 with `--no-sky`).
 fn path_trace(
     scene: &Scene,
     renderer: &Renderer,
     gpu: &Gpu,
     size: u32,
     spp: u32,
+    variant: Variant,
 ) -> Result<Traced, Box<dyn std::error::Error>> {
     if !matches!(scene.shade.model, ShadingModel::Chiang(_)) {
         return Err("the scattering lab's scenes use the Chiang model".into());
@@ -229,8 +271,8 @@ fn path_trace(
                 spp,
                 seed,
                 max_bounces,
-                background: DVec3::splat(f64::from(SKY)),
-                sky: DVec3::splat(f64::from(SKY)),
+                background: DVec3::splat(f64::from(variant.sky())),
+                sky: DVec3::splat(f64::from(variant.sky())),
                 ..Default::default()
             },
         )
@@ -355,7 +397,7 @@ fn fibre_counts(
     let mut text = String::new();
     let mut truth: Option<Vec<(usize, f64)>> = None;
     for (method, shadow) in shadow_methods() {
-        let mut s = scene(groom, 1.3, 0.0, quick, METHODS[0].1)?;
+        let mut s = scene(groom, 1.3, 0.0, quick, METHODS[0].1, Variant::default())?;
         s.shadow = shadow;
         let gpu = Gpu::headless()?;
         let mut renderer = Renderer::new(&gpu, &s, size, size)?;
@@ -454,8 +496,13 @@ fn fibre_counts(
     Ok(text)
 }
 
-/// Runs the lab (see the module docs); `spp` overrides the path tracer's samples per pixel.
-pub fn run(opts: &LabOpts, spp: Option<u32>) -> Result<(), Box<dyn std::error::Error>> {
+/// Runs the lab (see the module docs); `spp` overrides the path tracer's samples per pixel;
+/// `variant` takes the skin's bounce or the sky out of both renderers.
+pub fn run(
+    opts: &LabOpts,
+    spp: Option<u32>,
+    variant: Variant,
+) -> Result<(), Box<dyn std::error::Error>> {
     let started = Instant::now();
     let quick = opts.quick;
     let size = if quick { 64 } else { 256 };
@@ -520,7 +567,7 @@ pub fn run(opts: &LabOpts, spp: Option<u32>) -> Result<(), Box<dyn std::error::E
             let mut rendered = Vec::new();
             let mut first = None;
             for (method, apply) in METHODS {
-                let s = scene(groom, eu, pheo, quick, apply)?;
+                let s = scene(groom, eu, pheo, quick, apply, variant)?;
                 let (image, ms, renderer, gpu) = render_pelage(&s, size, frames)?;
                 if first.is_none() {
                     first = Some((s, renderer, gpu));
@@ -529,7 +576,7 @@ pub fn run(opts: &LabOpts, spp: Option<u32>) -> Result<(), Box<dyn std::error::E
             }
             let (first_scene, renderer, gpu) = first.ok_or("no methods")?;
             let traced = Instant::now();
-            let t = path_trace(&first_scene, &renderer, &gpu, size, spp)?;
+            let t = path_trace(&first_scene, &renderer, &gpu, size, spp, variant)?;
             let reference_s = traced.elapsed().as_secs_f64() / (3 + BOUNCE_CAPS.len()) as f64;
             let [a, b] = &t.reference;
             let stem = format!("{groom}_{name}");

@@ -4,7 +4,8 @@
 // `pelage_reference::volume` (crates/pelage-reference/src/volume.rs).
 //
 // Reads:  u (VolumeUniforms), frame (Frame: the lights), the strand vertices and StrandRoot
-//         attributes (width, colour), Chiang's model and tables at @group(2).
+//         attributes (width, colour), the mesh (positions, normals: f32 x3 each; a u32
+//         triangle list), Chiang's model and tables at @group(2).
 // Writes: bounds (6 x atomic<u32>, cleared to 0 before `fit`), accum (VOLUME_ACCUM u32 per
 //         cell, cleared to 0 before `splat`), medium (3 vec4 per cell: mean tangent times
 //         alignment and optical depth; A_iso; g_iso), state_in/state_out (3 vec4 per cell:
@@ -15,6 +16,8 @@
 //   `finalize`: one workgroup of 1;
 //   `splat`: one invocation per segment, workgroups of 64, flattened as
 //            gid.y * num_workgroups.x * 64 + gid.x (pelage_gpu::dispatch_size);
+//   `splat_mesh`: one invocation per triangle, flattened the same way (none without one);
+//   `occupy`: one invocation per cell, flattened the same way;
 //   `inject`: one invocation per cell, workgroups of 64, flattened the same way;
 //   `propagate`: as `inject`, `iterations` times, state_in and state_out swapped each time.
 //
@@ -27,6 +30,13 @@
 // the optical depth marched one cell at a time toward the light, times the share that
 // meets the cell's fibres (1 - exp(-kappa)), scattered once: E = irradiance exp(-tau)
 // (1 - exp(-kappa)) A(theta_l), its flux E times the scattered mean direction.
+// The mesh (the body under the hair, a Lambertian of albedo pi mesh_color, as the path
+// tracer's): `splat_mesh` adds its area-weighted outward normal to the cells, `occupy`
+// derives the share of each cell inside it; the march toward a light is stopped by the
+// cells' solid share, the mesh's lit area in a cell (n.l, under the cell's fibres)
+// injects its reflection (mean direction 2/3 of the normal), and in each step the
+// solid share of what arrives at a cell is reflected the same way (inside the mesh,
+// back the way it came).
 // Propagate: each cell gathers from its six neighbours the share of their energy that
 // leaves through the shared face, w_d = max(0, 1/6 + m.d/3) normalised over the six faces
 // (m = flux / energy; the cosine-weighted exitance of L(w) = (1 + 3 m.w)), arriving with
@@ -35,6 +45,7 @@
 // The fluence adds (2/3) (arriving + leaving) / 2 per step: the light's time in the cell.
 
 #import shared/math.wgsl
+#import shared/bounds.wgsl
 #import shared/strand.wgsl
 #import shade/frame.wgsl
 #import shade/models/chiang.wgsl
@@ -50,47 +61,24 @@
 @group(0) @binding(7) var<storage, read> state_in: array<vec4<f32>>;
 @group(0) @binding(8) var<storage, read_write> state_out: array<vec4<f32>>;
 @group(0) @binding(9) var<storage, read_write> fluence: array<vec4<f32>>;
-
-// Maps f32 to u32 so that unsigned order equals float order (NaN aside).
-fn order_key(f: f32) -> u32 {
-    let b = bitcast<u32>(f);
-    return select(b | 0x80000000u, ~b, (b & 0x80000000u) != 0u);
-}
-
-fn from_order_key(k: u32) -> f32 {
-    return bitcast<f32>(select(~k, k & 0x7fffffffu, (k & 0x80000000u) != 0u));
-}
-
-var<workgroup> wg_max: array<vec3<u32>, 256>;
-var<workgroup> wg_min: array<vec3<u32>, 256>;
+@group(0) @binding(10) var<storage, read> mesh_positions: array<f32>;
+@group(0) @binding(11) var<storage, read> mesh_indices: array<u32>;
+@group(0) @binding(12) var<storage, read> mesh_normals: array<f32>;
 
 @compute @workgroup_size(256)
 fn fit(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
-    var hi = vec3<u32>(0u);
-    var lo = vec3<u32>(0u);
+    var keys = bounds_empty();
     for (var i = gid.x; i < u.vertex_count; i += u.fit_invocations) {
-        let p = vertices[i].xyz;
-        let k = vec3<u32>(order_key(p.x), order_key(p.y), order_key(p.z));
-        hi = max(hi, k);
-        lo = max(lo, ~k);
+        keys = bounds_add(keys, vertices[i].xyz);
     }
-    wg_max[lid] = hi;
-    wg_min[lid] = lo;
-    workgroupBarrier();
-    for (var stride = 128u; stride > 0u; stride >>= 1u) {
-        if lid < stride {
-            wg_max[lid] = max(wg_max[lid], wg_max[lid + stride]);
-            wg_min[lid] = max(wg_min[lid], wg_min[lid + stride]);
-        }
-        workgroupBarrier();
-    }
+    let all_keys = bounds_reduce(lid, keys);
     if lid == 0u {
-        atomicMax(&bounds[0], wg_max[0].x);
-        atomicMax(&bounds[1], wg_max[0].y);
-        atomicMax(&bounds[2], wg_max[0].z);
-        atomicMax(&bounds[3], wg_min[0].x);
-        atomicMax(&bounds[4], wg_min[0].y);
-        atomicMax(&bounds[5], wg_min[0].z);
+        atomicMax(&bounds[0], all_keys.hi.x);
+        atomicMax(&bounds[1], all_keys.hi.y);
+        atomicMax(&bounds[2], all_keys.hi.z);
+        atomicMax(&bounds[3], all_keys.lo.x);
+        atomicMax(&bounds[4], all_keys.lo.y);
+        atomicMax(&bounds[5], all_keys.lo.z);
     }
 }
 
@@ -98,16 +86,8 @@ fn fit(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_
 // margin, centred on the hair.
 @compute @workgroup_size(1)
 fn finalize() {
-    let hi = vec3<f32>(
-        from_order_key(atomicLoad(&bounds[0])),
-        from_order_key(atomicLoad(&bounds[1])),
-        from_order_key(atomicLoad(&bounds[2])),
-    );
-    let lo = vec3<f32>(
-        from_order_key(~atomicLoad(&bounds[3])),
-        from_order_key(~atomicLoad(&bounds[4])),
-        from_order_key(~atomicLoad(&bounds[5])),
-    );
+    let hi = bounds_hi(vec3<u32>(atomicLoad(&bounds[0]), atomicLoad(&bounds[1]), atomicLoad(&bounds[2])));
+    let lo = bounds_lo(vec3<u32>(atomicLoad(&bounds[3]), atomicLoad(&bounds[4]), atomicLoad(&bounds[5])));
     var centre = 0.5 * (lo + hi);
     var extent = max(hi.x - lo.x, max(hi.y - lo.y, hi.z - lo.z));
     // No vertices (or non-finite ones): a harmless unit grid at the origin.
@@ -193,6 +173,119 @@ fn splat(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
     }
 }
 
+fn mesh_vec3(buffer: u32, vertex: u32) -> vec3<f32> {
+    let k = 3u * vertex;
+    if buffer == 0u {
+        return vec3<f32>(mesh_positions[k], mesh_positions[k + 1u], mesh_positions[k + 2u]);
+    }
+    return vec3<f32>(mesh_normals[k], mesh_normals[k + 1u], mesh_normals[k + 2u]);
+}
+
+// The mesh's area-weighted outward normal per cell: each triangle sampled at the
+// centroids of its m^2 sub-triangles (m: its longest edge over half a cell), each adding
+// its share of the area times the normal (oriented as the vertex normals) over the cell's
+// face area. Samples outside the grid are dropped (the mesh may reach beyond the hair).
+@compute @workgroup_size(64)
+fn splat_mesh(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let tri = gid.y * groups.x * 64u + gid.x;
+    if tri >= u.triangle_count {
+        return;
+    }
+    let ia = mesh_indices[3u * tri];
+    let ib = mesh_indices[3u * tri + 1u];
+    let ic = mesh_indices[3u * tri + 2u];
+    let a = mesh_vec3(0u, ia);
+    let e1 = mesh_vec3(0u, ib) - a;
+    let e2 = mesh_vec3(0u, ic) - a;
+    var an = 0.5 * cross(e1, e2);
+    let outward = mesh_vec3(1u, ia) + mesh_vec3(1u, ib) + mesh_vec3(1u, ic);
+    an = select(an, -an, dot(an, outward) < 0.0);
+    let header = fluence[0];
+    let origin = header.xyz;
+    let cell = header.w;
+    let longest = max(length(e1), max(length(e2), length(e2 - e1)));
+    if !(longest < 1e30) || !(length(an) > 0.0) {
+        return;
+    }
+    let m = u32(clamp(ceil(2.0 * longest / cell), 1.0, 64.0));
+    let per = an / (cell * cell * f32(m * m)) * (u.fixed_scale * VOLUME_TANGENT_SCALE);
+    let fixed = vec3<i32>(round(per));
+    if all(fixed == vec3<i32>(0)) {
+        return;
+    }
+    let n = f32(u.resolution);
+    for (var i = 0u; i < m; i += 1u) {
+        for (var j = 0u; j + i < m; j += 1u) {
+            for (var flip = 0u; flip < 2u; flip += 1u) {
+                if flip == 1u && i + j + 1u >= m {
+                    continue;
+                }
+                let off = select(1.0 / 3.0, 2.0 / 3.0, flip == 1u);
+                let p = a + e1 * ((f32(i) + off) / f32(m)) + e2 * ((f32(j) + off) / f32(m));
+                let q = (p - origin) / cell;
+                if any(q < vec3<f32>(0.0)) || any(q >= vec3<f32>(n)) {
+                    continue;
+                }
+                let at = VOLUME_ACCUM * cell_index(vec3<i32>(floor(q))) + VOLUME_SURFACE;
+                atomicAdd(&accum[at], bitcast<u32>(fixed.x));
+                atomicAdd(&accum[at + 1u], bitcast<u32>(fixed.y));
+                atomicAdd(&accum[at + 2u], bitcast<u32>(fixed.z));
+            }
+        }
+    }
+}
+
+fn surface_at(index: u32) -> vec3<f32> {
+    let at = VOLUME_ACCUM * index + VOLUME_SURFACE;
+    return vec3<f32>(
+        f32(bitcast<i32>(atomicLoad(&accum[at]))),
+        f32(bitcast<i32>(atomicLoad(&accum[at + 1u]))),
+        f32(bitcast<i32>(atomicLoad(&accum[at + 2u]))),
+    ) * (u.inv_fixed_scale / VOLUME_TANGENT_SCALE);
+}
+
+fn solid_at(index: u32) -> f32 {
+    return bitcast<f32>(atomicLoad(&accum[VOLUME_ACCUM * index + VOLUME_SOLID]));
+}
+
+// The share of each cell inside the mesh, from its normals alone (the divergence
+// theorem: along a row of cells, the inside indicator rises by the surface's -n.x per
+// cell face area): per axis, the sum of -n over the cells before this one plus half of
+// its own, from the low end, and of +n from the high end (a row whose one end lies
+// inside a mesh that leaves the grid is right from the other end), the larger of the two
+// clamped to [0, 1]; the median of the three axes.
+@compute @workgroup_size(64)
+fn occupy(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let n = u.resolution;
+    let i = gid.y * groups.x * 64u + gid.x;
+    if i >= n * n * n {
+        return;
+    }
+    let c = vec3<i32>(i32(i % n), i32((i / n) % n), i32(i / (n * n)));
+    let own = surface_at(i);
+    var axes = vec3<f32>(0.0);
+    for (var axis = 0u; axis < 3u; axis += 1u) {
+        var low = -0.5 * own[axis];
+        var high = 0.5 * own[axis];
+        for (var k = 0; k < i32(n); k += 1) {
+            if k == c[axis] {
+                continue;
+            }
+            var y = c;
+            y[axis] = k;
+            let s = surface_at(cell_index(y))[axis];
+            if k < c[axis] {
+                low -= s;
+            } else {
+                high += s;
+            }
+        }
+        axes[axis] = clamp(max(low, high), 0.0, 1.0);
+    }
+    let solid = max(min(axes.x, axes.y), min(max(axes.x, axes.y), axes.z));
+    atomicStore(&accum[VOLUME_ACCUM * i + VOLUME_SOLID], bitcast<u32>(solid));
+}
+
 fn depth_at(index: u32) -> f32 {
     return f32(atomicLoad(&accum[VOLUME_ACCUM * index])) * u.inv_fixed_scale;
 }
@@ -243,12 +336,14 @@ fn inject(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups
     medium[3u * i + 2u] = vec4<f32>(iso.g, 0.0);
 
     let meet = 1.0 - exp(-kappa);
+    let surface = surface_at(i);
+    let lit_mesh = length(surface);
     let p = origin + (vec3<f32>(c) + vec3<f32>(0.5)) * cell;
     var e = vec3<f32>(0.0);
     var flux_r = vec3<f32>(0.0);
     var flux_g = vec3<f32>(0.0);
     var flux_b = vec3<f32>(0.0);
-    if meet > 0.0 {
+    if meet > 0.0 || lit_mesh > 0.0 {
         for (var li = 0u; li < min(frame.light_count, MAX_LIGHTS); li += 1u) {
             let light = frame.lights[li];
             let l = frame_to_light(light, p);
@@ -260,6 +355,7 @@ fn inject(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups
                 reach = min(reach, length(light.position.xyz - p));
             }
             var tau = 0.0;
+            var clear = 1.0;
             for (var k = 1u; k < 4u * n; k += 1u) {
                 if f32(k) * cell > reach {
                     break;
@@ -268,18 +364,30 @@ fn inject(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups
                 if any(q < vec3<f32>(0.0)) || any(q >= vec3<f32>(f32(n))) {
                     break;
                 }
-                tau += depth_at(cell_index(vec3<i32>(floor(q))));
+                let j = cell_index(vec3<i32>(floor(q)));
+                tau += depth_at(j);
+                clear *= 1.0 - solid_at(j);
             }
             let cos_i = length(cross(t, l));
             let theta = fibre_angle(abs(dot(t, l)), min(cos_i, 1.0));
             let aligned = volume_fibre_at(theta, x);
             let albedo = s * aligned.albedo + (1.0 - s) * iso.albedo;
-            let scattered = irradiance * (exp(-tau) * meet) * albedo;
+            let scattered = irradiance * (exp(-tau) * clear * meet) * albedo;
             let dir = -l;
             e += scattered;
             flux_r += scattered.x * volume_scatter_direction(dir, t, s, aligned.g.x, iso.g.x);
             flux_g += scattered.y * volume_scatter_direction(dir, t, s, aligned.g.y, iso.g.y);
             flux_b += scattered.z * volume_scatter_direction(dir, t, s, aligned.g.z, iso.g.z);
+            if lit_mesh > 0.0 {
+                // The mesh's lit area in the cell, under the cell's own fibres, reflected
+                // as a Lambertian (mean direction 2/3 of its normal).
+                let bounce = irradiance * (exp(-tau - kappa) * clear * max(0.0, dot(surface, l))) * u.mesh_albedo;
+                e += bounce;
+                let d = (2.0 / 3.0) * surface / lit_mesh;
+                flux_r += bounce.x * d;
+                flux_g += bounce.y * d;
+                flux_b += bounce.z * d;
+            }
         }
     }
     let r = vec4<f32>(e.x, flux_r);
@@ -340,12 +448,27 @@ fn propagate(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
     let albedo = medium[3u * i + 1u].xyz;
     let g = medium[3u * i + 2u].xyz;
     let w = 0.5 * VOLUME_CHORD;
+    // The mesh: the cell's solid share reflects what arrives (Lambertian, toward its
+    // normal; inside the mesh, back the way it came); the rest meets the fibres.
+    let solid = solid_at(i);
+    let surface = surface_at(i);
+    let sl = length(surface);
     for (var ch = 0u; ch < 3u; ch += 1u) {
         let a = arrive[ch];
+        let free = (1.0 - solid) * a;
         let scatter = (1.0 - keep) * albedo[ch];
+        let bounce = solid * a.x * u.mesh_albedo[ch];
+        var normal = vec3<f32>(0.0);
+        let al = length(a.yzw);
+        if sl > 0.0 {
+            normal = surface / sl;
+        } else if al > 0.0 {
+            normal = -a.yzw / al;
+        }
         let out = vec4<f32>(
-            (keep + scatter) * a.x,
-            keep * a.yzw + scatter * volume_scatter_direction(a.yzw, t, s, g[ch], g[ch]),
+            (keep + scatter) * free.x + bounce,
+            keep * free.yzw + scatter * volume_scatter_direction(free.yzw, t, s, g[ch], g[ch])
+                + bounce * (2.0 / 3.0) * normal,
         );
         state_out[3u * i + ch] = out;
         fluence[1u + 3u * i + ch] += w * (a + out);

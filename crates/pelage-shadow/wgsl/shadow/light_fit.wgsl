@@ -9,67 +9,34 @@
 //         covers every vertex), then `finalize` with one workgroup of 1.
 
 #import shadow/light_common.wgsl
+#import shared/bounds.wgsl
 
 @group(0) @binding(0) var<uniform> u: LightGridUniforms;
 @group(0) @binding(1) var<storage, read> vertices: array<vec4<f32>>;
 @group(0) @binding(2) var<storage, read_write> bounds: array<atomic<u32>, 6>;
 @group(0) @binding(3) var<storage, read_write> grid: LightGrid;
 
-// Maps f32 to u32 so that unsigned order equals float order (NaN aside).
-fn order_key(f: f32) -> u32 {
-    let b = bitcast<u32>(f);
-    return select(b | 0x80000000u, ~b, (b & 0x80000000u) != 0u);
-}
-
-fn from_order_key(k: u32) -> f32 {
-    return bitcast<f32>(select(~k, k & 0x7fffffffu, (k & 0x80000000u) != 0u));
-}
-
-var<workgroup> wg_max: array<vec3<u32>, 256>;
-var<workgroup> wg_min: array<vec3<u32>, 256>;
-
 @compute @workgroup_size(256)
 fn fit(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
-    var hi = vec3<u32>(0u);
-    var lo = vec3<u32>(0u);
+    var keys = bounds_empty();
     for (var i = gid.x; i < u.vertex_count; i += u.fit_invocations) {
-        let p = to_light_space(u, vertices[i].xyz);
-        let k = vec3<u32>(order_key(p.x), order_key(p.y), order_key(p.z));
-        hi = max(hi, k);
-        lo = max(lo, ~k);
+        keys = bounds_add(keys, to_light_space(u, vertices[i].xyz));
     }
-    wg_max[lid] = hi;
-    wg_min[lid] = lo;
-    workgroupBarrier();
-    for (var stride = 128u; stride > 0u; stride >>= 1u) {
-        if lid < stride {
-            wg_max[lid] = max(wg_max[lid], wg_max[lid + stride]);
-            wg_min[lid] = max(wg_min[lid], wg_min[lid + stride]);
-        }
-        workgroupBarrier();
-    }
+    let all_keys = bounds_reduce(lid, keys);
     if lid == 0u {
-        atomicMax(&bounds[0], wg_max[0].x);
-        atomicMax(&bounds[1], wg_max[0].y);
-        atomicMax(&bounds[2], wg_max[0].z);
-        atomicMax(&bounds[3], wg_min[0].x);
-        atomicMax(&bounds[4], wg_min[0].y);
-        atomicMax(&bounds[5], wg_min[0].z);
+        atomicMax(&bounds[0], all_keys.hi.x);
+        atomicMax(&bounds[1], all_keys.hi.y);
+        atomicMax(&bounds[2], all_keys.hi.z);
+        atomicMax(&bounds[3], all_keys.lo.x);
+        atomicMax(&bounds[4], all_keys.lo.y);
+        atomicMax(&bounds[5], all_keys.lo.z);
     }
 }
 
 @compute @workgroup_size(1)
 fn finalize() {
-    let hi = vec3<f32>(
-        from_order_key(atomicLoad(&bounds[0])),
-        from_order_key(atomicLoad(&bounds[1])),
-        from_order_key(atomicLoad(&bounds[2])),
-    );
-    let lo = vec3<f32>(
-        from_order_key(~atomicLoad(&bounds[3])),
-        from_order_key(~atomicLoad(&bounds[4])),
-        from_order_key(~atomicLoad(&bounds[5])),
-    );
+    let hi = bounds_hi(vec3<u32>(atomicLoad(&bounds[0]), atomicLoad(&bounds[1]), atomicLoad(&bounds[2])));
+    let lo = bounds_lo(vec3<u32>(atomicLoad(&bounds[3]), atomicLoad(&bounds[4]), atomicLoad(&bounds[5])));
     var origin = lo - vec3<f32>(u.padding);
     var extent = hi - lo + vec3<f32>(2.0 * u.padding);
     // No vertices (or non-finite ones): a harmless unit grid at the origin.

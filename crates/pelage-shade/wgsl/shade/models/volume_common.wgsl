@@ -43,13 +43,22 @@ struct VolumeUniforms {
     inv_fixed_scale: f32,
     // Smallest cell edge, world units.
     min_cell: f32,
-    _pad0: u32,
+    // Triangles of the mesh (the body under the hair), 0 for none.
+    triangle_count: u32,
     _pad1: u32,
+    // The mesh's Lambertian albedo per channel (pi times shade.mesh_color, as the path
+    // tracer's, at most 1: a brighter body would make light every propagation step).
+    mesh_albedo: vec3<f32>,
+    _pad2: f32,
 }
 
 // u32 per cell in the splat accumulator: optical depth, tangent sum (x, y, z as i32),
-// colour sum (r, g, b), unused.
-const VOLUME_ACCUM: u32 = 8u;
+// colour sum (r, g, b), unused, the mesh's area-weighted outward normal sum over the
+// cell's face area (x, y, z as i32, at VOLUME_TANGENT_SCALE), the share of the cell
+// inside the mesh (f32 bits, written by `occupy`).
+const VOLUME_ACCUM: u32 = 12u;
+const VOLUME_SURFACE: u32 = 8u;
+const VOLUME_SOLID: u32 = 11u;
 // The tangent sum is kept at a quarter of fixed_scale (it must fit an i32).
 const VOLUME_TANGENT_SCALE: f32 = 0.25;
 // Mean chord of a cube under isotropic light (4 V / S = 2/3 of the edge): how far, in cell
