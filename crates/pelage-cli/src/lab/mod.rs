@@ -122,7 +122,7 @@ pub enum Lab {
                       its stateless wind instead (a groom has no floor of other roots). Without \
                       --scene a second row does the same for fur: scenes/creature_skinned.toml's \
                       creature (20 000 strands; its body bent and twisted by a two-joint rig, \
-                      skinned on the GPU) with a [dynamics] table at its defaults.\n\n\
+                      skinned on the GPU) with a [dynamics] table whose shape stiffnesses hold the groom.\n\n\
                       Writes DIR/dynamics.csv (a row per frame and scenario), \
                       DIR/dynamics_summary.csv (a column per scenario), DIR/dynamics_sheet.png \
                       and DIR/dynamics_sheet_fur.png (stateless over simulated at six times). \
