@@ -186,12 +186,12 @@ pub struct SceneOpts {
     pub melanin: Option<Melanin>,
     /// Dual scattering of the chiang model: light scattered between fibres, estimated
     /// from the shadows (on), or single scattering only (off); the older spelling of
-    /// `--multiple-scattering dual|none`. Default: the scene's (dual unless it says
+    /// `--multiple-scattering dual|none`. Default: the scene's (volume unless it says
     /// otherwise). Refused when the model is not chiang.
     #[arg(long, value_name = "on|off", conflicts_with = "multiple_scattering")]
     pub dual_scattering: Option<OnOff>,
     /// Multiple scattering of the chiang model: none, dual, or volume (a radiance grid
-    /// over the hair). Default: the scene's (dual unless it says otherwise). Refused when
+    /// over the hair). Default: the scene's (volume unless it says otherwise). Refused when
     /// the model is not chiang.
     #[arg(long, value_name = "METHOD", value_parser = method::<MultipleScattering>())]
     pub multiple_scattering: Option<MultipleScattering>,

@@ -257,7 +257,7 @@ impl Named for MultipleScattering {
             name: "volume",
             aliases: &[],
             summary: "a radiance grid over the hair (Moon 2008): orders >= 2 propagated cell to \
-                      cell with Chiang's fibre energies (32³, 7.3 MB)",
+                      cell with Chiang's fibre energies and the body's bounce (16³ by default, 0.98 MB)",
         },
     ];
 
