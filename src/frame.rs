@@ -294,13 +294,12 @@ impl Frame {
         }
         let draw_mesh = target.draw_mesh && !groom_only;
         let (mesh, strands) = StrandSource::of(scene).build(gpu, scene, mesh, groom_only)?;
-        // The resources that cross stages, named as the plan names them (for an audit of
-        // what each pass binds: pelage_gpu::audit; nothing happens outside one).
+        // The resources that cross stages and that the frame may take from its caller,
+        // named as the plan names them (for an audit of what each pass binds:
+        // pelage_gpu::audit; nothing happens outside one). Stage 1 names its strands.
         for buffer in [&mesh.positions, &mesh.normals, &mesh.indices] {
             audit::name_buffer(buffer, pelage_strands::MESH);
         }
-        audit::name_buffer(&strands.buffers().vertices, pelage_strands::STRAND_VERTICES);
-        audit::name_buffer(&strands.buffers().roots, pelage_strands::STRAND_ROOTS);
         let skin = match skin {
             Some(skin) => Some((
                 MeshSkin::new(gpu, &scene.mesh, skin, &mesh)?,

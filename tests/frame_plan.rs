@@ -188,6 +188,21 @@ fn every_pass_binds_only_what_the_plan_declares() {
         "passes bind what their declarations do not name:\n{}",
         failures.join("\n")
     );
+    // An audit started after the frame was built has seen none of its bind groups: it
+    // reports every binding rather than passing a frame it cannot check.
+    let s = scene(ShadowParams::default(), Transparency::default(), 1);
+    let mut renderer = Renderer::new(&gpu, &s, 96, 72).unwrap();
+    let late = Audit::start();
+    renderer.render(&gpu, 0.0, &s.camera).unwrap();
+    let bound = late.finish();
+    let unseen: Vec<String> = bound
+        .iter()
+        .flat_map(|p| p.undeclared(&[], &[], as_named))
+        .collect();
+    assert!(
+        bound.len() > 5 && unseen.len() >= bound.len(),
+        "a late audit must report every pass: {unseen:?}"
+    );
 }
 
 #[test]

@@ -280,7 +280,7 @@ fn access_of(ty: &wgpu::BindingType) -> Option<Access> {
 
 /// Records a bind group's resources (called by [`crate::create_bind_group`]). A layout
 /// the audit did not see being built (made before the audit started, or by wgpu's
-/// automatic layouts) leaves its bind groups unrecorded.
+/// automatic layouts) leaves its bind groups unrecorded: binding one is reported.
 pub(crate) fn group_created(group: &wgpu::BindGroup, desc: &wgpu::BindGroupDescriptor<'_>) {
     with_state(|s| {
         let Some(entries) = s.layouts.get(desc.layout) else {
@@ -320,22 +320,35 @@ pub(crate) fn pass_begun(label: &str) {
 
 fn bound(group: &wgpu::BindGroup) {
     with_state(|s| {
-        let Some(held) = s.groups.get(group) else {
-            return;
-        };
-        let resources: Vec<(BoundName, Access)> = held
-            .iter()
-            .map(|(label, binding, resource, access)| {
-                let name = match s.names.get(resource) {
-                    Some(n) => n.clone(),
-                    None => BoundName::Unnamed {
-                        group: label.clone(),
-                        binding: *binding,
-                    },
-                };
-                (name, *access)
-            })
-            .collect();
+        // A bind group the audit did not see made (before it started, or with a layout it
+        // did not see built) is reported rather than trusted: nothing passes unseen.
+        let unseen = [(
+            "a bind group made before the audit or with an unseen layout".to_string(),
+            0,
+            None,
+            Access::Write,
+        )];
+        let resources: Vec<(BoundName, Access)> = match s.groups.get(group) {
+            Some(held) => held
+                .iter()
+                .map(|(label, binding, resource, access)| {
+                    (label.clone(), *binding, Some(resource.clone()), *access)
+                })
+                .collect::<Vec<_>>(),
+            None => unseen.to_vec(),
+        }
+        .into_iter()
+        .map(|(label, binding, resource, access)| {
+            let name = match resource.and_then(|r| s.names.get(&r)) {
+                Some(n) => n.clone(),
+                None => BoundName::Unnamed {
+                    group: label,
+                    binding,
+                },
+            };
+            (name, access)
+        })
+        .collect();
         let pass = match s.passes.last_mut() {
             Some(p) => p,
             None => {
