@@ -21,34 +21,20 @@
 //! the mesh's own space.
 
 use std::path::PathBuf;
-use std::time::Duration;
 
-use bevy::app::PluginsState;
-use bevy::camera::{Exposure, RenderTarget};
+use bevy::camera::RenderTarget;
 use bevy::image::Image;
-use bevy::light::DirectionalLight;
 use bevy::mesh::VertexAttributeValues;
 use bevy::mesh::skinning::{SkinnedMesh, SkinnedMeshInverseBindposes};
 use bevy::prelude::*;
-use bevy::render::RenderPlugin;
-use bevy::render::pipelined_rendering::PipelinedRenderingPlugin;
-use bevy::render::render_asset::RenderAssets;
-use bevy::render::render_resource::{TextureFormat, TextureUsages};
-use bevy::render::renderer::{RenderDevice, RenderQueue};
-use bevy::render::texture::GpuImage;
 use bevy::render::view::{DebandDither, Msaa, Tonemapping};
 use bevy::time::TimeUpdateStrategy;
-use bevy::window::{ExitCondition, WindowPlugin};
-use bevy_pelage::{Fur, PelagePlugin};
+use bevy_pelage::PelagePlugin;
 
-type Result<T> = std::result::Result<T, Box<dyn std::error::Error>>;
-
-/// The frame size.
-pub const WIDTH: u32 = 320;
-/// The frame size.
-pub const HEIGHT: u32 = 240;
-/// Time between frames.
-pub const FRAME_STEP: Duration = Duration::from_millis(1000 / 12);
+#[path = "headless/mod.rs"]
+mod headless;
+use headless::Result;
+pub use headless::{FRAME_STEP, HEIGHT, WIDTH, read, time};
 /// Strands on the creature.
 pub const STRANDS: u32 = 8_000;
 
@@ -291,30 +277,16 @@ pub fn app(walking: bool) -> Result<(App, Handle<Image>)> {
     let scene = scene()?;
     let (mesh, skin) = character()?;
     let mut app = App::new();
-    app.add_plugins(
-        DefaultPlugins
-            .set(WindowPlugin {
-                primary_window: None,
-                exit_condition: ExitCondition::DontExit,
-                ..default()
-            })
-            .set(RenderPlugin {
-                synchronous_pipeline_compilation: true,
-                ..default()
-            })
-            .disable::<PipelinedRenderingPlugin>(),
-    )
-    .add_plugins(PelagePlugin)
-    .insert_resource(TimeUpdateStrategy::ManualDuration(FRAME_STEP))
-    .insert_resource(Walking(walking))
-    .add_systems(Update, trot);
+    app.add_plugins(headless::plugins())
+        .add_plugins(PelagePlugin)
+        .insert_resource(TimeUpdateStrategy::ManualDuration(FRAME_STEP))
+        .insert_resource(Walking(walking))
+        .add_systems(Update, trot);
     let bg = scene.shade.background;
     app.insert_resource(ClearColor(Color::linear_rgb(bg.x, bg.y, bg.z)));
 
     let world = app.world_mut();
-    let mut target = Image::new_target_texture(WIDTH, HEIGHT, TextureFormat::Rgba8UnormSrgb, None);
-    target.texture_descriptor.usage |= TextureUsages::COPY_SRC;
-    let image = world.resource_mut::<Assets<Image>>().add(target);
+    let image = headless::target(world);
 
     // The Bevy mesh: pelage's, with the skin as Bevy's joint attributes.
     let joint_index: Vec<[u16; 4]> = (skin.joints.iter()).map(|j| j.map(|j| j as u16)).collect();
@@ -373,17 +345,7 @@ pub fn app(walking: bool) -> Result<(App, Handle<Image>)> {
         Tonemapping::None,
         DebandDither::Disabled,
     ));
-    let pelage::scene::Light::Directional(key) = &scene.lights[0] else {
-        return Err("the scene's key light is not directional".into());
-    };
-    world.spawn((
-        DirectionalLight {
-            color: Color::linear_rgb(key.color.x, key.color.y, key.color.z),
-            illuminance: key.intensity / Exposure::default().exposure(),
-            ..default()
-        },
-        Transform::default().looking_to(m.rotation * v3(key.direction), Vec3::Y),
-    ));
+    world.spawn(headless::key_light(&scene, m.rotation)?);
 
     world.spawn((
         Mesh3d(mesh_handle),
@@ -391,49 +353,12 @@ pub fn app(walking: bool) -> Result<(App, Handle<Image>)> {
             inverse_bindposes,
             joints,
         },
-        Fur {
-            hair: scene.hair.clone(),
-            shade: scene.shade.clone(),
-            voxel: match &scene.shadow {
-                pelage::scene::ShadowParams::Voxel(voxel) => voxel.clone(),
-                _ => Default::default(),
-            },
-            draw_mesh: true,
-            skin_reach: Some(reach(&mesh)),
-        },
+        headless::fur(&scene, Some(reach(&mesh))),
         m,
     ));
 
-    while app.plugins_state() == PluginsState::Adding {
-        bevy::tasks::tick_global_task_pools_on_main_thread();
-    }
-    app.finish();
-    app.cleanup();
+    headless::finish(&mut app);
     Ok((app, image))
-}
-
-/// The image the camera renders into, read back (blocking: test and example code, not
-/// the plugin's frame).
-pub fn read(app: &mut App, image: &Handle<Image>) -> Result<image::RgbaImage> {
-    let render = app.sub_app(bevy::render::RenderApp).world();
-    let gpu = pelage::gpu::Gpu::from_device(
-        render.resource::<RenderDevice>().wgpu_device().clone(),
-        (**render.resource::<RenderQueue>()).clone(),
-        None,
-    );
-    let texture = &render
-        .resource::<RenderAssets<GpuImage>>()
-        .get(image.id())
-        .ok_or("the target image is not on the GPU")?
-        .texture;
-    let data = pelage::gpu::read_texture(&gpu, texture)?;
-    Ok(image::RgbaImage::from_raw(WIDTH, HEIGHT, data.data)
-        .ok_or("the frame has the wrong size")?)
-}
-
-/// Bevy's clock after the last `update`: the time the pose and the fur are for.
-pub fn time(app: &App) -> f32 {
-    app.world().resource::<Time>().elapsed_secs()
 }
 
 fn main() {

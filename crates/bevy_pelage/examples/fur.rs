@@ -13,32 +13,18 @@
 //! `tests/fur.rs` renders the same scene and compares it with pelage's own frame.
 
 use std::path::PathBuf;
-use std::time::Duration;
 
-use bevy::app::PluginsState;
-use bevy::camera::{Exposure, Hdr, RenderTarget};
+use bevy::camera::{Hdr, RenderTarget};
 use bevy::image::Image;
-use bevy::light::DirectionalLight;
 use bevy::prelude::*;
-use bevy::render::RenderPlugin;
-use bevy::render::pipelined_rendering::PipelinedRenderingPlugin;
-use bevy::render::render_asset::RenderAssets;
-use bevy::render::render_resource::{TextureFormat, TextureUsages};
-use bevy::render::renderer::{RenderDevice, RenderQueue};
-use bevy::render::texture::GpuImage;
 use bevy::render::view::{DebandDither, Msaa, Tonemapping};
 use bevy::time::TimeUpdateStrategy;
-use bevy::window::{ExitCondition, WindowPlugin};
-use bevy_pelage::{Fur, PelagePlugin};
+use bevy_pelage::PelagePlugin;
 
-type Result<T> = std::result::Result<T, Box<dyn std::error::Error>>;
-
-/// The frame size.
-pub const WIDTH: u32 = 320;
-/// The frame size.
-pub const HEIGHT: u32 = 240;
-/// Time between frames.
-pub const FRAME_STEP: Duration = Duration::from_millis(1000 / 12);
+#[path = "headless/mod.rs"]
+mod headless;
+use headless::Result;
+pub use headless::{FRAME_STEP, HEIGHT, WIDTH, read, time};
 
 /// The scene, as pelage's own renderer takes it: the creature, 12,000 strands in
 /// pelage's default gusting wind, one directional key light, pelage's default camera,
@@ -69,22 +55,8 @@ pub struct View {
 pub fn app(view: View) -> Result<(App, Handle<Image>)> {
     let scene = scene();
     let mut app = App::new();
-    app.add_plugins(
-        DefaultPlugins
-            .set(WindowPlugin {
-                primary_window: None,
-                exit_condition: ExitCondition::DontExit,
-                ..default()
-            })
-            .set(RenderPlugin {
-                // Every pipeline ready on the first frame (Bevy's blit too).
-                synchronous_pipeline_compilation: true,
-                ..default()
-            })
-            // The frame is rendered inside `update`, so it can be read right after.
-            .disable::<PipelinedRenderingPlugin>(),
-    )
-    .insert_resource(TimeUpdateStrategy::ManualDuration(FRAME_STEP));
+    app.add_plugins(headless::plugins())
+        .insert_resource(TimeUpdateStrategy::ManualDuration(FRAME_STEP));
     if !view.without_plugin {
         app.add_plugins(PelagePlugin);
     }
@@ -92,10 +64,7 @@ pub fn app(view: View) -> Result<(App, Handle<Image>)> {
     app.insert_resource(ClearColor(Color::linear_rgb(bg.x, bg.y, bg.z)));
 
     let world = app.world_mut();
-    let mut target = Image::new_target_texture(WIDTH, HEIGHT, TextureFormat::Rgba8UnormSrgb, None);
-    // Read back by the test and the example.
-    target.texture_descriptor.usage |= TextureUsages::COPY_SRC;
-    let image = world.resource_mut::<Assets<Image>>().add(target);
+    let image = headless::target(world);
     let mesh = world
         .resource_mut::<Assets<Mesh>>()
         .add(bevy_pelage::bevy_mesh(&scene.mesh));
@@ -121,65 +90,17 @@ pub fn app(view: View) -> Result<(App, Handle<Image>)> {
         camera.insert((Hdr, Tonemapping::Reinhard));
     }
 
-    // pelage's key light as a Bevy directional light: its direction, colour, and an
-    // illuminance that the camera's exposure brings to pelage's intensity.
-    let pelage::scene::Light::Directional(key) = &scene.lights[0] else {
-        return Err("the scene's key light is not directional".into());
-    };
-    world.spawn((
-        DirectionalLight {
-            color: Color::linear_rgb(key.color.x, key.color.y, key.color.z),
-            illuminance: key.intensity / Exposure::default().exposure(),
-            ..default()
-        },
-        Transform::default().looking_to(v3(key.direction), Vec3::Y),
-    ));
+    // pelage's key light as a Bevy directional light.
+    world.spawn(headless::key_light(&scene, Quat::IDENTITY)?);
 
     world.spawn((
         Mesh3d(mesh),
-        Fur {
-            hair: scene.hair.clone(),
-            shade: scene.shade.clone(),
-            voxel: match &scene.shadow {
-                pelage::scene::ShadowParams::Voxel(voxel) => voxel.clone(),
-                _ => Default::default(),
-            },
-            draw_mesh: true,
-            skin_reach: None,
-        },
+        headless::fur(&scene, None),
         Transform::default(),
     ));
 
-    while app.plugins_state() == PluginsState::Adding {
-        bevy::tasks::tick_global_task_pools_on_main_thread();
-    }
-    app.finish();
-    app.cleanup();
+    headless::finish(&mut app);
     Ok((app, image))
-}
-
-/// The image the camera renders into, read back (blocking: test and example code, not
-/// the plugin's frame).
-pub fn read(app: &mut App, image: &Handle<Image>) -> Result<image::RgbaImage> {
-    let render = app.sub_app(bevy::render::RenderApp).world();
-    let gpu = pelage::gpu::Gpu::from_device(
-        render.resource::<RenderDevice>().wgpu_device().clone(),
-        (**render.resource::<RenderQueue>()).clone(),
-        None,
-    );
-    let texture = &render
-        .resource::<RenderAssets<GpuImage>>()
-        .get(image.id())
-        .ok_or("the target image is not on the GPU")?
-        .texture;
-    let data = pelage::gpu::read_texture(&gpu, texture)?;
-    Ok(image::RgbaImage::from_raw(WIDTH, HEIGHT, data.data)
-        .ok_or("the frame has the wrong size")?)
-}
-
-/// Bevy's clock after the last `update`: the time the fur was grown for.
-pub fn time(app: &App) -> f32 {
-    app.world().resource::<Time>().elapsed_secs()
 }
 
 fn main() {

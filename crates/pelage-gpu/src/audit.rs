@@ -349,15 +349,14 @@ fn bound(group: &wgpu::BindGroup) {
             (name, access)
         })
         .collect();
-        let pass = match s.passes.last_mut() {
-            Some(p) => p,
-            None => {
-                s.passes.push(BoundPass {
-                    label: "(before any pass)".into(),
-                    bound: BTreeMap::new(),
-                });
-                s.passes.last_mut().expect("just pushed")
-            }
+        if s.passes.is_empty() {
+            s.passes.push(BoundPass {
+                label: "(before any pass)".into(),
+                bound: BTreeMap::new(),
+            });
+        }
+        let Some(pass) = s.passes.last_mut() else {
+            return;
         };
         for (name, access) in resources {
             let a = pass.bound.entry(name).or_insert(access);

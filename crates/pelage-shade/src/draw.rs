@@ -118,6 +118,20 @@ impl Vertices {
     }
 }
 
+/// A colour attachment that draws over what `view` holds (loaded and stored): every
+/// pass compositing hair onto the caller's target.
+pub(crate) fn over_color(view: &wgpu::TextureView) -> wgpu::RenderPassColorAttachment<'_> {
+    wgpu::RenderPassColorAttachment {
+        view,
+        depth_slice: None,
+        resolve_target: None,
+        ops: wgpu::Operations {
+            load: wgpu::LoadOp::Load,
+            store: wgpu::StoreOp::Store,
+        },
+    }
+}
+
 impl Draw {
     /// Binds the pipeline and its groups, then `extra` (group, bind group) pairs, and draws.
     pub fn record(&self, pass: &mut wgpu::RenderPass<'_>, extra: Option<(u32, &wgpu::BindGroup)>) {

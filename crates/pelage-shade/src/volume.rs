@@ -237,7 +237,14 @@ impl VolumeGrid {
         }
         let module = crate::SHADERS.library().module(gpu, "shade/volume.wgsl")?;
         let c = wgpu::ShaderStages::COMPUTE;
-        let built = gpu.scoped(|device| {
+        let bytes = bounds.size()
+            + accum.size()
+            + medium.size()
+            + states[0].size()
+            + states[1].size()
+            + field.fluence_buffer().size()
+            + field.uniform_buffer().size();
+        Ok(gpu.scoped(|device| {
             let fit_layout = BindLayout::new("pelage volume fit", c)
                 .uniform(0)
                 .storage(2)
@@ -376,10 +383,16 @@ impl VolumeGrid {
                 )
             };
             let propagate_groups = [propagate_group(0), propagate_group(1)];
-            (
+            Self {
+                field_uniform: field.uniform_buffer().clone(),
+                value: std::sync::Mutex::new(value),
+                bounds,
+                accum,
+                medium,
                 fit,
                 splat,
-                [splat_mesh, occupy],
+                splat_mesh,
+                occupy,
                 mesh_group,
                 inject,
                 propagate,
@@ -388,49 +401,10 @@ impl VolumeGrid {
                 inject_group,
                 chiang_group,
                 propagate_groups,
-            )
-        })?;
-        let (
-            fit,
-            splat,
-            [splat_mesh, occupy],
-            mesh_group,
-            inject,
-            propagate,
-            fit_group,
-            splat_group,
-            inject_group,
-            chiang_group,
-            propagate_groups,
-        ) = built;
-        let bytes = bounds.size()
-            + accum.size()
-            + medium.size()
-            + states[0].size()
-            + states[1].size()
-            + field.fluence_buffer().size()
-            + field.uniform_buffer().size();
-        Ok(Self {
-            field_uniform: field.uniform_buffer().clone(),
-            value: std::sync::Mutex::new(value),
-            bounds,
-            accum,
-            medium,
-            fit,
-            splat,
-            splat_mesh,
-            occupy,
-            mesh_group,
-            inject,
-            propagate,
-            fit_group,
-            splat_group,
-            inject_group,
-            chiang_group,
-            propagate_groups,
-            max_segments: u64::from(strands.strand_count) * u64::from(strands.segments),
-            bytes,
-        })
+                max_segments: u64::from(strands.strand_count) * u64::from(strands.segments),
+                bytes,
+            }
+        })?)
     }
 
     /// Sets the body's colour (`shade.mesh_color`) for the frames that follow (the next

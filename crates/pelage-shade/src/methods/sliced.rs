@@ -440,15 +440,7 @@ impl Sliced {
                 };
                 let label = pass.draw.label;
                 let timestamp_writes = timer.as_deref_mut().and_then(|t| t.render_pass(label));
-                let color = wgpu::RenderPassColorAttachment {
-                    view: target.color,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Load,
-                        store: wgpu::StoreOp::Store,
-                    },
-                };
+                let color = crate::draw::over_color(target.color);
                 let color_attachments = match pass.kind {
                     PassKind::Storage | PassKind::DepthOnly => Vec::new(),
                     PassKind::OpaqueHair | PassKind::Resolve => vec![Some(color)],

@@ -256,15 +256,7 @@ impl HairPass for Wboit {
             &mut *encoder,
             &wgpu::RenderPassDescriptor {
                 label: Some(resolve.label),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: target.color,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Load,
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
+                color_attachments: &[Some(crate::draw::over_color(target.color))],
                 depth_stencil_attachment: None,
                 timestamp_writes: timer.and_then(|t| t.render_pass(resolve.label)),
                 occlusion_query_set: None,
