@@ -607,7 +607,7 @@ fn run() -> Result<()> {
     for frame in 0..frames {
         let image = tone_map(&engine.frame(&gpu, frame as f32 / 12.0, true)?)?;
         let path = out.join(format!("embed_{frame:04}.png"));
-        pelage::save_png(&image, &path)?;
+        image.save(&path)?;
         if frame + 1 == frames {
             // The frame holds the engine's background, pelage's fur and the engine's tips.
             let px = |x: u32, y: u32| image.get_pixel(x, y).0;

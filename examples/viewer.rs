@@ -750,11 +750,12 @@ fn screenshot(gfx: &Gfx, path: &Path) -> Result<(), Box<dyn Error>> {
         .flat_map(|p| [p[r], p[1], p[b]])
         .collect();
     let image = image::RgbImage::from_raw(data.width, data.height, rgb).ok_or("short readback")?;
-    pelage::write_atomically(path, |w| {
-        use image::codecs::png::{CompressionType, FilterType, PngEncoder};
-        let encoder = PngEncoder::new_with_quality(w, CompressionType::Best, FilterType::Adaptive);
-        image.write_with_encoder(encoder).map_err(|e| e.to_string())
-    })?;
+    use image::codecs::png::{CompressionType, FilterType, PngEncoder};
+    let mut png = Vec::new();
+    let encoder =
+        PngEncoder::new_with_quality(&mut png, CompressionType::Best, FilterType::Adaptive);
+    image.write_with_encoder(encoder)?;
+    pelage_lab::write_file_atomically(path, &png)?;
     Ok(())
 }
 

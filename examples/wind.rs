@@ -12,7 +12,7 @@
 
 use std::path::Path;
 
-use pelage::{Renderer, Scene, gpu::Gpu, save_png};
+use pelage::{Renderer, Scene, gpu::Gpu};
 
 /// Frames to render, and how many of them make a second of animation.
 const FRAMES: u32 = 12;
@@ -50,7 +50,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 
         // Read the image back and save it (written to a temporary file, then renamed).
         let path = out.join(format!("frame_{frame:04}.png"));
-        save_png(&renderer.image(&gpu)?, &path)?;
+        renderer.image(&gpu)?.save(&path)?;
         println!(
             "{}: t = {t:.3} s, {:.1} ms on the GPU",
             path.display(),

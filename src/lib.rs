@@ -33,9 +33,11 @@
 //! - `backends` (default): wgpu's native backends (Vulkan, GLES, Metal, DX12), for a
 //!   program that depends on pelage alone. The stage crates enable none; an engine that
 //!   brings its own device turns default features off and keeps its own wgpu features.
-//! - `png` (default): `Renderer::image` as an `image::RgbaImage` and `save_png`.
-//!   Without it the `image` crate is no dependency and [`Renderer::rgba8`] returns the
+//! - `png` (default): `Renderer::image` as an `image::RgbaImage`. Without it the `image` crate is no dependency and [`Renderer::rgba8`] returns the
 //!   plain pixels.
+//! - `files` (default): scene files (`Scene::from_file`, TOML naming OBJ meshes and PNG
+//!   maps). Without it `toml`, `tobj` and `image` are no dependencies of the library: a
+//!   scene is built in code ([`Scene`]'s fields, `scene::Mesh`, `scene::MapImage::new`).
 //! - `usd` (default): USD grooms (`BasisCurves` in `.usda`, `.usdc`, `.usd`, `.usdz`)
 //!   in `scene::Groom::load` and scene files, through the pure-Rust `openusd` crate,
 //!   which needs Rust 1.96 (without it pelage builds on 1.87).
@@ -47,13 +49,9 @@ pub use pelage_shadow as shadow;
 pub use pelage_strands as strands;
 
 mod frame;
-mod output;
 mod renderer;
 
 pub use frame::{Frame, FrameTarget, frame_plan};
-#[cfg(feature = "png")]
-pub use output::save_png;
-pub use output::{AtomicFile, OutputError, remove_pending_temporaries, write_atomically};
 pub use renderer::{Change, FRAMES_IN_FLIGHT, FrameStats, Renderer, Scene, Update};
 
 /// Any error of the frame pipeline.
@@ -81,9 +79,6 @@ pub enum Error {
     /// The passes of a frame are in an order that reads a resource before it is written.
     #[error("frame plan: {0}")]
     Plan(#[from] gpu::PlanError),
-    /// Writing an output failed.
-    #[error(transparent)]
-    Output(#[from] OutputError),
     /// The frame read back was never drawn: every frame starts by clearing to the
     /// opaque background, so pixels that are not opaque mean the adapter dropped the
     /// passes (or no frame was rendered yet). Returned instead of a blank picture.

@@ -77,12 +77,15 @@ impl Default for Scene {
 
 impl Scene {
     /// Reads a scene file (TOML, see [`pelage_scene::SceneFile`]) and builds or loads its
-    /// mesh and groom.
+    /// mesh and groom. (Feature `files`.)
+    #[cfg(feature = "files")]
     pub fn from_file(path: &std::path::Path) -> Result<Self, pelage_scene::SceneFileError> {
         Self::from_scene_file(&pelage_scene::SceneFile::load(path)?, path)
     }
 
-    /// The scene a parsed scene file describes (`path` names it in errors).
+    /// The scene a parsed scene file describes (`path` names it in errors). (Feature
+    /// `files`.)
+    #[cfg(feature = "files")]
     pub fn from_scene_file(
         file: &pelage_scene::SceneFile,
         path: &std::path::Path,

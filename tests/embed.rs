@@ -74,8 +74,8 @@ fn the_engine_frame_is_the_facades_picture() {
     // PELAGE_EMBED_OUT=DIR keeps both pictures for a look.
     if let Some(dir) = std::env::var_os("PELAGE_EMBED_OUT").map(std::path::PathBuf::from) {
         std::fs::create_dir_all(&dir).unwrap();
-        pelage::save_png(&engine_image, &dir.join("engine.png")).unwrap();
-        pelage::save_png(&facade_image, &dir.join("facade.png")).unwrap();
+        engine_image.save(&dir.join("engine.png")).unwrap();
+        facade_image.save(&dir.join("facade.png")).unwrap();
     }
     assert!(map.mean() <= 0.01, "mean FLIP {} > 0.01", map.mean());
     // The engine does pelage's arithmetic, so the pictures agree nearly pixel for pixel.

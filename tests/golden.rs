@@ -102,7 +102,7 @@ fn default_scene_matches_golden_image() {
                 judge("the old golden image against the new", old, &image);
             }
         }
-        pelage::save_png(&image, &path).unwrap();
+        image.save(&path).unwrap();
         println!("blessed {}", path.display());
         return;
     }
@@ -115,7 +115,7 @@ fn default_scene_matches_golden_image() {
     assert_eq!(golden.dimensions(), image.dimensions());
     if let Some(why) = judge("golden", &golden, &image) {
         let failed = path.with_file_name("default_scene.failed.png");
-        pelage::save_png(&image, &failed).unwrap();
+        image.save(&failed).unwrap();
         panic!(
             "image differs from {GOLDEN}: {why}; wrote {} (bless an intended change with PELAGE_BLESS=1)",
             failed.display()

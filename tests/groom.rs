@@ -96,10 +96,11 @@ fn the_committed_groom_file_is_what_its_generator_writes() {
     let path = scenes().join("long_hair.hair");
     let strands = long_hair();
     if std::env::var_os("PELAGE_BLESS").is_some() {
-        HairFile::from_strands(&strands)
-            .unwrap()
-            .write_path(&path)
-            .unwrap();
+        std::fs::write(
+            &path,
+            HairFile::from_strands(&strands).unwrap().write().unwrap(),
+        )
+        .unwrap();
     }
     let file =
         HairFile::read_path(&path).unwrap_or_else(|e| panic!("{e}; bless it with PELAGE_BLESS=1"));
@@ -193,10 +194,11 @@ fn a_scene_file_groom_is_drawn_and_a_tfx_copy_draws_the_same_picture() {
     std::fs::create_dir_all(&dir).unwrap();
     let strands: Vec<Vec<Vec3>> = groom.points.chunks(17).map(<[Vec3]>::to_vec).collect();
     let hair_path = dir.join("resampled.hair");
-    HairFile::from_strands(&strands)
-        .unwrap()
-        .write_path(&hair_path)
-        .unwrap();
+    std::fs::write(
+        &hair_path,
+        HairFile::from_strands(&strands).unwrap().write().unwrap(),
+    )
+    .unwrap();
     let tfx_path = dir.join("resampled.tfx");
     let bytes = TfxFile::from_strands(&strands).unwrap().write().unwrap();
     std::fs::write(&tfx_path, bytes).unwrap();

@@ -28,10 +28,14 @@ fn the_committed_guides_are_every_tenth_strand_of_long_hair() {
         .collect();
     let path = scenes().join("long_hair_guides.hair");
     if std::env::var_os("PELAGE_BLESS").is_some() {
-        HairFile::from_strands(&every_tenth)
-            .unwrap()
-            .write_path(&path)
-            .unwrap();
+        std::fs::write(
+            &path,
+            HairFile::from_strands(&every_tenth)
+                .unwrap()
+                .write()
+                .unwrap(),
+        )
+        .unwrap();
     }
     let file =
         HairFile::read_path(&path).unwrap_or_else(|e| panic!("{e}; bless it with PELAGE_BLESS=1"));

@@ -22,6 +22,11 @@ fn temp(name: &str) -> PathBuf {
     dir
 }
 
+/// Writes `groom` to `path` as USD (the format by the extension).
+fn write_usd(groom: &Groom, path: &Path) {
+    std::fs::write(path, usd_file::encode(groom, path).unwrap()).unwrap();
+}
+
 /// 300 wavy strands of 12 points hanging from a 1 x 0.4 patch at y = 0.5 down to
 /// about y = -0.5.
 fn strands() -> Vec<Vec<Vec3>> {
@@ -91,15 +96,15 @@ fn the_same_strands_as_hair_and_as_usda_draw_the_same_picture() {
     let gpu = gpu();
     let dir = temp("same");
     let strands = strands();
-    HairFile::from_strands(&strands)
-        .unwrap()
-        .write_path(&dir.join("groom.hair"))
-        .unwrap();
-    usd_file::write_path(
-        &Groom::from_strands(&strands).unwrap(),
-        &dir.join("groom.usda"),
+    std::fs::write(
+        dir.join("groom.hair"),
+        HairFile::from_strands(&strands).unwrap().write().unwrap(),
     )
     .unwrap();
+    write_usd(
+        &Groom::from_strands(&strands).unwrap(),
+        &dir.join("groom.usda"),
+    );
     let mesh = "[mesh]\nkind = \"icosphere\"\nradius = 0.3\nsubdivisions = 2";
     let hair = load_scene(&dir, &scene_text("groom.hair", mesh));
     let usd = load_scene(&dir, &scene_text("groom.usda", mesh));
@@ -125,11 +130,10 @@ fn green(image: &image::RgbaImage) -> usize {
 fn a_groom_only_scene_draws_the_hair_and_no_mesh() {
     let gpu = gpu();
     let dir = temp("only");
-    usd_file::write_path(
+    write_usd(
         &Groom::from_strands(&strands()).unwrap(),
         &dir.join("groom.usda"),
-    )
-    .unwrap();
+    );
     let with_mesh = load_scene(
         &dir,
         &scene_text(
@@ -193,11 +197,10 @@ fn a_groom_only_scene_draws_the_hair_and_no_mesh() {
 fn a_groom_keeps_its_file_shape_at_t_0_unless_the_scene_asks_for_wind() {
     let gpu = gpu();
     let dir = temp("still");
-    usd_file::write_path(
+    write_usd(
         &Groom::from_strands(&strands()).unwrap(),
         &dir.join("groom.usda"),
-    )
-    .unwrap();
+    );
     let calm = load_scene(&dir, &scene_text("groom.usda", "[mesh]\nkind = \"none\""));
     assert_eq!(
         calm.hair.wind,
@@ -251,7 +254,7 @@ fn display_colors_colour_the_strands() {
         .unwrap()
         .with_colors(Some(vec![Vec3::new(0.9, 0.05, 0.05); n]))
         .unwrap();
-    usd_file::write_path(&red, &dir.join("groom.usda")).unwrap();
+    write_usd(&red, &dir.join("groom.usda"));
     let groom = GroomSource::new(dir.join("groom.usda")).load().unwrap();
     assert_eq!(groom.colors.as_ref().map(Vec::len), Some(n));
     let strands = GroomStrands::new(&gpu, &groom, &HairParams::default()).unwrap();

@@ -5,8 +5,10 @@ use std::ops::Range;
 use std::path::PathBuf;
 use std::time::Instant;
 
+use pelage::Renderer;
 use pelage::gpu::Gpu;
-use pelage::{AtomicFile, OutputError, Renderer, save_png};
+
+use crate::output::{AtomicFile, OutputError, save_png};
 
 use crate::error::CliError;
 use crate::progress;

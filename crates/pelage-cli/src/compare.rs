@@ -8,7 +8,7 @@
 
 use std::path::{Path, PathBuf};
 
-use pelage::save_png;
+use crate::output::save_png;
 use pelage_reference::flip::{DEFAULT_PIXELS_PER_DEGREE, LinearImage, flip};
 
 use crate::error::CliError;

@@ -1,6 +1,6 @@
 //! What a command can fail with, and the exit code each failure gets.
 
-use pelage::OutputError;
+use crate::output::OutputError;
 use pelage::gpu::GpuError;
 use pelage::scene::SceneFileError;
 
@@ -17,6 +17,9 @@ pub enum CliError {
     /// Building or rendering the scene failed.
     #[error(transparent)]
     Render(#[from] pelage::Error),
+    /// Writing an output file failed.
+    #[error(transparent)]
+    Output(#[from] OutputError),
     /// A progress bar could not be drawn.
     #[error("progress bar: {0}")]
     Progress(#[from] indicatif::style::TemplateError),
@@ -50,12 +53,6 @@ impl CliError {
 
 impl From<GpuError> for CliError {
     fn from(e: GpuError) -> Self {
-        CliError::Render(e.into())
-    }
-}
-
-impl From<OutputError> for CliError {
-    fn from(e: OutputError) -> Self {
         CliError::Render(e.into())
     }
 }

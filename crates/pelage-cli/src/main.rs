@@ -270,7 +270,7 @@ fn main() -> ExitCode {
     // (the target keeps its old content) and exit with 130, as a shell reports Ctrl-C.
     // Without a handler (it could not be installed) a later run sweeps the leftovers.
     let _ = ctrlc::set_handler(|| {
-        pelage::remove_pending_temporaries();
+        output::remove_pending_temporaries();
         eprintln!("interrupted: removed unfinished outputs");
         exit_now(130);
     });

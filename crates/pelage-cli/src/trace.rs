@@ -11,9 +11,11 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use glam::DVec3;
+use pelage::Renderer;
 use pelage::gpu::Gpu;
 use pelage::scene::{ShadowParams, Transparency};
-use pelage::{Renderer, save_png, write_atomically};
+
+use crate::output::{save_png, write_atomically};
 use pelage_reference::path_tracer::{
     MAX_BOUNCES_LIMIT, MAX_IMAGE_SIDE, MAX_SPP, PathTracedImage, PathTracerSettings,
 };

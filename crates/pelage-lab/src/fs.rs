@@ -1,9 +1,9 @@
-//! Atomic file writes for the lab: [`pelage_scene::atomic_file`] (the one atomic writer
-//! of pelage) with the lab's error type.
+//! Atomic file writes for the lab: [`crate::atomic_file`] (the one atomic writer of
+//! pelage) with the lab's error type.
 
 use std::path::Path;
 
-pub use pelage_scene::atomic_file::{
+pub use crate::atomic_file::{
     AtomicFile, WriteError, remove_pending_temporaries, remove_stale_temporaries,
     write_bytes_atomically,
 };

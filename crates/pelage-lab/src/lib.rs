@@ -18,6 +18,7 @@
 
 #![deny(missing_docs)]
 
+pub mod atomic_file;
 mod chart;
 mod error;
 mod font;

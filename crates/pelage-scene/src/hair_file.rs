@@ -789,18 +789,4 @@ impl HairFile {
         }
         Ok(out)
     }
-
-    /// Encodes the file and writes it to `path` atomically with
-    /// [`crate::atomic_file::AtomicFile`]: the bytes go to a short temporary file in
-    /// the same folder, which is flushed and then renamed over `path` (a
-    /// symbolic link is followed, a device written through). An interrupted
-    /// or failed write leaves any existing file at `path` untouched.
-    pub fn write_path(&self, path: &Path) -> Result<(), HairFileError> {
-        let bytes = self.write()?;
-        crate::atomic_file::write_bytes_atomically(path, &bytes).map_err(|e| HairFileError::Io {
-            action: e.action,
-            path: e.path,
-            source: e.source,
-        })
-    }
 }

@@ -4,8 +4,16 @@
 //!
 //! Everything here is plain CPU data with serde support; nothing here knows
 //! about the GPU. The stage crates turn these types into GPU buffers.
+//!
+//! # Features
+//!
+//! The file formats that need a dependency are features, so an engine that builds its
+//! scene in code compiles none of them: `obj` (OBJ meshes, tobj), `maps` (PNG texture
+//! maps read from files, image), `scene-file` (TOML scene files, which name OBJ meshes
+//! and maps; default) and `usd` (USD grooms, openusd). Within pelage every crate
+//! depends on this one without default features; the facade's default feature
+//! `files` turns `scene-file` on.
 
-pub mod atomic_file;
 pub mod camera;
 pub mod groom;
 pub mod guides;
@@ -15,9 +23,12 @@ pub mod limits;
 pub mod lod;
 pub mod mesh;
 pub mod names;
+#[cfg(feature = "obj")]
 pub mod obj;
 pub mod params;
+#[cfg(feature = "scene-file")]
 pub mod scene_file;
+#[cfg(feature = "scene-file")]
 mod scene_keys;
 pub mod shading;
 pub mod skin;
@@ -36,6 +47,7 @@ pub use limits::{MAX_EXTENT, MAX_GROOM_FILE_BYTES, MAX_OBJ_FILE_BYTES, MAX_SCENE
 pub use lod::{LodParams, Transition};
 pub use mesh::{Mesh, MeshError, MeshReport};
 pub use names::{MethodName, Named};
+#[cfg(feature = "obj")]
 pub use obj::{ObjError, load_obj, parse_obj};
 pub use params::{
     AdsmParams, Collider, DeepOpacityParams, DynamicsParams, GrowthParams, HairParams, HairType,
@@ -45,6 +57,7 @@ pub use params::{
     ShadeParams, ShadowMapParams, ShadowParams, Splat, SurfaceInterpolation, VoxelParams,
     WindParams,
 };
+#[cfg(feature = "scene-file")]
 pub use scene_file::{MeshSource, SceneFile, SceneFileError};
 pub use shading::{
     ARTIST_EUMELANIN_SIGMA_A, ARTIST_PHEOMELANIN_SIGMA_A, Absorption, ChiangParams,

@@ -9,7 +9,9 @@
 //! (for region indices, which must not be blended), [`MapImage::bilinear`] blends the
 //! four texels around it, texel centres at `((x + ½) / width, 1 − (y + ½) / height)`.
 
-use std::path::{Path, PathBuf};
+#[cfg(feature = "maps")]
+use std::path::Path;
+use std::path::PathBuf;
 use std::sync::Arc;
 
 use glam::{Vec2, Vec3};
@@ -109,6 +111,8 @@ impl MapImage {
 
     /// Decodes a PNG file's bytes (any bit depth and colour type), at most
     /// [`MAX_MAP_SIZE`] texels on a side. `path` only names the file in errors.
+    /// (Feature `maps`.)
+    #[cfg(feature = "maps")]
     pub fn decode(bytes: &[u8], path: &Path) -> Result<Self, MapError> {
         let decode_error = |message: String| MapError::Decode {
             path: path.to_path_buf(),
@@ -147,6 +151,8 @@ impl MapImage {
     }
 
     /// Reads and decodes the file at `path` (at most [`MAX_MAP_FILE_BYTES`]).
+    /// (Feature `maps`.)
+    #[cfg(feature = "maps")]
     pub fn load(path: &Path) -> Result<Self, MapError> {
         let bytes = crate::limits::read_capped(path, MAX_MAP_FILE_BYTES, "texture maps").map_err(
             |source| MapError::Io {
@@ -268,10 +274,12 @@ impl MapImage {
 }
 
 /// PNG colour type 0: grey.
+#[cfg(feature = "maps")]
 const GREY: u8 = 0;
 
 /// The bit depth and colour type of a PNG's header (`IHDR`, which must come first), or
 /// `None` for bytes that do not start as a PNG.
+#[cfg(feature = "maps")]
 fn png_header(bytes: &[u8]) -> Option<(u8, u8)> {
     const SIGNATURE: &[u8] = b"\x89PNG\r\n\x1a\n";
     let header = bytes.get(..26)?;
@@ -324,7 +332,9 @@ impl TextureMap {
         }
     }
 
-    /// Reads the image at [`TextureMap::path`] (again, if it was loaded).
+    /// Reads the image at [`TextureMap::path`] (again, if it was loaded). (Feature
+    /// `maps`.)
+    #[cfg(feature = "maps")]
     pub fn load(&mut self) -> Result<(), MapError> {
         self.image = Some(Arc::new(MapImage::load(&self.path)?));
         Ok(())
@@ -394,6 +404,7 @@ mod tests {
     }
 
     #[test]
+    #[cfg(feature = "maps")]
     fn bad_files_are_errors_naming_the_file() {
         let e = MapImage::decode(b"not a png", Path::new("x.png")).unwrap_err();
         assert!(e.to_string().contains("x.png"), "{e}");
@@ -407,6 +418,7 @@ mod tests {
     }
 
     #[test]
+    #[cfg(feature = "maps")]
     fn an_oversized_png_is_refused() {
         let mut bytes = Vec::new();
         image::RgbaImage::new(MAX_MAP_SIZE + 1, 1)

@@ -67,7 +67,7 @@ pub const CUBIC_SAMPLES: usize = 8;
 /// File extensions the USD reader understands (lower case, without the dot).
 pub const USD_EXTENSIONS: [&str; 4] = ["usda", "usdc", "usd", "usdz"];
 
-/// The name of the prim [`write_path`] writes the curves to.
+/// The name of the prim [`encode`] writes the curves to.
 pub const WRITTEN_PRIM: &str = "/Groom";
 
 /// The deepest nesting of brackets (`{` prim bodies and dictionaries, `(` metadata and
@@ -1604,9 +1604,10 @@ pub fn to_usdz(groom: &Groom) -> Result<Vec<u8>, UsdFileError> {
     Ok(out.into_inner())
 }
 
-/// Writes `groom` to `path` as `.usda` (text), `.usdc`/`.usd` (binary crate) or
-/// `.usdz` (package), chosen by the extension, atomically through [`crate::atomic_file::AtomicFile`].
-pub fn write_path(groom: &Groom, path: &Path) -> Result<(), UsdFileError> {
+/// `groom` encoded for a file at `path`: `.usda` (text), `.usdc`/`.usd` (binary crate)
+/// or `.usdz` (package), chosen by the extension (another is an error naming the path).
+/// The caller writes the bytes (the command line writes them atomically).
+pub fn encode(groom: &Groom, path: &Path) -> Result<Vec<u8>, UsdFileError> {
     let write_error = |message: String| UsdFileError::Write {
         path: path.to_path_buf(),
         message,
@@ -1627,14 +1628,10 @@ pub fn write_path(groom: &Groom, path: &Path) -> Result<(), UsdFileError> {
             ));
         }
     };
-    crate::atomic_file::write_bytes_atomically(path, &bytes).map_err(|e| UsdFileError::Io {
-        action: e.action,
-        path: e.path,
-        source: e.source,
-    })
+    Ok(bytes)
 }
 
-/// The layer [`to_usda`] and [`write_path`] write.
+/// The layer [`to_usda`] and [`encode`] write.
 fn layer_of(groom: &Groom) -> Result<sdf::Data, UsdFileError> {
     let path_error = |e: sdf::PathParseError| UsdFileError::Write {
         path: PathBuf::from(WRITTEN_PRIM),

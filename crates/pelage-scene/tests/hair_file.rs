@@ -145,24 +145,17 @@ fn strands_iterate_in_order() {
 }
 
 #[test]
-fn path_round_trip_is_atomic() {
+fn path_round_trip() {
     let dir = std::env::temp_dir().join(format!("pelage-scene-hair-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("full.hair");
     let hair = full();
-    hair.write_path(&path).unwrap();
+    std::fs::write(&path, hair.write().unwrap()).unwrap();
     assert_eq!(HairFile::read_path(&path).unwrap(), hair);
-    // No temporary left behind.
-    let names: Vec<_> = std::fs::read_dir(&dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name())
-        .collect();
-    assert_eq!(names, vec![std::ffi::OsString::from("full.hair")]);
-    // A failed write (inconsistent struct) leaves the existing file as it was.
+    // An inconsistent struct is not encoded.
     let mut bad = hair.clone();
     bad.thickness.pop();
-    assert!(bad.write_path(&path).is_err());
-    assert_eq!(HairFile::read_path(&path).unwrap(), hair);
+    assert!(bad.write().is_err());
     std::fs::remove_dir_all(&dir).ok();
     // Missing file names its path.
     let err = HairFile::read_path(&dir.join("missing.hair")).unwrap_err();
@@ -468,32 +461,6 @@ fn corrupted_bytes_never_panic() {
             }
         }
     }
-}
-
-#[test]
-fn concurrent_writes_of_one_path_do_not_race() {
-    // The old fixed `<name>.tmp` was shared by every writer: one thread's rename took
-    // another's temporary, and the other's rename then failed.
-    let dir = std::env::temp_dir().join(format!("pelage-scene-race-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join("shared.hair");
-    let hair = full();
-    std::thread::scope(|s| {
-        for _ in 0..8 {
-            s.spawn(|| {
-                for _ in 0..20 {
-                    hair.write_path(&path).unwrap();
-                }
-            });
-        }
-    });
-    assert_eq!(HairFile::read_path(&path).unwrap(), hair);
-    assert_eq!(
-        std::fs::read_dir(&dir).unwrap().count(),
-        1,
-        "temporaries left"
-    );
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 /// A tiny file whose header claims 4 billion strands is named by its header's counts

@@ -351,14 +351,15 @@ fn rich() -> Groom {
 #[test]
 fn usda_usdc_and_usdz_round_trips_give_the_same_groom() {
     let dir = std::env::temp_dir().join(format!("pelage-usd-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
     for groom in [sample(), rich()] {
         for ext in ["usda", "usdc", "usd", "usdz"] {
             let path = dir.join(format!("groom.{ext}"));
-            usd_file::write_path(&groom, &path).unwrap();
+            std::fs::write(&path, usd_file::encode(&groom, &path).unwrap()).unwrap();
             let back = Groom::load(&path).unwrap();
             assert_eq!(back, groom, "{ext}");
             // And again: usda -> Groom -> usda -> Groom.
-            usd_file::write_path(&back, &path).unwrap();
+            std::fs::write(&path, usd_file::encode(&back, &path).unwrap()).unwrap();
             assert_eq!(Groom::load(&path).unwrap(), groom, "{ext}, twice");
         }
     }
@@ -384,7 +385,9 @@ fn a_usdz_package_is_read() {
 #[test]
 fn a_scene_file_groom_may_be_a_usd_file() {
     let dir = std::env::temp_dir().join(format!("pelage-usd-scene-{}", std::process::id()));
-    usd_file::write_path(&sample(), &dir.join("hair.usda")).unwrap();
+    std::fs::create_dir_all(&dir).unwrap();
+    let usda = dir.join("hair.usda");
+    std::fs::write(&usda, usd_file::encode(&sample(), &usda).unwrap()).unwrap();
     let scene = dir.join("scene.toml");
     std::fs::write(
         &scene,
@@ -531,7 +534,7 @@ fn bad_files_name_the_prim_and_attribute() {
     // A missing file and an unknown extension.
     let e = Groom::load("/nonexistent/groom.usda").unwrap_err();
     assert!(e.to_string().contains("/nonexistent/groom.usda"), "{e}");
-    let e = usd_file::write_path(&sample(), Path::new("/tmp/groom.abc")).unwrap_err();
+    let e = usd_file::encode(&sample(), Path::new("/tmp/groom.abc")).unwrap_err();
     assert!(matches!(e, UsdFileError::Write { .. }), "{e}");
 }
 

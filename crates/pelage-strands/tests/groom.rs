@@ -371,7 +371,7 @@ fn a_hair_files_colours_colour_the_strands() {
         })
         .collect();
     let path = std::env::temp_dir().join(format!("pelage-red-{}.hair", std::process::id()));
-    hair.write_path(&path).unwrap();
+    std::fs::write(&path, hair.write().unwrap()).unwrap();
     let source = pelage_scene::GroomSource::new(&path);
     let resampled = source.load().unwrap();
     std::fs::remove_file(&path).unwrap();

@@ -13,8 +13,8 @@
 
 use std::process::ExitCode;
 
+use pelage::Renderer;
 use pelage::gpu::Gpu;
-use pelage::{Renderer, save_png};
 use pelage_reference::flip::{DEFAULT_PIXELS_PER_DEGREE, LinearImage, flip};
 use pelage_web::Settings;
 
@@ -80,7 +80,7 @@ fn run(options: &Options) -> Result<bool, Box<dyn std::error::Error>> {
     renderer.render(&gpu, options.t, &scene.camera)?;
     renderer.finish(&gpu)?;
     let native = renderer.image(&gpu)?;
-    save_png(&native, &options.native)?;
+    native.save(&options.native)?;
 
     let reference = LinearImage::from_srgb8_rgba(width, height, native.as_raw())?;
     let test = LinearImage::from_srgb8_rgba(width, height, shot.as_raw())?;

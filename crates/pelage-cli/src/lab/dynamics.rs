@@ -539,7 +539,7 @@ pub fn run(opts: &LabOpts, scene: Option<&Path>) -> LabResult<()> {
             "fur" => "dynamics_sheet_fur.png",
             _ => "dynamics_sheet.png",
         };
-        pelage::save_png(&contact_sheet(&outcome.cells, 2)?, &opts.out.join(file))?;
+        crate::output::save_png(&contact_sheet(&outcome.cells, 2)?, &opts.out.join(file))?;
     }
     println!("frames from t = 1.0 s on (all frames if the run is shorter), {frames} frames:");
     println!("{}", summary.to_text());

@@ -460,14 +460,14 @@ pub fn run(opts: &LabOpts) -> Result<(), Box<dyn std::error::Error>> {
                     if let Some(img) =
                         image::RgbaImage::from_raw(size.0, size.1, m.frames[0].clone())
                     {
-                        pelage::save_png(&img, &path)?;
+                        crate::output::save_png(&img, &path)?;
                     }
                 }
                 bar.inc(1);
             }
             if case.name == "creature" && (opacity - 0.8).abs() < 1e-6 {
                 if let Some(img) = image::RgbaImage::from_raw(size.0, size.1, reference.clone()) {
-                    pelage::save_png(&img, &opts.out.join("oit_exact.png"))?;
+                    crate::output::save_png(&img, &opts.out.join("oit_exact.png"))?;
                 }
             }
             // The strand rasterizer against the k-buffer of 8 (issue 18's targets): time

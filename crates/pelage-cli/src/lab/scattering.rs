@@ -724,7 +724,7 @@ pub fn run(
     chart.write_png(&opts.out.join("scattering.png"), 800, 500)?;
     chart.write_svg(&opts.out.join("scattering.svg"), 800, 500)?;
     let sheet = contact_sheet(&cells, METHODS.len() as u32 + 2)?;
-    pelage::save_png(&sheet, &opts.out.join("scattering_sheet.png"))?;
+    crate::output::save_png(&sheet, &opts.out.join("scattering_sheet.png"))?;
     println!("{}", table.to_text());
     println!("where the light comes from (hair luminance over the reference's, by bounce order):");
     print!("{orders_text}");

@@ -174,7 +174,7 @@ pub fn run(opts: &LabOpts) -> Result<(), Box<dyn std::error::Error>> {
     }
     bar.finish_and_clear();
     let sheet = contact_sheet(&cells, 4)?;
-    pelage::save_png(&sheet, &opts.out.join("shading_sheet.png"))?;
+    crate::output::save_png(&sheet, &opts.out.join("shading_sheet.png"))?;
     table.write_csv(&opts.out.join("shading.csv"))?;
     println!("{}", table.to_text());
     println!(

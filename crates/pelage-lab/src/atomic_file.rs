@@ -1,7 +1,7 @@
-//! Atomic file writes, shared by every crate of pelage that writes a file
-//! (the `.hair` writer here, the lab's CSV and charts, the facade's PNG and GIF
-//! outputs). It lives in this crate, the lowest CPU one, so that no stage crate
-//! depends on the lab.
+//! Atomic file writes, shared by every program of pelage that writes a file (the
+//! command line's images, GIFs, `.hair` and USD grooms, the labs' CSV and charts).
+//! The library crates write no files: they hand out bytes (`HairFile::write`,
+//! `usd_file::encode`), and the programs write them here.
 //!
 //! [`AtomicFile`] writes a regular file (or a path that does not exist yet) to
 //! a short temporary name in the same folder, `.pelage-<pid>-<n>.tmp`, and
