@@ -160,17 +160,17 @@ pub struct SceneOpts {
     /// with guides, the render strands interpolated from them).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     pub strands: Option<u32>,
-    /// Shadow method (the scene's by default: voxel).
+    /// Shadow method (the scene's by default; the built-in scene's: voxel).
     #[arg(long, value_name = "METHOD", value_parser = method::<ShadowParams>())]
     pub shadow: Option<ShadowParams>,
     /// Shadow resolution: voxels per axis for voxel shadows (default 128), texels per
     /// side for deep_opacity, shadow_map and adsm (default 1024). Applies to --shadow or the scene's method.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     pub shadow_res: Option<u32>,
-    /// Transparency (the scene's by default: opaque).
+    /// Transparency (the scene's by default; the built-in scene's: strand_raster).
     #[arg(long, value_name = "METHOD", value_parser = method::<Transparency>())]
     pub oit: Option<Transparency>,
-    /// Hair shading model (the scene's by default: kajiya_kay). When the scene already
+    /// Hair shading model (the scene's by default; the built-in scene's: chiang). When the scene already
     /// uses this model its parameters are kept (marschner and marschner_lut share them);
     /// another model starts from its defaults.
     #[arg(long, value_name = "MODEL", value_parser = method::<ShadingModel>())]
@@ -391,6 +391,28 @@ impl SceneOpts {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The help names the built-in scene's methods as they are (it said `opaque` and
+    /// `kajiya_kay` for a release after the defaults changed).
+    #[test]
+    fn the_help_names_the_built_in_scenes_methods() {
+        use clap::{Args, Command};
+        use pelage::scene::Named;
+        let help = SceneOpts::augment_args(Command::new("t"))
+            .render_long_help()
+            .to_string();
+        let scene = pelage::Scene::default();
+        let voxel = matches!(scene.shadow, ShadowParams::Voxel(_));
+        assert!(voxel, "the help says voxel: update it");
+        for name in [
+            "voxel",
+            scene.shade.transparency.name(),
+            scene.shade.model.name(),
+        ] {
+            let said = format!("the built-in scene's: {name})");
+            assert!(help.contains(&said), "`{said}` not in the help:\n{help}");
+        }
+    }
 
     #[test]
     fn sizes() {
