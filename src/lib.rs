@@ -47,10 +47,12 @@ pub use pelage_shadow as shadow;
 pub use pelage_strands as strands;
 
 mod frame;
+mod bridge;
 mod output;
 mod renderer;
 
 pub use frame::{Frame, FrameTarget, frame_plan};
+pub use bridge::{RESOLVED_DEPTH, SHADERS};
 #[cfg(feature = "png")]
 pub use output::save_png;
 pub use output::{AtomicFile, OutputError, remove_pending_temporaries, write_atomically};
