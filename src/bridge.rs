@@ -25,7 +25,7 @@
 //! the caller's resolved picture. Pixels drawn before the hair keep their antialiasing
 //! (resolved, then written into every sample); the hair's edges are the method's own;
 //! the mesh pelage draws itself is single-sampled. When the caller asks for cleared
-//! targets (`TargetViews::load` false) pass 1 is skipped and pass 2 only clears the copy.
+//! targets (`TargetViews::load` false) passes 1 and 2 only clear the bridge's targets.
 //!
 //! The caller's depth must be sampleable (`TEXTURE_BINDING`, as the transparency methods
 //! already ask of a depth they draw) and its colour a render attachment.
@@ -318,12 +318,18 @@ impl TargetBridge {
             .collect()
     }
 
-    /// The pass recorded after the method's.
+    /// The pass recorded after the method's (the colour is written back only into a
+    /// multisampled caller's: a single-sampled one is the method's own target).
     pub fn passes_after(&self) -> Vec<PassInfo> {
+        let written: &[&str] = if self.color.is_some() {
+            &[TARGET_COLOR, TARGET_DEPTH]
+        } else {
+            &[TARGET_DEPTH]
+        };
         vec![
             PassInfo::new(WRITE_BACK)
-                .reads([TARGET_COLOR, TARGET_DEPTH, RESOLVED_DEPTH])
-                .writes([TARGET_COLOR, TARGET_DEPTH]),
+                .reads(written.iter().copied().chain([RESOLVED_DEPTH]))
+                .writes(written.iter().copied()),
         ]
     }
 
@@ -368,35 +374,29 @@ impl TargetBridge {
                 })),
             })
         };
-        if !outer.load {
-            // Nothing to resolve: the method clears its targets, and every pixel's depth
-            // is written back.
-            drop(audit::begin_render_pass(
-                encoder,
-                &wgpu::RenderPassDescriptor {
-                    label: Some(RESOLVE_DEPTH),
-                    color_attachments: &[copy(NO_DEPTH)],
-                    depth_stencil_attachment: None,
-                    timestamp_writes: timer.and_then(|t| t.render_pass(RESOLVE_DEPTH)),
-                    occlusion_query_set: None,
-                    multiview_mask: None,
-                },
-            ));
-            return Ok(());
-        }
         if let Some(color) = &self.color {
             // An empty pass whose end resolves the caller's samples into the bridge's
-            // colour.
+            // colour, or (the caller asks for cleared targets) clears it.
+            let attachment = if outer.load {
+                wgpu::RenderPassColorAttachment {
+                    view: outer.color,
+                    depth_slice: None,
+                    resolve_target: Some(color),
+                    ops: ops(wgpu::LoadOp::Load),
+                }
+            } else {
+                wgpu::RenderPassColorAttachment {
+                    view: color,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: ops(wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT)),
+                }
+            };
             drop(audit::begin_render_pass(
                 encoder,
                 &wgpu::RenderPassDescriptor {
                     label: Some(RESOLVE_COLOR),
-                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                        view: outer.color,
-                        depth_slice: None,
-                        resolve_target: Some(color),
-                        ops: ops(wgpu::LoadOp::Load),
-                    })],
+                    color_attachments: &[Some(attachment)],
                     depth_stencil_attachment: None,
                     timestamp_writes: timer
                         .as_deref_mut()
@@ -406,17 +406,34 @@ impl TargetBridge {
                 },
             ));
         }
+        let depth = Some(wgpu::RenderPassDepthStencilAttachment {
+            view: &self.depth,
+            depth_ops: Some(ops(wgpu::LoadOp::Clear(self.inner.far_depth()))),
+            stencil_ops: None,
+        });
+        if !outer.load {
+            // Nothing to resolve: the method clears its targets, and every pixel's depth
+            // is written back.
+            drop(audit::begin_render_pass(
+                encoder,
+                &wgpu::RenderPassDescriptor {
+                    label: Some(RESOLVE_DEPTH),
+                    color_attachments: &[copy(NO_DEPTH)],
+                    depth_stencil_attachment: depth,
+                    timestamp_writes: timer.and_then(|t| t.render_pass(RESOLVE_DEPTH)),
+                    occlusion_query_set: None,
+                    multiview_mask: None,
+                },
+            ));
+            return Ok(());
+        }
         let group = self.resolve_group(outer.depth_to_sample())?;
         let mut pass = audit::begin_render_pass(
             encoder,
             &wgpu::RenderPassDescriptor {
                 label: Some(RESOLVE_DEPTH),
                 color_attachments: &[copy(0.0)],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &self.depth,
-                    depth_ops: Some(ops(wgpu::LoadOp::Clear(self.inner.far_depth()))),
-                    stencil_ops: None,
-                }),
+                depth_stencil_attachment: depth,
                 timestamp_writes: timer.and_then(|t| t.render_pass(RESOLVE_DEPTH)),
                 occlusion_query_set: None,
                 multiview_mask: None,

@@ -611,10 +611,10 @@ impl Frame {
             return Ok(self.hair.encode(encoder, &frame, views, timer)?);
         };
         let mut timer = timer;
-        bridge.encode_before(encoder, views, timer.as_deref_mut())?;
         let inner = bridge.views(views);
         audit::name_view(inner.color, pelage_shade::TARGET_COLOR);
         audit::name_view(inner.depth, pelage_shade::TARGET_DEPTH);
+        bridge.encode_before(encoder, views, timer.as_deref_mut())?;
         self.hair
             .encode(encoder, &frame, &inner, timer.as_deref_mut())?;
         bridge.encode_after(encoder, views, timer);
