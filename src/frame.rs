@@ -642,9 +642,8 @@ impl Frame {
         &self,
         passes: impl IntoIterator<Item = PassInfo>,
     ) -> crate::Result<FramePlan> {
-        let bridge = (self.bridge.as_ref()).map_or(0, |b| {
-            b.passes_before().len() + b.passes_after().len()
-        });
+        let bridge =
+            (self.bridge.as_ref()).map_or(0, |b| b.passes_before().len() + b.passes_after().len());
         let shade = self.hair.passes(&self.key_lookup()).len() + bridge;
         let all = self.plan.passes();
         let (before, after) = all.split_at(all.len() - shade.min(all.len()));

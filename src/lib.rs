@@ -46,13 +46,13 @@ pub use pelage_shade as shade;
 pub use pelage_shadow as shadow;
 pub use pelage_strands as strands;
 
-mod frame;
 mod bridge;
+mod frame;
 mod output;
 mod renderer;
 
-pub use frame::{Frame, FrameTarget, frame_plan};
 pub use bridge::{RESOLVED_DEPTH, SHADERS};
+pub use frame::{Frame, FrameTarget, frame_plan};
 #[cfg(feature = "png")]
 pub use output::save_png;
 pub use output::{AtomicFile, OutputError, remove_pending_temporaries, write_atomically};

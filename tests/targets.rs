@@ -197,13 +197,7 @@ fn every_method_draws_multisampled_and_reverse_z_targets() {
         let base = TargetFormat::for_params(&s.shade);
         let reference = render(&gpu, &s, &base);
         let variants = [
-            (
-                "4x MSAA",
-                TargetFormat {
-                    samples: 4,
-                    ..base
-                },
-            ),
+            ("4x MSAA", TargetFormat { samples: 4, ..base }),
             (
                 "reverse-Z",
                 TargetFormat {

@@ -20,9 +20,22 @@
 //!
 //! What this first version does and does not do:
 //! - The mesh is read once from `Assets<Mesh>` (positions, normals, triangle-list
-//!   indices) and uploaded into pelage's own buffers; it is read again only when the
-//!   entity's [`Fur`], [`Mesh3d`] or [`SkinnedMesh`] changes, not when the asset is
-//!   edited in place.
+//!   indices, and `ATTRIBUTE_UV_0` as `(u, 1 - v)`, so that [`Fur::hair`]'s texture maps
+//!   follow the mesh's UVs: [`pelage_mesh`]) and uploaded into pelage's own buffers; it is
+//!   read again only when the entity's [`Fur`], [`Mesh3d`], [`SkinnedMesh`] or [`Groom`]
+//!   changes, not when the asset is edited in place.
+//! - Groom files are Bevy assets: the plugin registers [`GroomAsset`] and its
+//!   [`GroomLoader`] (`.hair`, `.tfx`, and with the `usd` feature USD `BasisCurves`), and
+//!   a [`Groom`] component with the asset's handle draws the groom on the entity's mesh
+//!   instead of the grown fur: its own strands in the wind, simulated
+//!   ([`Groom::dynamics`]) or as guides for strands rooted on the mesh
+//!   ([`Groom::guides`]). A file pelage refuses is the asset's load error (Bevy's
+//!   `LoadState::Failed`, logged by Bevy), and the entity is logged once and skipped.
+//! - Every transparency method draws under the camera's [`Msaa`](bevy::render::view::Msaa)
+//!   and reverse-Z depth: the opaque method draws Bevy's samples itself, the others
+//!   draw single-sampled into pelage's own targets between Bevy's (the library's
+//!   `Frame` resolves Bevy's colour and depth into them, depth turned to standard for
+//!   the methods that need it, and writes the picture back into every sample).
 //! - A skinned mesh (an entity with a [`SkinnedMesh`] whose mesh has
 //!   `ATTRIBUTE_JOINT_INDEX` and `ATTRIBUTE_JOINT_WEIGHT`) is skinned by pelage on the
 //!   GPU every frame ([`pelage::Frame::with_skin`]: linear blend skinning of the mesh
@@ -65,9 +78,9 @@
 //!   frame's after-submit step (readbacks, pool growth; never a wait) runs at the next
 //!   frame's prepare, after Bevy submitted.
 //!
-//! Errors (a mesh without normals, bad parameters, a transparency method that refuses
-//! the camera's targets) are logged once with Bevy's `error!` and the entity is
-//! skipped until its [`Fur`] or mesh changes; nothing panics.
+//! Errors (a mesh without normals, bad parameters, a groom file that did not load, a
+//! transparency method the adapter lacks) are logged once with Bevy's `error!` and the
+//! entity is skipped until its [`Fur`], mesh or [`Groom`] changes; nothing panics.
 
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -126,7 +139,8 @@ pub struct Fur {
     pub hair: HairParams,
     /// Shading: the hair model, ambient term, mesh colour and transparency method.
     /// `background` is unused (Bevy clears its targets); `sample_count` is taken from
-    /// the camera for opaque hair; the transparency methods need `Msaa::Off`.
+    /// the camera for opaque hair; every transparency method draws under any `Msaa`
+    /// (single-sampled, through pelage's target bridge).
     pub shade: ShadeParams,
     /// pelage's voxel shadow (the fur's own shadow from the directional light).
     pub voxel: VoxelParams,

@@ -71,7 +71,10 @@ fn a_groom_asset_draws_as_pelage_draws_the_scene_file() {
         bevy_frame.save(dir.join("bevy_groom.png")).unwrap();
         own.save(dir.join("pelage_groom.png")).unwrap();
     }
-    assert!(drawn > pixels / 20, "pelage's frame holds {drawn} drawn pixels");
+    assert!(
+        drawn > pixels / 20,
+        "pelage's frame holds {drawn} drawn pixels"
+    );
     // The bound for the plugin against the facade.
     assert!(map.mean() <= 0.005, "mean FLIP {} > 0.005", map.mean());
 }

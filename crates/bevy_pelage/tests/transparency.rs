@@ -82,14 +82,9 @@ fn every_transparency_method_draws_under_bevys_msaa_as_pelage_draws_it() {
             own_scene.shade.sample_count = 4;
             own_format.samples = 4;
         }
-        let mut renderer = Renderer::with_format(
-            &own_gpu,
-            &own_scene,
-            fur::WIDTH,
-            fur::HEIGHT,
-            &own_format,
-        )
-        .unwrap();
+        let mut renderer =
+            Renderer::with_format(&own_gpu, &own_scene, fur::WIDTH, fur::HEIGHT, &own_format)
+                .unwrap();
         renderer.render(&own_gpu, t, &own_scene.camera).unwrap();
         let own = renderer.image(&own_gpu).unwrap();
         let map = flip(

@@ -24,7 +24,11 @@ fn half_map(black_top: bool) -> TextureMap {
             if white { [255; 4] } else { [0, 0, 0, 255] }
         })
         .collect();
-    let name = if black_top { "black top" } else { "black bottom" };
+    let name = if black_top {
+        "black top"
+    } else {
+        "black bottom"
+    };
     TextureMap::from_image(name, MapImage::new(1, 64, texels).unwrap())
 }
 

@@ -258,7 +258,10 @@ impl Transparency {
     pub fn draws_reverse_z(&self) -> bool {
         !matches!(
             self,
-            Self::KBuffer { .. } | Self::ABuffer { .. } | Self::Dbk { .. } | Self::RandomSubsets { .. }
+            Self::KBuffer { .. }
+                | Self::ABuffer { .. }
+                | Self::Dbk { .. }
+                | Self::RandomSubsets { .. }
         )
     }
 

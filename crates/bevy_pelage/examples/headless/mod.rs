@@ -7,6 +7,7 @@ use std::time::Duration;
 
 use bevy::app::{PluginGroupBuilder, PluginsState};
 use bevy::camera::Exposure;
+use bevy::camera::RenderTarget;
 use bevy::image::Image;
 use bevy::light::DirectionalLight;
 use bevy::prelude::*;
@@ -14,10 +15,9 @@ use bevy::render::RenderPlugin;
 use bevy::render::pipelined_rendering::PipelinedRenderingPlugin;
 use bevy::render::render_asset::RenderAssets;
 use bevy::render::render_resource::{TextureFormat, TextureUsages};
-use bevy::camera::RenderTarget;
 use bevy::render::renderer::{RenderDevice, RenderQueue};
-use bevy::render::view::{DebandDither, Msaa, Tonemapping};
 use bevy::render::texture::GpuImage;
+use bevy::render::view::{DebandDither, Msaa, Tonemapping};
 use bevy::window::{ExitCondition, WindowPlugin};
 use bevy_pelage::Fur;
 
