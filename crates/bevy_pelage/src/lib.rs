@@ -31,7 +31,7 @@
 //!   ([`Groom::dynamics`]) or as guides for strands rooted on the mesh
 //!   ([`Groom::guides`]). A file pelage refuses is the asset's load error (Bevy's
 //!   `LoadState::Failed`, logged by Bevy), and the entity is logged once and skipped.
-//! - Every transparency method draws under the camera's [`Msaa`](bevy::render::view::Msaa)
+//! - Every transparency method draws under the camera's [`Msaa`]
 //!   and reverse-Z depth: the opaque method draws Bevy's samples itself, the others
 //!   draw single-sampled into pelage's own targets between Bevy's (the library's
 //!   `Frame` resolves Bevy's colour and depth into them, depth turned to standard for

@@ -12,7 +12,7 @@ use std::f32::consts::FRAC_PI_2;
 use bevy::prelude::*;
 use bevy::render::view::Msaa;
 use bevy::time::TimeUpdateStrategy;
-use bevy_pelage::{Fur, PelagePlugin};
+use bevy_pelage::PelagePlugin;
 use pelage::scene::{MapImage, TextureMap};
 
 /// A 1 x 64 density map: black (no fur) in its top half, white in its bottom half, or
