@@ -53,7 +53,13 @@ pub fn scene(path: &Path) -> Result<(pelage::Scene, String)> {
 ///
 /// [`Fur`]: bevy_pelage::Fur
 pub fn app(scene_file: &Path) -> Result<(App, Handle<Image>)> {
-    let (scene, groom_file) = scene(scene_file)?;
+    app_with_groom(scene_file, None)
+}
+
+/// [`app`] with another groom file than the scene's (a name in the scene's folder).
+pub fn app_with_groom(scene_file: &Path, groom: Option<&str>) -> Result<(App, Handle<Image>)> {
+    let (scene, scene_groom) = scene(scene_file)?;
+    let groom_file = groom.map_or(scene_groom, str::to_owned);
     let folder = scene_file
         .parent()
         .ok_or("the scene file has no folder")?

@@ -20,10 +20,19 @@ fn linear(image: &image::RgbaImage) -> LinearImage {
     LinearImage::from_srgb8_rgba(image.width(), image.height(), image.as_raw()).unwrap()
 }
 
+/// The groom's own strands in the wind (`long_hair.toml`) and interpolated from it as
+/// guides onto the head (`guides.toml`).
 #[test]
 fn a_groom_asset_draws_as_pelage_draws_the_scene_file() {
-    let file = groom::default_scene_file();
-    let (mut app, target) = groom::app(&file).unwrap_or_else(|e| {
+    let scenes = groom::default_scene_file().with_file_name("");
+    for name in ["long_hair.toml", "guides.toml"] {
+        against_pelage(&scenes.join(name));
+    }
+}
+
+fn against_pelage(file: &std::path::Path) {
+    let name = file.file_name().unwrap().to_string_lossy();
+    let (mut app, target) = groom::app(file).unwrap_or_else(|e| {
         panic!("this test needs a GPU adapter (install mesa-vulkan-drivers for lavapipe): {e}")
     });
     let waited = groom::until_drawn(&mut app, &target, 200).unwrap();
@@ -34,7 +43,7 @@ fn a_groom_asset_draws_as_pelage_draws_the_scene_file() {
     let bevy_frame = groom::read(&mut app, &target).unwrap();
     let pixels = (groom::WIDTH * groom::HEIGHT) as usize;
 
-    let (scene, _) = groom::scene(&file).unwrap();
+    let (scene, groom_file) = groom::scene(file).unwrap();
     assert!(scene.groom.is_some());
     let gpu = pelage::gpu::Gpu::headless().unwrap();
     let format = TargetFormat {
@@ -61,22 +70,28 @@ fn a_groom_asset_draws_as_pelage_draws_the_scene_file() {
         .filter(|(a, b)| a != b)
         .count();
     println!(
-        "long_hair.hair as a Bevy asset (drawn after {waited} frames), Bevy's 4x MSAA, vs \
-         pelage's frame of long_hair.toml at t = {t:.3} s: mean FLIP {:.5}, {differing} of \
+        "{groom_file} as a Bevy asset (drawn after {waited} frames), Bevy's 4x MSAA, vs \
+         pelage's frame of {name} at t = {t:.3} s: mean FLIP {:.5}, {differing} of \
          {pixels} pixels differ ({drawn} drawn)",
         map.mean()
     );
     if let Some(dir) = std::env::var_os("PELAGE_BEVY_OUT").map(std::path::PathBuf::from) {
         std::fs::create_dir_all(&dir).unwrap();
-        bevy_frame.save(dir.join("bevy_groom.png")).unwrap();
-        own.save(dir.join("pelage_groom.png")).unwrap();
+        bevy_frame
+            .save(dir.join(format!("bevy_{name}.png")))
+            .unwrap();
+        own.save(dir.join(format!("pelage_{name}.png"))).unwrap();
     }
     assert!(
         drawn > pixels / 20,
-        "pelage's frame holds {drawn} drawn pixels"
+        "{name}: pelage's frame holds {drawn} drawn pixels"
     );
     // The issue's bound for the plugin against the facade.
-    assert!(map.mean() <= 0.005, "mean FLIP {} > 0.005", map.mean());
+    assert!(
+        map.mean() <= 0.005,
+        "{name}: mean FLIP {} > 0.005",
+        map.mean()
+    );
 }
 
 /// A broken groom file: the loader's error is Bevy's load error, naming pelage's reason.
@@ -125,4 +140,16 @@ fn a_bad_groom_file_is_the_assets_load_error() {
         );
     }
     std::fs::remove_dir_all(&dir).ok();
+}
+
+/// A groom file that is not there: the entity gets no fur (nor its mesh: pelage draws
+/// none without a frame), nothing panics, frame after frame.
+#[test]
+fn an_entity_whose_groom_does_not_load_is_skipped() {
+    let file = groom::default_scene_file();
+    let (mut app, target) = groom::app_with_groom(&file, Some("missing.hair")).unwrap();
+    assert!(groom::until_drawn(&mut app, &target, 12).is_err());
+    let frame = groom::read(&mut app, &target).unwrap();
+    let background = *frame.get_pixel(0, 0);
+    assert!(frame.pixels().all(|p| *p == background));
 }
