@@ -22,6 +22,7 @@ use pelage_strands::{
 };
 
 use crate::Scene;
+use crate::bridge::TargetBridge;
 
 /// The targets a [`Frame`] records into, as the caller describes them (the views
 /// themselves come at every [`Frame::record`]).
@@ -186,6 +187,10 @@ pub struct Frame {
     plan: FramePlan,
     /// The frame stage 1 last prepared, which every stage records.
     prepared: Option<StrandFrame>,
+    /// Targets the transparency method can draw, around it, when it cannot draw the
+    /// caller's (multisampled, or reverse-Z for some methods); `None`: the hair pass
+    /// draws into the caller's targets.
+    bridge: Option<TargetBridge>,
 }
 
 impl Frame {
@@ -350,6 +355,21 @@ impl Frame {
             .shade
             .validate()
             .map_err(pelage_shade::ShadeError::from)?;
+        // A transparency method draws single-sampled (and some only standard depth): on
+        // targets it cannot draw it draws into the bridge's, resolved from and written
+        // back into the caller's.
+        let transparency = &scene.shade.transparency;
+        let bridge = TargetBridge::needed(&target.format, transparency)
+            .then(|| {
+                TargetBridge::new(
+                    gpu,
+                    target.format,
+                    transparency,
+                    target.width,
+                    target.height,
+                )
+            })
+            .transpose()?;
         let hair = pelage_shade::build(
             gpu,
             &HairInputs {
@@ -360,13 +380,31 @@ impl Frame {
                 visibility: visibility
                     .as_ref()
                     .map(|buffer| Visibility { buffer, stride }),
-                target: target.format,
+                target: bridge.as_ref().map_or(target.format, TargetBridge::inner),
                 draw_mesh,
             },
             target.width,
             target.height,
         )?;
         let plan = frame_plan(strands.as_ref(), &shadows, hair.as_ref());
+        let plan = match &bridge {
+            Some(bridge) => {
+                let key_lookup = shadows
+                    .first()
+                    .map(|(shadow, _)| rename_lookup(shadow.as_ref(), "shadow0"))
+                    .unwrap_or_default();
+                let shade = hair.passes(&key_lookup).len();
+                let all = plan.passes();
+                let (before, after) = all.split_at(all.len() - shade.min(all.len()));
+                let mut bridged = FramePlan::new(plan.inputs().iter().cloned());
+                bridged.push(before.iter().cloned());
+                bridged.push(bridge.passes_before());
+                bridged.push(after.iter().cloned());
+                bridged.push(bridge.passes_after());
+                bridged
+            }
+            None => plan,
+        };
         // The skinning pass writes the mesh before stage 1 reads it.
         let plan = match &skin {
             Some((skin, _)) => {
@@ -398,6 +436,7 @@ impl Frame {
             target: *target,
             plan,
             prepared: None,
+            bridge,
         })
     }
 
@@ -485,6 +524,10 @@ impl Frame {
             hand_over.prepare(queue, frame)?;
         }
         let (width, height) = (self.target.width, self.target.height);
+        let camera = match &self.bridge {
+            Some(bridge) => &bridge.matrices(camera),
+            None => camera,
+        };
         self.hair
             .prepare(queue, frame, camera, &self.lights, width, height)?;
         Ok(())
@@ -563,7 +606,19 @@ impl Frame {
         {
             audit::name_view(view, pelage_shade::TARGET_DEPTH);
         }
-        Ok(self.hair.encode(encoder, &self.prepared()?, views, timer)?)
+        let frame = self.prepared()?;
+        let Some(bridge) = &self.bridge else {
+            return Ok(self.hair.encode(encoder, &frame, views, timer)?);
+        };
+        let mut timer = timer;
+        let inner = bridge.views(views);
+        audit::name_view(inner.color, pelage_shade::TARGET_COLOR);
+        audit::name_view(inner.depth, pelage_shade::TARGET_DEPTH);
+        bridge.encode_before(encoder, views, timer.as_deref_mut())?;
+        self.hair
+            .encode(encoder, &frame, &inner, timer.as_deref_mut())?;
+        bridge.encode_after(encoder, views, timer);
+        Ok(())
     }
 
     /// The one step after the caller submitted a recorded frame: takes the readbacks of
@@ -587,7 +642,9 @@ impl Frame {
         &self,
         passes: impl IntoIterator<Item = PassInfo>,
     ) -> crate::Result<FramePlan> {
-        let shade = self.hair.passes(&self.key_lookup()).len();
+        let bridge =
+            (self.bridge.as_ref()).map_or(0, |b| b.passes_before().len() + b.passes_after().len());
+        let shade = self.hair.passes(&self.key_lookup()).len() + bridge;
         let all = self.plan.passes();
         let (before, after) = all.split_at(all.len() - shade.min(all.len()));
         let mut plan = FramePlan::new(self.plan.inputs().iter().cloned());

@@ -48,9 +48,11 @@ pub use pelage_shade as shade;
 pub use pelage_shadow as shadow;
 pub use pelage_strands as strands;
 
+mod bridge;
 mod frame;
 mod renderer;
 
+pub use bridge::{RESOLVED_DEPTH, SHADERS};
 pub use frame::{Frame, FrameTarget, frame_plan};
 pub use renderer::{Change, FRAMES_IN_FLIGHT, FrameStats, Renderer, Scene, Update};
 

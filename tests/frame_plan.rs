@@ -8,6 +8,7 @@ use pelage::gpu::{Gpu, PlanError};
 use std::path::Path;
 
 use pelage::scene::{DynamicsParams, Named, ShadowParams, Transparency};
+use pelage::shade::TargetFormat;
 use pelage::{Renderer, Scene, frame_plan};
 
 fn scene(shadow: ShadowParams, transparency: Transparency, lights: usize) -> Scene {
@@ -48,6 +49,61 @@ fn cases() -> Vec<(ShadowParams, Transparency, usize)> {
         ),
         (ShadowParams::default(), Transparency::strand_raster(), 2),
     ]
+}
+
+/// Targets a transparency method draws through the frame's target bridge
+/// (`src/bridge.rs`): multisampled, reversed depth for a method that compares one way,
+/// both; each with its scene.
+fn bridged() -> Vec<(String, Scene, TargetFormat)> {
+    let base = TargetFormat::default();
+    let msaa = TargetFormat { samples: 4, ..base };
+    let reversed = TargetFormat {
+        reverse_z: true,
+        ..base
+    };
+    let both = TargetFormat {
+        samples: 4,
+        reverse_z: true,
+        ..base
+    };
+    [
+        (Transparency::wboit(), msaa, "4x MSAA"),
+        (Transparency::a_buffer(), reversed, "reverse-Z"),
+        (Transparency::strand_raster(), both, "4x MSAA, reverse-Z"),
+    ]
+    .into_iter()
+    .map(|(method, format, targets)| {
+        (
+            format!("{} on {targets}", method.name()),
+            scene(ShadowParams::default(), method, 1),
+            format,
+        )
+    })
+    .collect()
+}
+
+#[test]
+fn the_plan_declares_the_passes_a_frame_records_through_the_target_bridge() {
+    let gpu = Gpu::headless().unwrap_or_else(|e| panic!("this test needs a GPU adapter: {e}"));
+    if !gpu.has_timestamps() {
+        panic!("this test compares with timestamp labels; the adapter has no timestamp queries");
+    }
+    for (name, s, format) in bridged() {
+        let mut renderer = Renderer::with_format(&gpu, &s, 96, 72, &format)
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
+        let plan = renderer.plan().clone();
+        plan.validate().unwrap();
+        assert!(
+            plan.labels().iter().any(|l| l.starts_with("bridge: ")),
+            "{name}: {:?}",
+            plan.labels()
+        );
+        renderer.render(&gpu, 0.0, &s.camera).unwrap();
+        let stats = renderer.finish(&gpu).unwrap();
+        let timed: Vec<&str> = stats.passes.iter().map(|(l, _)| l.as_str()).collect();
+        println!("{name}: {:?}", plan.labels());
+        assert_eq!(plan.labels(), timed, "{name}");
+    }
 }
 
 #[test]
@@ -117,23 +173,28 @@ fn every_pass_binds_only_what_the_plan_declares() {
         );
     }
     let mut failures = Vec::new();
-    let mut scenes: Vec<(String, Scene)> = cases()
+    let mut scenes: Vec<(String, Scene, TargetFormat)> = cases()
         .into_iter()
         .map(|(shadow, method, lights)| {
+            let s = scene(shadow.clone(), method.clone(), lights);
+            let format = TargetFormat::for_params(&s.shade);
             (
                 format!(
                     "{} / {} / {lights} light(s)",
                     shadow.method_name(),
                     method.name()
                 ),
-                scene(shadow, method, lights),
+                s,
+                format,
             )
         })
         .collect();
+    scenes.extend(bridged());
     // Every stage 1 method: a simulation, a groom, a simulated groom, guides, a skin.
     let mut simulated = scene(ShadowParams::default(), Transparency::default(), 1);
     simulated.dynamics = Some(DynamicsParams::default());
-    scenes.push(("simulated fur".into(), simulated));
+    let format = TargetFormat::for_params(&simulated.shade);
+    scenes.push(("simulated fur".into(), simulated, format));
     for file in [
         "long_hair.toml",
         "head_turn.toml",
@@ -145,11 +206,12 @@ fn every_pass_binds_only_what_the_plan_declares() {
             .join(file);
         let mut s = Scene::from_file(&path).unwrap_or_else(|e| panic!("{file}: {e}"));
         s.hair.roots.count = s.hair.roots.count.min(1500);
-        scenes.push((file.into(), s));
+        let format = TargetFormat::for_params(&s.shade);
+        scenes.push((file.into(), s, format));
     }
-    for (name, s) in scenes {
+    for (name, s, format) in scenes {
         let audit = Audit::start();
-        let mut renderer = match Renderer::new(&gpu, &s, 96, 72) {
+        let mut renderer = match Renderer::with_format(&gpu, &s, 96, 72, &format) {
             Ok(r) => r,
             Err(pelage::Error::Shade(pelage::shade::ShadeError::Unsupported(why))) => {
                 println!("{name}: skipped, this adapter cannot run it: {why}");

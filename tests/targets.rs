@@ -127,15 +127,15 @@ fn every_target_format_gives_the_default_picture() {
 #[test]
 fn a_target_the_method_cannot_draw_is_an_error() {
     let gpu = gpu();
-    // The transparency methods draw single-sampled.
+    // A sample count the adapter lacks.
     let s = scene(Transparency::Wboit {
         weight: Default::default(),
     });
-    let msaa = TargetFormat {
-        samples: 4,
+    let odd = TargetFormat {
+        samples: 3,
         ..TargetFormat::default()
     };
-    let err = Renderer::with_format(&gpu, &s, W, H, &msaa).unwrap_err();
+    let err = Renderer::with_format(&gpu, &s, W, H, &odd).unwrap_err();
     assert!(err.to_string().contains("target.samples"), "{err}");
     // A depth format as colour, a colour format as depth.
     for bad in [
@@ -174,29 +174,108 @@ fn a_projection_that_disagrees_with_the_depth_direction_is_an_error() {
     assert!(err.to_string().contains("reverse_z"), "{err}");
 }
 
+/// Every transparency method the adapter runs draws multisampled targets and reversed
+/// depth (an engine's: Bevy's are both) through the frame's target bridge
+/// (`src/bridge.rs`): the picture of the single-sampled, standard-depth targets.
 #[test]
-fn a_reverse_z_target_is_refused_where_it_cannot_be_drawn() {
+fn every_method_draws_multisampled_and_reverse_z_targets() {
     let gpu = gpu();
+    let supported = pelage::shade::supported_methods(&gpu);
+    for transparency in Transparency::defaults() {
+        if transparency == Transparency::Opaque {
+            continue; // draws multisampled and reversed itself (the test above)
+        }
+        if !supported.contains(&transparency.name()) {
+            println!(
+                "{}: skipped, this adapter ({}) lacks what it needs",
+                transparency.name(),
+                gpu.describe()
+            );
+            continue;
+        }
+        let s = scene(transparency.clone());
+        let base = TargetFormat::for_params(&s.shade);
+        let reference = render(&gpu, &s, &base);
+        let variants = [
+            ("4x MSAA", TargetFormat { samples: 4, ..base }),
+            (
+                "reverse-Z",
+                TargetFormat {
+                    reverse_z: true,
+                    ..base
+                },
+            ),
+            (
+                "4x MSAA, Rgba16Float, Depth24PlusStencil8, reverse-Z",
+                TargetFormat {
+                    samples: 4,
+                    color: wgpu::TextureFormat::Rgba16Float,
+                    depth: wgpu::TextureFormat::Depth24PlusStencil8,
+                    reverse_z: true,
+                },
+            ),
+        ];
+        for (name, format) in variants {
+            let image = render(&gpu, &s, &format);
+            let (mean, large) = compare(&reference, &image);
+            println!(
+                "{} {name}: mean {mean:.3}/255, {:.3}% large",
+                transparency.name(),
+                large * 100.0
+            );
+            // The bridge writes the single-sampled picture into every sample: what is
+            // left is 16-bit float storage, 24-bit depth and 1 - depth's rounding.
+            assert!(
+                mean < 1.0 && large < 0.002,
+                "{} {name}: mean {mean:.3}/255, {:.3}% of channels off by more than 24",
+                transparency.name(),
+                large * 100.0
+            );
+        }
+    }
+}
+
+/// `Transparency::draws_reverse_z` (which methods the frame bridges to standard depth) is
+/// the list of methods stage 3 refuses reversed depth for.
+#[test]
+fn the_methods_that_draw_reverse_z_are_the_ones_stage_3_builds() {
+    let gpu = gpu();
+    let supported = pelage::shade::supported_methods(&gpu);
     let reversed = TargetFormat {
         reverse_z: true,
         ..TargetFormat::default()
     };
-    for transparency in [
-        Transparency::ABuffer {
-            nodes_per_pixel: 8.0,
-            resolve_k: 16,
-        },
-        Transparency::Dbk {
-            depth_shift: 1.0,
-            nodes_per_pixel: 8.0,
-            resolve_k: 16,
-        },
-        Transparency::KBuffer { k: 8 },
-        Transparency::RandomSubsets { k: 8 },
-    ] {
-        let err = Renderer::with_format(&gpu, &scene(transparency.clone()), W, H, &reversed)
-            .unwrap_err()
-            .to_string();
-        assert!(err.contains("reverse-Z"), "{transparency:?}: {err}");
+    for transparency in Transparency::defaults() {
+        if !supported.contains(&transparency.name()) {
+            continue;
+        }
+        let s = scene(transparency.clone());
+        let frame = pelage::Frame::new(
+            &gpu,
+            &s,
+            &pelage::FrameTarget::new(TargetFormat::for_params(&s.shade), W, H),
+        )
+        .unwrap();
+        let built = pelage::shade::build(
+            &gpu,
+            &pelage::shade::HairInputs {
+                params: &s.shade,
+                mesh: frame.mesh_buffers(),
+                strands: frame.strands().buffers(),
+                shadow: None,
+                visibility: None,
+                target: reversed,
+                draw_mesh: true,
+            },
+            W,
+            H,
+        );
+        assert_eq!(
+            built.is_ok(),
+            transparency.draws_reverse_z(),
+            "{}: {:?}",
+            transparency.name(),
+            built.err()
+        );
     }
 }

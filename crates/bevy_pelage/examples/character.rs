@@ -22,12 +22,11 @@
 
 use std::path::PathBuf;
 
-use bevy::camera::RenderTarget;
 use bevy::image::Image;
 use bevy::mesh::VertexAttributeValues;
 use bevy::mesh::skinning::{SkinnedMesh, SkinnedMeshInverseBindposes};
 use bevy::prelude::*;
-use bevy::render::view::{DebandDither, Msaa, Tonemapping};
+use bevy::render::view::Msaa;
 use bevy::time::TimeUpdateStrategy;
 use bevy_pelage::PelagePlugin;
 
@@ -330,21 +329,7 @@ pub fn app(walking: bool) -> Result<(App, Handle<Image>)> {
 
     // pelage's camera and key light, placed relative to the mesh as pelage's scene
     // places them relative to its mesh.
-    let c = &scene.camera;
-    let camera_local = Transform::from_translation(v3(c.eye)).looking_at(v3(c.target), Vec3::Y);
-    world.spawn((
-        Camera3d::default(),
-        RenderTarget::Image(image.clone().into()),
-        Transform::from_matrix(m.to_matrix() * camera_local.to_matrix()),
-        Projection::Perspective(PerspectiveProjection {
-            fov: c.fov_y,
-            near: c.near,
-            ..default()
-        }),
-        Msaa::Off,
-        Tonemapping::None,
-        DebandDither::Disabled,
-    ));
+    world.spawn(headless::camera(&scene, &image, m, Msaa::Off));
     world.spawn(headless::key_light(&scene, m.rotation)?);
 
     world.spawn((

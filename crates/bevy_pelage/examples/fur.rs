@@ -2,10 +2,12 @@
 //! and an entity with a `Mesh3d` and [`Fur`], rendered headless into an `Image`.
 //!
 //! ```text
-//! cargo run -p bevy_pelage --example fur -- [--frames N] [--out DIR] [--msaa] [--hdr] [--without-plugin]
+//! cargo run -p bevy_pelage --example fur -- [--frames N] [--out DIR] [--msaa] [--hdr] [--transparency NAME] [--without-plugin]
 //! ```
 //!
-//! Renders N frames (default 8, 1/12 s apart) of 320 x 240 and writes
+//! `--transparency` names pelage's transparency method (`opaque`, `wboit`, `k_buffer`,
+//! `a_buffer`, `dbk`, `random_subsets`, `strand_raster`, the default); every one draws
+//! under `--msaa` too. Renders N frames (default 8, 1/12 s apart) of 320 x 240 and writes
 //! `DIR/fur_NNNN.png` (default `out/bevy`), then the median time of Bevy's whole frame
 //! (`App::update`) after the first two; `--without-plugin` times the same app without
 //! `PelagePlugin`. No window: Bevy is built without winit,
@@ -14,10 +16,10 @@
 
 use std::path::PathBuf;
 
-use bevy::camera::{Hdr, RenderTarget};
+use bevy::camera::Hdr;
 use bevy::image::Image;
 use bevy::prelude::*;
-use bevy::render::view::{DebandDither, Msaa, Tonemapping};
+use bevy::render::view::{Msaa, Tonemapping};
 use bevy::time::TimeUpdateStrategy;
 use bevy_pelage::PelagePlugin;
 
@@ -53,7 +55,11 @@ pub struct View {
 /// A Bevy app, headless, that renders `scene()` into an image each `update`: returns
 /// the app and the image.
 pub fn app(view: View) -> Result<(App, Handle<Image>)> {
-    let scene = scene();
+    app_of(view, &scene())
+}
+
+/// [`app`] of another scene (`scene()` with another transparency method, say).
+pub fn app_of(view: View, scene: &pelage::Scene) -> Result<(App, Handle<Image>)> {
     let mut app = App::new();
     app.add_plugins(headless::plugins())
         .insert_resource(TimeUpdateStrategy::ManualDuration(FRAME_STEP));
@@ -69,33 +75,18 @@ pub fn app(view: View) -> Result<(App, Handle<Image>)> {
         .resource_mut::<Assets<Mesh>>()
         .add(bevy_pelage::bevy_mesh(&scene.mesh));
 
-    // pelage's camera, as a Bevy camera: the same eye, target, vertical field of view
-    // and near plane (Bevy's projection is reverse-Z with an infinite far plane).
-    let c = &scene.camera;
-    let v3 = |v: glam::Vec3| Vec3::from_array(v.to_array());
-    let mut camera = world.spawn((
-        Camera3d::default(),
-        RenderTarget::Image(image.clone().into()),
-        Transform::from_translation(v3(c.eye)).looking_at(v3(c.target), Vec3::Y),
-        Projection::Perspective(PerspectiveProjection {
-            fov: c.fov_y,
-            near: c.near,
-            ..default()
-        }),
-        if view.msaa { Msaa::Sample4 } else { Msaa::Off },
-        Tonemapping::None,
-        DebandDither::Disabled,
-    ));
+    let msaa = if view.msaa { Msaa::Sample4 } else { Msaa::Off };
+    let mut camera = world.spawn(headless::camera(scene, &image, Transform::default(), msaa));
     if view.hdr {
         camera.insert((Hdr, Tonemapping::Reinhard));
     }
 
     // pelage's key light as a Bevy directional light.
-    world.spawn(headless::key_light(&scene, Quat::IDENTITY)?);
+    world.spawn(headless::key_light(scene, Quat::IDENTITY)?);
 
     world.spawn((
         Mesh3d(mesh),
-        headless::fur(&scene, None),
+        headless::fur(scene, None),
         Transform::default(),
     ));
 
@@ -114,23 +105,29 @@ fn run() -> Result<()> {
     let mut frames = 8u32;
     let mut out = PathBuf::from("out/bevy");
     let mut view = View::default();
+    let mut scene = scene();
     let mut args = std::env::args().skip(1);
     while let Some(flag) = args.next() {
         match flag.as_str() {
             "--msaa" => view.msaa = true,
             "--hdr" => view.hdr = true,
             "--without-plugin" => view.without_plugin = true,
+            "--transparency" => {
+                let name = args.next().ok_or("--transparency needs a name")?;
+                scene.shade.transparency = pelage::scene::Transparency::by_name(&name)
+                    .ok_or_else(|| format!("--transparency: no method {name}"))?;
+            }
             "--frames" => frames = args.next().ok_or("--frames needs a value")?.parse()?,
             "--out" => out = PathBuf::from(args.next().ok_or("--out needs a value")?),
             other => {
                 return Err(format!(
-                    "unknown argument {other} (--frames, --out, --msaa, --hdr, --without-plugin)"
+                    "unknown argument {other} (--frames, --out, --msaa, --hdr, --transparency, --without-plugin)"
                 )
                 .into());
             }
         }
     }
-    let (mut app, image) = app(view)?;
+    let (mut app, image) = app_of(view, &scene)?;
     std::fs::create_dir_all(&out)?;
     let mut update_ms = Vec::new();
     let mut plugin_ms = Vec::new();

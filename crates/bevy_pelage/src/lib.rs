@@ -20,9 +20,22 @@
 //!
 //! What this first version does and does not do:
 //! - The mesh is read once from `Assets<Mesh>` (positions, normals, triangle-list
-//!   indices) and uploaded into pelage's own buffers; it is read again only when the
-//!   entity's [`Fur`], [`Mesh3d`] or [`SkinnedMesh`] changes, not when the asset is
-//!   edited in place.
+//!   indices, and `ATTRIBUTE_UV_0` as `(u, 1 - v)`, so that [`Fur::hair`]'s texture maps
+//!   follow the mesh's UVs: [`pelage_mesh`]) and uploaded into pelage's own buffers; it is
+//!   read again only when the entity's [`Fur`], [`Mesh3d`], [`SkinnedMesh`] or [`Groom`]
+//!   changes, not when the asset is edited in place.
+//! - Groom files are Bevy assets: the plugin registers [`GroomAsset`] and its
+//!   [`GroomLoader`] (`.hair`, `.tfx`, and with the `usd` feature USD `BasisCurves`), and
+//!   a [`Groom`] component with the asset's handle draws the groom on the entity's mesh
+//!   instead of the grown fur: its own strands in the wind, simulated
+//!   ([`Groom::dynamics`]) or as guides for strands rooted on the mesh
+//!   ([`Groom::guides`]). A file pelage refuses is the asset's load error (Bevy's
+//!   `LoadState::Failed`, logged by Bevy), and the entity is logged once and skipped.
+//! - Every transparency method draws under the camera's [`Msaa`]
+//!   and reverse-Z depth: the opaque method draws Bevy's samples itself, the others
+//!   draw single-sampled into pelage's own targets between Bevy's (the library's
+//!   `Frame` resolves Bevy's colour and depth into them, depth turned to standard for
+//!   the methods that need it, and writes the picture back into every sample).
 //! - A skinned mesh (an entity with a [`SkinnedMesh`] whose mesh has
 //!   `ATTRIBUTE_JOINT_INDEX` and `ATTRIBUTE_JOINT_WEIGHT`) is skinned by pelage on the
 //!   GPU every frame ([`pelage::Frame::with_skin`]: linear blend skinning of the mesh
@@ -65,9 +78,9 @@
 //!   frame's after-submit step (readbacks, pool growth; never a wait) runs at the next
 //!   frame's prepare, after Bevy submitted.
 //!
-//! Errors (a mesh without normals, bad parameters, a transparency method that refuses
-//! the camera's targets) are logged once with Bevy's `error!` and the entity is
-//! skipped until its [`Fur`] or mesh changes; nothing panics.
+//! Errors (a mesh without normals, bad parameters, a groom file that did not load, a
+//! transparency method the adapter lacks) are logged once with Bevy's `error!` and the
+//! entity is skipped until its [`Fur`], mesh or [`Groom`] changes; nothing panics.
 
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -97,6 +110,9 @@ use pelage::scene::{
 use pelage::shade::{TargetFormat, TargetViews};
 use pelage::{Frame, FrameTarget, Scene};
 
+mod groom;
+pub use groom::{Groom, GroomAsset, GroomLoadError, GroomLoader};
+
 /// Why an entity's fur cannot be drawn.
 #[derive(Debug, thiserror::Error)]
 pub enum FurError {
@@ -110,6 +126,9 @@ pub enum FurError {
     /// or joint entities (pelage's own checks of the skin are [`FurError::Pelage`]).
     #[error("skin: {0}")]
     Skin(String),
+    /// A [`Groom`] whose file did not load or that pelage cannot resample.
+    #[error("groom: {0}")]
+    Groom(String),
 }
 
 /// Fur on the [`Mesh3d`] of the same entity.
@@ -120,7 +139,8 @@ pub struct Fur {
     pub hair: HairParams,
     /// Shading: the hair model, ambient term, mesh colour and transparency method.
     /// `background` is unused (Bevy clears its targets); `sample_count` is taken from
-    /// the camera for opaque hair; the transparency methods need `Msaa::Off`.
+    /// the camera for opaque hair; every transparency method draws under any `Msaa`
+    /// (single-sampled, through pelage's target bridge).
     pub shade: ShadeParams,
     /// pelage's voxel shadow (the fur's own shadow from the directional light).
     pub voxel: VoxelParams,
@@ -165,7 +185,9 @@ pub struct PelagePlugin;
 
 impl Plugin for PelagePlugin {
     fn build(&self, app: &mut App) {
-        app.add_systems(PostUpdate, (read_fur_meshes, let_pelage_read_depth));
+        app.init_asset::<GroomAsset>()
+            .register_asset_loader(GroomLoader)
+            .add_systems(PostUpdate, (read_fur_meshes, let_pelage_read_depth));
         let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
             return;
         };
@@ -399,17 +421,54 @@ fn has_morph_targets(mesh: &Mesh) -> bool {
 }
 
 /// An entity's fur as read from the main world: the parameters, pelage's copy of the
-/// mesh and, for a skinned mesh, its skin.
+/// mesh and, for a skinned mesh, its skin, and its groom.
 #[derive(Debug)]
 struct FurSetup {
     fur: Fur,
     mesh: pelage::scene::Mesh,
     skin: Option<FurSkin>,
+    groom: Option<FurGroom>,
 }
 
-/// What the render world builds an entity's fur from, made when [`Fur`], the mesh or
-/// its [`SkinnedMesh`] changes: the parameters, pelage's copy of the mesh and its skin,
-/// with a number that changes with them.
+/// A [`Groom`] as pelage's scene takes it: the strands resampled, guides, dynamics.
+#[derive(Debug)]
+struct FurGroom {
+    strands: pelage::scene::Resampled,
+    guides: Option<pelage::scene::GuideParams>,
+    dynamics: Option<pelage::scene::DynamicsParams>,
+}
+
+impl FurGroom {
+    /// `groom`'s file (loaded) resampled as it asks; `Ok(None)` while it loads.
+    fn read(
+        groom: &Groom,
+        grooms: &Assets<GroomAsset>,
+        server: &AssetServer,
+    ) -> Result<Option<Self>, FurError> {
+        let Some(asset) = grooms.get(&groom.asset) else {
+            if let bevy::asset::LoadState::Failed(e) = server.load_state(&groom.asset) {
+                return Err(FurError::Groom(format!("the file did not load: {e}")));
+            }
+            return Ok(None);
+        };
+        if let Some(guides) = &groom.guides {
+            guides.validate().map_err(pelage::Error::from)?;
+        }
+        let strands = asset
+            .groom
+            .resample(groom.segments)
+            .map_err(|e| FurError::Groom(format!("Groom::segments = {}: {e}", groom.segments)))?;
+        Ok(Some(Self {
+            strands,
+            guides: groom.guides.clone(),
+            dynamics: groom.dynamics.clone(),
+        }))
+    }
+}
+
+/// What the render world builds an entity's fur from, made when [`Fur`], the mesh, its
+/// [`SkinnedMesh`] or its [`Groom`] changes: the parameters, pelage's copy of the mesh,
+/// its skin and groom, with a number that changes with them.
 #[derive(Component, Clone, Debug)]
 pub struct FurSource {
     setup: Arc<FurSetup>,
@@ -420,44 +479,50 @@ pub struct FurSource {
 #[derive(Component)]
 struct FurSourceOf(AssetId<Mesh>);
 
-/// Reads the mesh (and the skin of a [`SkinnedMesh`]) of every entity whose [`Fur`],
-/// [`Mesh3d`] or [`SkinnedMesh`] is new or changed (or whose mesh or inverse bind
-/// matrices had not loaded yet) into a [`FurSource`]; logs a mesh that cannot carry fur
-/// once.
-#[allow(clippy::type_complexity)]
+/// Reads the mesh (and the skin of a [`SkinnedMesh`], the file of a [`Groom`]) of every
+/// entity whose [`Fur`], [`Mesh3d`], [`SkinnedMesh`] or [`Groom`] is new or changed (or
+/// whose mesh, inverse bind matrices or groom had not loaded yet) into a [`FurSource`];
+/// logs a mesh that cannot carry fur, or a groom that did not load, once.
+#[allow(clippy::type_complexity, clippy::too_many_arguments)]
 fn read_fur_meshes(
     mut commands: Commands,
     meshes: Res<Assets<Mesh>>,
     bindposes: Option<Res<Assets<SkinnedMeshInverseBindposes>>>,
+    grooms: Res<Assets<GroomAsset>>,
+    server: Res<AssetServer>,
     furs: Query<
         (
             Entity,
             Ref<Fur>,
             Ref<Mesh3d>,
             Option<Ref<SkinnedMesh>>,
+            Option<Ref<Groom>>,
             Option<&FurSourceOf>,
         ),
         Or<(
             Changed<Fur>,
             Changed<Mesh3d>,
             Changed<SkinnedMesh>,
+            Changed<Groom>,
             Without<FurSourceOf>,
         )>,
     >,
     mut unskinned: RemovedComponents<SkinnedMesh>,
+    mut ungroomed: RemovedComponents<Groom>,
     mut generation: Local<u64>,
 ) {
-    // An entity that lost its skin is read again (next frame) as a rigid mesh.
-    for entity in unskinned.read() {
+    // An entity that lost its skin (or groom) is read again (next frame) without it.
+    for entity in unskinned.read().chain(ungroomed.read()) {
         if let Ok(mut e) = commands.get_entity(entity) {
             e.remove::<FurSourceOf>();
         }
     }
-    for (entity, fur, mesh3d, skinned, done) in &furs {
+    for (entity, fur, mesh3d, skinned, groom, done) in &furs {
         let id = mesh3d.id();
         let changed = fur.is_changed()
             || mesh3d.is_changed()
-            || skinned.as_ref().is_some_and(|s| s.is_changed());
+            || skinned.as_ref().is_some_and(|s| s.is_changed())
+            || groom.as_ref().is_some_and(|g| g.is_changed());
         if done.is_some_and(|d| d.0 == id) && !changed {
             continue;
         }
@@ -471,6 +536,19 @@ fn read_fur_meshes(
         {
             continue; // the inverse bind matrices are not loaded yet: tried again
         }
+        let groom = match groom.map(|g| FurGroom::read(&g, &grooms, &server)) {
+            None => None,
+            Some(Ok(Some(groom))) => Some(groom),
+            Some(Ok(None)) => continue, // the groom is not loaded yet: tried again
+            Some(Err(e)) => {
+                error!("pelage: no fur on {entity}: {e}");
+                commands
+                    .entity(entity)
+                    .insert(FurSourceOf(id))
+                    .remove::<FurSource>();
+                continue;
+            }
+        };
         *generation += 1;
         if has_morph_targets(mesh) {
             warn!(
@@ -499,6 +577,7 @@ fn read_fur_meshes(
                 fur: (*fur).clone(),
                 mesh: pelage_mesh,
                 skin,
+                groom,
             })
         });
         match setup {
@@ -681,7 +760,12 @@ impl FurInstance {
         format: TargetFormat,
         size: (u32, u32),
     ) -> Result<ViewFur, FurError> {
-        let FurSetup { fur, mesh, skin } = &*self.setup;
+        let FurSetup {
+            fur,
+            mesh,
+            skin,
+            groom,
+        } = &*self.setup;
         let mut shade = fur.shade.clone();
         if shade.transparency == pelage::scene::Transparency::Opaque {
             shade.sample_count = format.samples;
@@ -689,9 +773,9 @@ impl FurInstance {
         let scene = Scene {
             mesh: mesh.clone(),
             hair: fur.hair.clone(),
-            groom: None,
-            guides: None,
-            dynamics: None,
+            groom: groom.as_ref().map(|g| g.strands.clone()),
+            guides: groom.as_ref().and_then(|g| g.guides.clone()),
+            dynamics: groom.as_ref().and_then(|g| g.dynamics.clone()),
             motion: None,
             skin: None,
             shadow: ShadowParams::Voxel(fur.voxel.clone()),

@@ -330,7 +330,7 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
         .collect();
     // Steps: each strand count's compute stages and each of its transparency methods,
     // then the bare lit pass and the three combinations of section 4.
-    let bar = progress::bar((counts.len() * (1 + methods.len()) + 8) as u64, "steps")?;
+    let bar = progress::bar((counts.len() * (1 + methods.len()) + 9) as u64, "steps")?;
 
     // 1. Compute stages and the copy kernel, on a device that never draws.
     bar.println(format!(
@@ -629,6 +629,11 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
     //     strand rasterizer's time against strands and against pixels.
     let raster = strand_raster_section(opts, frames, &bar)?;
     rows.extend(raster.rows);
+
+    // 2c. The frame's target bridge: each transparency method on an engine's 4x MSAA,
+    //     reverse-Z targets (Bevy's), its bridge passes against its own hair passes.
+    let bridge = bridge_section(opts, frames, &bar)?;
+    rows.extend(bridge.rows);
 
     // 3. Scaling.
     let frame_exponent = exponent(&frame_points);
@@ -993,7 +998,7 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
     println!(
         "  skinning: the skin pass takes {skin_ratio:.3}x the growth pass of a {SKIN_STRANDS}-strand creature (target <= 0.1)"
     );
-    for line in &raster.summary {
+    for line in raster.summary.iter().chain(&bridge.summary) {
         println!("  {line}");
     }
     for (name, ratio) in &overheads {
@@ -1072,6 +1077,135 @@ fn skinning_section(frames: usize, bar: &progress::Progress) -> Result<(Vec<Row>
         ],
         skin_ms / grow_ms,
     ))
+}
+
+/// Label prefix of the frame's target bridge passes (`src/bridge.rs`).
+const BRIDGE_PREFIX: &str = "bridge: ";
+
+/// Section 2c of the benchmark: every transparency method the adapter runs, on an
+/// engine's targets it cannot draw itself (4x MSAA, reverse-Z, drawn over: Bevy's), built
+/// as an engine builds it ([`pelage::Frame`] recorded into the caller's views with
+/// `load`), no shadow. Timestamps: the bridge's passes (render passes) and the rest of
+/// stage 3 (the hair pass: the method's passes, the mesh, the volume grid), summed per
+/// frame, medians. lavapipe misplaces compute timestamps after a
+/// render pass, so the strand rasterizer's (compute) figure is marked as such.
+fn bridge_section(
+    opts: &LabOpts,
+    frames: usize,
+    bar: &progress::Progress,
+) -> Result<RasterSection, Error> {
+    let (strands, width, height) = if opts.quick {
+        (2_000, 160, 120)
+    } else {
+        (20_000, 640, 480)
+    };
+    bar.println(format!(
+        "target bridge (timestamps, median of {frames} frames): {strands} strands, {width}x{height}, 4x MSAA, reverse-Z, drawn over:"
+    ));
+    let mut rows = Vec::new();
+    let mut summary = Vec::new();
+    let probe = Gpu::headless()?;
+    let supported = pelage::shade::supported_methods(&probe);
+    for method in Transparency::defaults() {
+        if method == Transparency::Opaque || !supported.contains(&method.name()) {
+            continue;
+        }
+        let gpu = Gpu::headless()?;
+        let mut s = scene(strands, 8);
+        s.shadow = ShadowParams::None;
+        s.shade.transparency = method.clone();
+        let format = pelage::shade::TargetFormat {
+            samples: 4,
+            reverse_z: true,
+            ..Default::default()
+        };
+        let target = pelage::FrameTarget::new(format, width, height);
+        let mut frame = pelage::Frame::new(&gpu, &s, &target)?;
+        let texture = |label: &str, format: wgpu::TextureFormat, samples: u32| {
+            gpu.device
+                .create_texture(&wgpu::TextureDescriptor {
+                    label: Some(label),
+                    size: wgpu::Extent3d {
+                        width,
+                        height,
+                        depth_or_array_layers: 1,
+                    },
+                    mip_level_count: 1,
+                    sample_count: samples,
+                    dimension: wgpu::TextureDimension::D2,
+                    format,
+                    usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                        | wgpu::TextureUsages::TEXTURE_BINDING,
+                    view_formats: &[],
+                })
+                .create_view(&Default::default())
+        };
+        let color = texture("bench engine colour", format.color, 4);
+        let resolve = texture("bench engine resolve", format.color, 1);
+        let depth = texture("bench engine depth", format.depth, 4);
+        let views = pelage::shade::TargetViews {
+            color: &color,
+            resolve: Some(&resolve),
+            depth: &depth,
+            depth_sampled: None,
+            width,
+            height,
+            load: true,
+        };
+        let samples = frame_samples(&gpu, frames, |encoder, timer, i| {
+            frame.prepare(&gpu.queue, i as f32 / 24.0, &s.camera)?;
+            frame.record(encoder, &views, timer)?;
+            Ok(())
+        })?;
+        frame.after_submit(&gpu)?;
+        // Per frame: the bridge's passes and the hair pass (every other pass but stage
+        // 1's: the method's, the mesh, the volume grid).
+        let frame_count = samples.first().map_or(0, |(_, v)| v.len());
+        let sum = |bridge: bool| {
+            median(
+                (0..frame_count)
+                    .map(|f| {
+                        (samples.iter())
+                            .filter(|(l, _)| !l.starts_with("strands: "))
+                            .filter(|(l, _)| l.starts_with(BRIDGE_PREFIX) == bridge)
+                            .map(|(_, v)| v.get(f).copied().unwrap_or(0.0))
+                            .sum::<f64>()
+                    })
+                    .collect(),
+            )
+        };
+        let (bridge_ms, hair_ms) = (sum(true), sum(false));
+        let compute = matches!(method, Transparency::StrandRaster { .. });
+        let caveat = if compute {
+            " (compute passes: lavapipe's timestamps are not reliable here)"
+        } else {
+            ""
+        };
+        bar.println(format!(
+            "  {:<15} bridge {bridge_ms:8.3} ms, the hair pass {hair_ms:8.3} ms: {:.2}x{caveat}",
+            method.name(),
+            bridge_ms / hair_ms
+        ));
+        summary.push(format!(
+            "target bridge: {} on 4x MSAA, reverse-Z targets: bridge passes {:.2}x the hair pass{caveat}",
+            method.name(),
+            bridge_ms / hair_ms
+        ));
+        rows.push(Row {
+            section: "target bridge",
+            stage: format!("{BRIDGE_PREFIX}{}", method.name()),
+            strands,
+            pixels: u64::from(width) * u64::from(height),
+            gpu_ms: bridge_ms,
+            bytes: 0,
+            copy_ratio: bridge_ms / hair_ms,
+            note: format!(
+                "resolve colour and depth, write back, 4x MSAA reverse-Z targets; ratio: over the hair pass ({hair_ms:.3} ms){caveat}"
+            ),
+        });
+    }
+    bar.inc(1);
+    Ok(RasterSection { rows, summary })
 }
 
 /// What [`strand_raster_section`] measured.

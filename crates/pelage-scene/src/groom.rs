@@ -108,6 +108,19 @@ pub enum GroomError {
         /// Its extension, if it has one.
         extension: Option<String>,
     },
+    /// [`Groom::read`] was handed more bytes than a groom file may have.
+    #[error(
+        "{} has {bytes} bytes, more than the {max} a groom file may have",
+        path.display()
+    )]
+    TooLarge {
+        /// The file.
+        path: PathBuf,
+        /// Its size.
+        bytes: u64,
+        /// [`MAX_GROOM_FILE_BYTES`](crate::MAX_GROOM_FILE_BYTES).
+        max: u64,
+    },
     /// There are no strands.
     #[error("the groom has no strands; there is no hair to draw")]
     NoStrands,
@@ -375,6 +388,39 @@ impl Groom {
             Some("tfx") => Groom::from_tfx(&TfxFile::load(path)?),
             #[cfg(feature = "usd")]
             Some("usda" | "usdc" | "usd" | "usdz") => crate::usd_file::load(path),
+            _ => Err(GroomError::UnknownExtension {
+                path: path.to_path_buf(),
+                extension: path.extension().map(|e| e.to_string_lossy().into_owned()),
+            }),
+        }
+    }
+
+    /// Parses a groom file held in memory (an engine's asset loader's bytes), its format
+    /// chosen by `path`'s extension as [`Groom::load`] chooses it: `.hair`
+    /// ([`HairFile::read`]), `.tfx` ([`TfxFile::read`]) or, with the feature `usd`,
+    /// `.usda`, `.usdc`, `.usd`, `.usdz` (`usd_file::read`). `path` only names the file.
+    ///
+    /// Errors: an unknown or missing extension ([`GroomError::UnknownExtension`]), more
+    /// than [`MAX_GROOM_FILE_BYTES`](crate::MAX_GROOM_FILE_BYTES)
+    /// ([`GroomError::TooLarge`]), and whatever parsing the bytes reports.
+    pub fn read(bytes: Vec<u8>, path: &Path) -> Result<Groom, GroomError> {
+        let len = bytes.len() as u64;
+        if len > crate::MAX_GROOM_FILE_BYTES {
+            return Err(GroomError::TooLarge {
+                path: path.to_path_buf(),
+                bytes: len,
+                max: crate::MAX_GROOM_FILE_BYTES,
+            });
+        }
+        let extension = path
+            .extension()
+            .map(OsStr::to_string_lossy)
+            .map(|e| e.to_ascii_lowercase());
+        match extension.as_deref() {
+            Some("hair") => Groom::from_hair(&HairFile::read(&bytes)?),
+            Some("tfx") => Groom::from_tfx(&TfxFile::read(&bytes)?),
+            #[cfg(feature = "usd")]
+            Some("usda" | "usdc" | "usd" | "usdz") => crate::usd_file::read(bytes, path),
             _ => Err(GroomError::UnknownExtension {
                 path: path.to_path_buf(),
                 extension: path.extension().map(|e| e.to_string_lossy().into_owned()),

@@ -250,6 +250,21 @@ impl Transparency {
         }
     }
 
+    /// Whether the method draws into reverse-Z targets itself. The k-buffer, A-buffer,
+    /// DBK-buffer and random subsets test fragments against the opaque depth in the shader
+    /// one way only: pelage-shade refuses reversed depth for them, and pelage's `Frame`
+    /// draws them into standard-depth targets of its own between the caller's reversed
+    /// ones (the facade's `tests/bridge.rs` checks this list against pelage-shade).
+    pub fn draws_reverse_z(&self) -> bool {
+        !matches!(
+            self,
+            Self::KBuffer { .. }
+                | Self::ABuffer { .. }
+                | Self::Dbk { .. }
+                | Self::RandomSubsets { .. }
+        )
+    }
+
     /// Short name, as in file names and the lab's tables (`opaque`, `wboit`, `k_buffer`,
     /// ...): its row of [`Named::NAMES`].
     pub fn name(&self) -> &'static str {

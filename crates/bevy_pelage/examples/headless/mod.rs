@@ -7,6 +7,7 @@ use std::time::Duration;
 
 use bevy::app::{PluginGroupBuilder, PluginsState};
 use bevy::camera::Exposure;
+use bevy::camera::RenderTarget;
 use bevy::image::Image;
 use bevy::light::DirectionalLight;
 use bevy::prelude::*;
@@ -16,6 +17,7 @@ use bevy::render::render_asset::RenderAssets;
 use bevy::render::render_resource::{TextureFormat, TextureUsages};
 use bevy::render::renderer::{RenderDevice, RenderQueue};
 use bevy::render::texture::GpuImage;
+use bevy::render::view::{DebandDither, Msaa, Tonemapping};
 use bevy::window::{ExitCondition, WindowPlugin};
 use bevy_pelage::Fur;
 
@@ -50,6 +52,34 @@ pub fn target(world: &mut World) -> Handle<Image> {
     let mut target = Image::new_target_texture(WIDTH, HEIGHT, TextureFormat::Rgba8UnormSrgb, None);
     target.texture_descriptor.usage |= TextureUsages::COPY_SRC;
     world.resource_mut::<Assets<Image>>().add(target)
+}
+
+/// pelage's camera as a Bevy camera rendering into `image`: the same eye, target,
+/// vertical field of view and near plane (Bevy's projection is reverse-Z with an
+/// infinite far plane), placed by `world_from_scene`, with `msaa`, no tone mapping and
+/// no dithering (pelage's own frame has neither).
+pub fn camera(
+    scene: &pelage::Scene,
+    image: &Handle<Image>,
+    world_from_scene: Transform,
+    msaa: Msaa,
+) -> impl Bundle {
+    let c = &scene.camera;
+    let v3 = |v: glam::Vec3| Vec3::from_array(v.to_array());
+    let local = Transform::from_translation(v3(c.eye)).looking_at(v3(c.target), Vec3::Y);
+    (
+        Camera3d::default(),
+        RenderTarget::Image(image.clone().into()),
+        Transform::from_matrix(world_from_scene.to_matrix() * local.to_matrix()),
+        Projection::Perspective(PerspectiveProjection {
+            fov: c.fov_y,
+            near: c.near,
+            ..default()
+        }),
+        msaa,
+        Tonemapping::None,
+        DebandDither::Disabled,
+    )
 }
 
 /// pelage's key light (the scene's first light) as a Bevy directional light, its
