@@ -397,7 +397,6 @@ mod tests {
     #[test]
     fn the_help_names_the_built_in_scenes_methods() {
         use clap::{Args, Command};
-        use pelage::scene::Named;
         let help = SceneOpts::augment_args(Command::new("t"))
             .render_long_help()
             .to_string();
