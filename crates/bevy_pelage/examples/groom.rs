@@ -53,11 +53,16 @@ pub fn scene(path: &Path) -> Result<(pelage::Scene, String)> {
 ///
 /// [`Fur`]: bevy_pelage::Fur
 pub fn app(scene_file: &Path) -> Result<(App, Handle<Image>)> {
-    app_with_groom(scene_file, None)
+    app_with_groom(scene_file, None, true)
 }
 
-/// [`app`] with another groom file than the scene's (a name in the scene's folder).
-pub fn app_with_groom(scene_file: &Path, groom: Option<&str>) -> Result<(App, Handle<Image>)> {
+/// [`app`] with another groom file than the scene's (a name in the scene's folder), and
+/// without the scene's mesh unless `head` (the groom alone: no `Mesh3d`).
+pub fn app_with_groom(
+    scene_file: &Path,
+    groom: Option<&str>,
+    head: bool,
+) -> Result<(App, Handle<Image>)> {
     let (scene, scene_groom) = scene(scene_file)?;
     let groom_file = groom.map_or(scene_groom, str::to_owned);
     let folder = scene_file
@@ -88,8 +93,7 @@ pub fn app_with_groom(scene_file: &Path, groom: Option<&str>) -> Result<(App, Ha
     world.spawn(headless::key_light(&scene, Quat::IDENTITY)?);
     let asset = world.resource::<AssetServer>().load(groom_file);
     let segments = scene.groom.as_ref().map_or(16, |g| g.segments);
-    world.spawn((
-        Mesh3d(mesh),
+    let mut entity = world.spawn((
         headless::fur(&scene, None),
         Groom {
             asset,
@@ -99,6 +103,9 @@ pub fn app_with_groom(scene_file: &Path, groom: Option<&str>) -> Result<(App, Ha
         },
         Transform::default(),
     ));
+    if head {
+        entity.insert(Mesh3d(mesh));
+    }
     headless::finish(&mut app);
     Ok((app, image))
 }

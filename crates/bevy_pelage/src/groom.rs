@@ -68,7 +68,9 @@ impl AssetLoader for GroomLoader {
 /// A groom on the entity's [`Mesh3d`](bevy::mesh::Mesh3d) in place of the fur that
 /// [`Fur`](crate::Fur) grows: its strands (resampled to `segments` segments, in the
 /// mesh's own space) bent by [`Fur::hair`](crate::Fur::hair)'s wind, or simulated, or
-/// taken as guides for render strands rooted on the mesh. The entity's [`Fur`](crate::Fur) still
+/// taken as guides for render strands rooted on the mesh. Without a `Mesh3d` the groom
+/// is drawn alone (in the entity's space, in the wind; pelage refuses guides and
+/// dynamics there: they need the mesh). The entity's [`Fur`](crate::Fur) still
 /// gives the strands' width, colour, opacity, the wind and the shading (what a scene
 /// file's `[hair.growth]` gives a `[groom]`).
 ///

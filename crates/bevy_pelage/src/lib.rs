@@ -131,7 +131,8 @@ pub enum FurError {
     Groom(String),
 }
 
-/// Fur on the [`Mesh3d`] of the same entity.
+/// Fur on the [`Mesh3d`] of the same entity, or, with a [`Groom`], the groom's strands
+/// (on the entity's mesh, or alone without a [`Mesh3d`]).
 #[derive(Component, Clone, Debug)]
 #[require(Transform)]
 pub struct Fur {
@@ -475,14 +476,16 @@ pub struct FurSource {
     generation: u64,
 }
 
-/// The mesh asset a [`FurSource`] (or its error) was made from.
+/// The mesh asset a [`FurSource`] (or its error) was made from (`None`: a groom without
+/// a mesh).
 #[derive(Component)]
-struct FurSourceOf(AssetId<Mesh>);
+struct FurSourceOf(Option<AssetId<Mesh>>);
 
 /// Reads the mesh (and the skin of a [`SkinnedMesh`], the file of a [`Groom`]) of every
 /// entity whose [`Fur`], [`Mesh3d`], [`SkinnedMesh`] or [`Groom`] is new or changed (or
 /// whose mesh, inverse bind matrices or groom had not loaded yet) into a [`FurSource`];
-/// logs a mesh that cannot carry fur, or a groom that did not load, once.
+/// logs a mesh that cannot carry fur, a groom that did not load, or a [`Fur`] with
+/// neither a mesh nor a groom, once.
 #[allow(clippy::type_complexity, clippy::too_many_arguments)]
 fn read_fur_meshes(
     mut commands: Commands,
@@ -494,7 +497,7 @@ fn read_fur_meshes(
         (
             Entity,
             Ref<Fur>,
-            Ref<Mesh3d>,
+            Option<Ref<Mesh3d>>,
             Option<Ref<SkinnedMesh>>,
             Option<Ref<Groom>>,
             Option<&FurSourceOf>,
@@ -509,27 +512,42 @@ fn read_fur_meshes(
     >,
     mut unskinned: RemovedComponents<SkinnedMesh>,
     mut ungroomed: RemovedComponents<Groom>,
+    mut unmeshed: RemovedComponents<Mesh3d>,
     mut generation: Local<u64>,
 ) {
-    // An entity that lost its skin (or groom) is read again (next frame) without it.
-    for entity in unskinned.read().chain(ungroomed.read()) {
+    // An entity that lost its skin, groom or mesh is read again (next frame) without it.
+    for entity in unskinned
+        .read()
+        .chain(ungroomed.read())
+        .chain(unmeshed.read())
+    {
         if let Ok(mut e) = commands.get_entity(entity) {
             e.remove::<FurSourceOf>();
         }
     }
     for (entity, fur, mesh3d, skinned, groom, done) in &furs {
-        let id = mesh3d.id();
+        let id = mesh3d.as_ref().map(|m| m.id());
         let changed = fur.is_changed()
-            || mesh3d.is_changed()
+            || mesh3d.as_ref().is_some_and(|m| m.is_changed())
             || skinned.as_ref().is_some_and(|s| s.is_changed())
             || groom.as_ref().is_some_and(|g| g.is_changed());
         if done.is_some_and(|d| d.0 == id) && !changed {
             continue;
         }
-        let Some(mesh) = meshes.get(id) else {
-            continue; // not loaded yet: tried again next frame
+        let mesh = match id {
+            Some(id) => match meshes.get(id) {
+                Some(mesh) => Some(mesh),
+                None => continue, // not loaded yet: tried again next frame
+            },
+            None if groom.is_some() => None, // a groom alone
+            None => {
+                let e = "Fur needs a Mesh3d on its entity to grow from, or a Groom";
+                refuse(&mut commands, entity, id, FurError::Mesh(e.into()));
+                continue;
+            }
         };
         if let Some(skinned) = &skinned
+            && mesh.is_some()
             && bindposes
                 .as_ref()
                 .is_none_or(|b| b.get(&skinned.inverse_bindposes).is_none())
@@ -541,45 +559,21 @@ fn read_fur_meshes(
             Some(Ok(Some(groom))) => Some(groom),
             Some(Ok(None)) => continue, // the groom is not loaded yet: tried again
             Some(Err(e)) => {
-                error!("pelage: no fur on {entity}: {e}");
-                commands
-                    .entity(entity)
-                    .insert(FurSourceOf(id))
-                    .remove::<FurSource>();
+                refuse(&mut commands, entity, id, e);
                 continue;
             }
         };
         *generation += 1;
-        if has_morph_targets(mesh) {
-            warn!(
-                "pelage: the mesh of {entity} has morph targets; the fur grows on it without them"
-            );
-        }
-        let setup = pelage_mesh(mesh).and_then(|pelage_mesh| {
-            let skin = match &skinned {
-                Some(skinned) => {
-                    let bindposes = bindposes
-                        .as_ref()
-                        .and_then(|b| b.get(&skinned.inverse_bindposes))
-                        .map_or(0, |b| b.len());
-                    if bindposes < skinned.joints.len() {
-                        return Err(FurError::Skin(format!(
-                            "{} joints but {bindposes} inverse bind matrices: needs one per joint",
-                            skinned.joints.len()
-                        )));
-                    }
-                    let skin = pelage_skin(mesh, skinned.joints.len())?;
-                    Some(FurSkin::new(&fur, &pelage_mesh, skin))
-                }
-                None => None,
-            };
-            Ok(FurSetup {
+        let setup = match mesh {
+            Some(mesh) => fur_setup(entity, &fur, mesh, skinned.as_deref(), &bindposes, groom),
+            // A groom-only scene: pelage draws the groom alone (no mesh, no skin).
+            None => Ok(FurSetup {
                 fur: (*fur).clone(),
-                mesh: pelage_mesh,
-                skin,
+                mesh: pelage::scene::Mesh::default(),
+                skin: None,
                 groom,
-            })
-        });
+            }),
+        };
         match setup {
             Ok(setup) => {
                 commands.entity(entity).insert((
@@ -590,15 +584,56 @@ fn read_fur_meshes(
                     FurSourceOf(id),
                 ));
             }
-            Err(e) => {
-                error!("pelage: no fur on {entity}: {e}");
-                commands
-                    .entity(entity)
-                    .insert(FurSourceOf(id))
-                    .remove::<FurSource>();
-            }
+            Err(e) => refuse(&mut commands, entity, id, e),
         }
     }
+}
+
+/// Logs why `entity` gets no fur, once: it is read again only when it changes.
+fn refuse(commands: &mut Commands, entity: Entity, id: Option<AssetId<Mesh>>, e: FurError) {
+    error!("pelage: no fur on {entity}: {e}");
+    commands
+        .entity(entity)
+        .insert(FurSourceOf(id))
+        .remove::<FurSource>();
+}
+
+/// An entity's [`FurSetup`] on its Bevy `mesh` (with the skin of `skinned`).
+fn fur_setup(
+    entity: Entity,
+    fur: &Fur,
+    mesh: &Mesh,
+    skinned: Option<&SkinnedMesh>,
+    bindposes: &Option<Res<Assets<SkinnedMeshInverseBindposes>>>,
+    groom: Option<FurGroom>,
+) -> Result<FurSetup, FurError> {
+    if has_morph_targets(mesh) {
+        warn!("pelage: the mesh of {entity} has morph targets; the fur grows on it without them");
+    }
+    let pelage_mesh = pelage_mesh(mesh)?;
+    let skin = match skinned {
+        Some(skinned) => {
+            let bindposes = bindposes
+                .as_ref()
+                .and_then(|b| b.get(&skinned.inverse_bindposes))
+                .map_or(0, |b| b.len());
+            if bindposes < skinned.joints.len() {
+                return Err(FurError::Skin(format!(
+                    "{} joints but {bindposes} inverse bind matrices: needs one per joint",
+                    skinned.joints.len()
+                )));
+            }
+            let skin = pelage_skin(mesh, skinned.joints.len())?;
+            Some(FurSkin::new(fur, &pelage_mesh, skin))
+        }
+        None => None,
+    };
+    Ok(FurSetup {
+        fur: fur.clone(),
+        mesh: pelage_mesh,
+        skin,
+        groom,
+    })
 }
 
 /// One furred entity as the render world sees it this frame.

@@ -26,13 +26,27 @@ fn linear(image: &image::RgbaImage) -> LinearImage {
 fn a_groom_asset_draws_as_pelage_draws_the_scene_file() {
     let scenes = groom::default_scene_file().with_file_name("");
     for name in ["long_hair.toml", "guides.toml"] {
-        against_pelage(&scenes.join(name));
+        against_pelage(&scenes.join(name), true);
     }
 }
 
-fn against_pelage(file: &std::path::Path) {
+/// The groom on an entity without a `Mesh3d`: pelage's groom-only scene (no head drawn
+/// or shadowed).
+#[test]
+fn a_groom_alone_draws_as_pelage_draws_a_groom_only_scene() {
+    against_pelage(&groom::default_scene_file(), false);
+}
+
+/// The plugin's frame of the scene file's groom (on its head, or alone) against pelage's
+/// own frame of the same scene (its mesh left out without the head).
+fn against_pelage(file: &std::path::Path, head: bool) {
     let name = file.file_name().unwrap().to_string_lossy();
-    let (mut app, target) = groom::app(file).unwrap_or_else(|e| {
+    let name = if head {
+        name.into_owned()
+    } else {
+        format!("{name} without its mesh")
+    };
+    let (mut app, target) = groom::app_with_groom(file, None, head).unwrap_or_else(|e| {
         panic!("this test needs a GPU adapter (install mesa-vulkan-drivers for lavapipe): {e}")
     });
     let waited = groom::until_drawn(&mut app, &target, 200).unwrap();
@@ -43,7 +57,10 @@ fn against_pelage(file: &std::path::Path) {
     let bevy_frame = groom::read(&mut app, &target).unwrap();
     let pixels = (groom::WIDTH * groom::HEIGHT) as usize;
 
-    let (scene, groom_file) = groom::scene(file).unwrap();
+    let (mut scene, groom_file) = groom::scene(file).unwrap();
+    if !head {
+        scene.mesh = pelage::scene::Mesh::default();
+    }
     assert!(scene.groom.is_some());
     let gpu = pelage::gpu::Gpu::headless().unwrap();
     let format = TargetFormat {
@@ -147,7 +164,7 @@ fn a_bad_groom_file_is_the_assets_load_error() {
 #[test]
 fn an_entity_whose_groom_does_not_load_is_skipped() {
     let file = groom::default_scene_file();
-    let (mut app, target) = groom::app_with_groom(&file, Some("missing.hair")).unwrap();
+    let (mut app, target) = groom::app_with_groom(&file, Some("missing.hair"), true).unwrap();
     assert!(groom::until_drawn(&mut app, &target, 12).is_err());
     let frame = groom::read(&mut app, &target).unwrap();
     let background = *frame.get_pixel(0, 0);

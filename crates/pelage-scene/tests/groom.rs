@@ -526,3 +526,32 @@ fn widths_too_large_name_the_files_attribute() {
         .to_string();
     assert!(e.contains("width after groom.fit and groom.scale"), "{e}");
 }
+
+/// `Groom::read` (an engine's asset loader's bytes) gives what `Groom::load` gives for the
+/// same file, chooses the format by the name's extension, and refuses an unknown one,
+/// naming the file.
+#[test]
+fn read_from_bytes_is_load() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes");
+    let mut files = vec!["long_hair.hair"];
+    if cfg!(feature = "usd") {
+        files.push("usd_groom.usda");
+    }
+    for file in files {
+        let path = dir.join(file);
+        let loaded = Groom::load(&path).unwrap();
+        let bytes = std::fs::read(&path).unwrap();
+        // Only the name's extension counts: the bytes come from anywhere.
+        let read = Groom::read(bytes, std::path::Path::new(file)).unwrap();
+        assert_eq!(read, loaded, "{file}");
+    }
+    let (_, tfx) = same_hair_both_ways();
+    let from_tfx = Groom::from_tfx(&tfx).unwrap();
+    let read = Groom::read(tfx.write().unwrap(), std::path::Path::new("a.TFX")).unwrap();
+    assert_eq!(read, from_tfx);
+    let err = Groom::read(vec![0; 16], std::path::Path::new("hair.obj")).unwrap_err();
+    assert!(
+        matches!(err, GroomError::UnknownExtension { .. }) && err.to_string().contains("hair.obj"),
+        "{err}"
+    );
+}
