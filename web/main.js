@@ -3,8 +3,10 @@
 //
 // Query parameters: `t=0.5` draws that time in every frame instead of the clock;
 // `frames=3` stops after that many frames; `strands`, `wind` and `method` set the
-// controls; `test=1` (with `t` and `frames`) marks the page done once the last frame is
-// shown: <body data-done="ok"> (or "error") and the title "done" (or "error: ...").
+// controls; `groom=URL` shows that .hair or .tfx file instead of the creature (as a file
+// opened or dropped on the picture does); `test=1` (with `t` and `frames`) marks the
+// page done once the last frame is shown: <body data-done="ok"> (or "error") and the
+// title "done" (or "error: ...").
 import init, { Demo } from './pkg/pelage_web.js';
 
 const params = new URLSearchParams(location.search);
@@ -62,6 +64,56 @@ async function main() {
   };
   for (const id of ['strands', 'wind', 'method']) $(id).addEventListener('change', apply);
   $('wind').addEventListener('input', apply);
+
+  // A groom replaces the creature: its own strand count, the slider disabled.
+  const showGroom = (bytes, name) => {
+    const said = demo.load_groom(new Uint8Array(bytes), name);
+    $('groom-info').textContent = said;
+    $('strands').value = demo.strands();
+    $('strands-value').textContent = demo.strands();
+    $('strands').disabled = true;
+    $('creature').disabled = false;
+    status.textContent = '';
+    status.className = '';
+  };
+  // A file the user picks or drops: an error is shown and the page draws on.
+  const openFile = async (file) => {
+    try {
+      showGroom(await file.arrayBuffer(), file.name);
+    } catch (e) {
+      status.textContent = e.message;
+      status.className = 'error';
+    }
+  };
+  $('groom-file').addEventListener('change', () => {
+    if ($('groom-file').files.length > 0) openFile($('groom-file').files[0]);
+  });
+  for (const target of [$('view'), $('groom-drop')]) {
+    target.addEventListener('dragover', (event) => event.preventDefault());
+    target.addEventListener('drop', (event) => {
+      event.preventDefault();
+      if (event.dataTransfer.files.length > 0) openFile(event.dataTransfer.files[0]);
+    });
+  }
+  $('creature').addEventListener('click', () => {
+    try {
+      demo.show_creature(Number($('strands').value));
+      $('strands').disabled = false;
+      $('creature').disabled = true;
+      $('groom-info').textContent = 'the creature, grown';
+    } catch (e) {
+      status.textContent = e.message;
+      status.className = 'error';
+    }
+  });
+  // A groom named in the URL is shown before the first frame; failing to fetch or read
+  // it fails the page (the browser test names one).
+  if (params.has('groom')) {
+    const url = params.get('groom');
+    const response = await fetch(url);
+    if (!response.ok) throw new Error(`groom ${url}: HTTP ${response.status}`);
+    showGroom(await response.arrayBuffer(), new URL(url, location.href).pathname.split('/').pop());
+  }
 
   const start = performance.now();
   let frames = 0;

@@ -8,8 +8,11 @@
 //!
 //! ```text
 //! browser_compare SCREENSHOT.png NATIVE_OUT.png [--t 0.5] [--strands N] [--wind 1]
-//!                 [--method strand_raster] [--max 0.02] [--creature-max X]
+//!                 [--method strand_raster] [--groom FILE] [--max 0.02] [--creature-max X]
 //! ```
+//!
+//! `--groom FILE` draws the groom file as the page draws one it was given
+//! ([`pelage_web::groom_scene`]; the strand count is the file's).
 
 use std::process::ExitCode;
 
@@ -24,6 +27,7 @@ struct Options {
     native: std::path::PathBuf,
     t: f32,
     settings: Settings,
+    groom: Option<std::path::PathBuf>,
     max: f64,
     creature_max: f64,
 }
@@ -34,6 +38,7 @@ fn parse() -> Result<Options, String> {
     let mut settings = Settings::default();
     let mut max = 0.02;
     let mut creature_max = None;
+    let mut groom = None;
     let mut args = std::env::args().skip(1);
     while let Some(arg) = args.next() {
         let mut value = |name: &str| args.next().ok_or(format!("{name} needs a value"));
@@ -49,6 +54,7 @@ fn parse() -> Result<Options, String> {
             }
             "--wind" => settings.wind = number("--wind", value("--wind")?)? as f32,
             "--method" => settings.method = value("--method")?,
+            "--groom" => groom = Some(std::path::PathBuf::from(value("--groom")?)),
             "--max" => max = number("--max", value("--max")?)?,
             "--creature-max" => {
                 creature_max = Some(number("--creature-max", value("--creature-max")?)?);
@@ -64,6 +70,7 @@ fn parse() -> Result<Options, String> {
         native,
         t,
         settings,
+        groom,
         max,
         creature_max: creature_max.unwrap_or(max),
     })
@@ -74,7 +81,17 @@ fn run(options: &Options) -> Result<bool, Box<dyn std::error::Error>> {
         .map_err(|e| format!("{}: {e}", options.screenshot.display()))?
         .to_rgba8();
     let (width, height) = shot.dimensions();
-    let scene = pelage_web::scene(&options.settings)?;
+    let mut settings = options.settings.clone();
+    let scene = match &options.groom {
+        Some(path) => {
+            let name = path.file_name().map(|n| n.to_string_lossy().into_owned());
+            let bytes = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
+            let groom = pelage_web::read_groom(bytes, &name.unwrap_or_default())?;
+            settings.strands = groom.strands;
+            pelage_web::groom_scene(&groom, &settings)?
+        }
+        None => pelage_web::scene(&settings)?,
+    };
     let gpu = Gpu::headless()?;
     let mut renderer = Renderer::new(&gpu, &scene, width, height)?;
     renderer.render(&gpu, options.t, &scene.camera)?;
@@ -106,9 +123,9 @@ fn run(options: &Options) -> Result<bool, Box<dyn std::error::Error>> {
         options.native.display(),
         gpu.describe(),
         options.t,
-        options.settings.strands,
-        options.settings.wind,
-        options.settings.method
+        settings.strands,
+        settings.wind,
+        settings.method
     );
     println!(
         "mean FLIP browser vs native: {:.4} over the frame, {creature:.4} over the {count} \

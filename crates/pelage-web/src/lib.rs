@@ -1,7 +1,9 @@
 //! pelage in a web page: the creature of [`pelage::Scene::default`] in wind, drawn on
 //! WebGPU into a canvas (`web/index.html`), with controls for the wind, the strand count
 //! and the transparency method, and the GPU time per pass where the browser offers
-//! timestamp queries.
+//! timestamp queries; or any `.hair` or `.tfx` groom the user drops on the page, picks
+//! or names in the URL (`?groom=URL`), drawn alone ([`groom_scene`]) with its strand
+//! count, so a groom can be viewed and timed in a browser.
 //!
 //! Built for `wasm32-unknown-unknown` this crate exports `Demo` to JavaScript
 //! (through wasm-bindgen). On every target it exports the scene the page draws
@@ -15,8 +17,10 @@
 //! [`ShadeError::Unsupported`](pelage::shade::ShadeError::Unsupported), and the page
 //! offers only those [`pelage::shade::supported_methods`] names.
 
+use std::path::Path;
+
 use pelage::Scene;
-use pelage::scene::{Named, Transparency};
+use pelage::scene::{Groom, GroomError, Mesh, Named, Resampled, Transparency};
 
 #[cfg(target_arch = "wasm32")]
 mod web;
@@ -34,6 +38,18 @@ pub const MAX_STRANDS: u32 = 200_000;
 
 /// The largest wind factor the page offers (times the default wind's forces).
 pub const MAX_WIND: f32 = 4.0;
+
+/// The longest side of a dropped groom's bounding box once placed, scene units: the
+/// default camera frames the creature, about this size, at the origin.
+pub const GROOM_FIT: f32 = 1.6;
+
+/// Segments per strand a dropped groom is resampled to (as a scene file's `[groom]`
+/// default).
+pub const GROOM_SEGMENTS: u32 = 16;
+
+/// The strand width of a dropped groom whose file gives none, scene units (the long
+/// hair scene's, `scenes/long_hair.toml`, for a groom fitted to about the same size).
+pub const GROOM_WIDTH: f32 = 0.003;
 
 /// What the page's controls set.
 #[derive(Clone, Debug, PartialEq)]
@@ -73,6 +89,14 @@ pub enum DemoError {
         value: f64,
         /// The accepted range.
         range: String,
+    },
+    /// The groom file could not be read, placed or resampled.
+    #[error("{name}: {source}")]
+    Groom {
+        /// The file's name, as the page was given it.
+        name: String,
+        /// Why.
+        source: GroomError,
     },
     /// pelage refused or failed (a method this adapter cannot run among them:
     /// [`pelage::shade::ShadeError::Unsupported`]).
@@ -115,6 +139,45 @@ pub fn scene(settings: &Settings) -> Result<Scene, DemoError> {
     Ok(scene)
 }
 
+/// A groom file's bytes (`.hair` or `.tfx`, told by `name`'s extension; the page is
+/// built without USD, whose reader needs a newer Rust than the browser build's
+/// dependencies allow: such a file is refused naming the feature) placed for the page:
+/// centred on the origin, its longest side [`GROOM_FIT`], resampled to
+/// [`GROOM_SEGMENTS`] segments per strand.
+pub fn read_groom(bytes: Vec<u8>, name: &str) -> Result<Resampled, DemoError> {
+    Groom::read(bytes, Path::new(name))
+        .and_then(|g| g.normalized(GROOM_FIT))
+        .and_then(|g| g.resample(GROOM_SEGMENTS))
+        .map_err(|source| DemoError::Groom {
+            name: name.into(),
+            source,
+        })
+}
+
+/// The scene the page draws for a groom ([`read_groom`]): the groom alone (no mesh),
+/// [`GROOM_WIDTH`] wide where the file gives no widths, with `settings`' wind and method
+/// and otherwise [`scene`]'s defaults. The strand count is the file's: `settings.strands`
+/// is refused unless it is the groom's (the page shows the count and disables its
+/// slider while a groom is shown).
+pub fn groom_scene(groom: &Resampled, settings: &Settings) -> Result<Scene, DemoError> {
+    let strands = groom.strands;
+    let mut scene = crate::scene(&Settings {
+        strands: strands.clamp(1, MAX_STRANDS),
+        ..settings.clone()
+    })?;
+    if settings.strands != strands {
+        return Err(DemoError::OutOfRange {
+            what: "strands",
+            value: f64::from(settings.strands),
+            range: format!("the groom's own count, {strands}"),
+        });
+    }
+    scene.mesh = Mesh::default();
+    scene.groom = Some(groom.clone());
+    scene.hair.growth.width = GROOM_WIDTH;
+    Ok(scene)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -136,6 +199,44 @@ mod tests {
         assert_eq!(s.hair, expected.hair);
         assert_eq!(s.shade, expected.shade);
         assert_eq!(s.camera, expected.camera);
+    }
+
+    /// The page's groom: the file's strands, placed and resampled, drawn alone; a
+    /// strand count other than the file's, a USD file (not in the page's build) and a
+    /// broken file are errors naming what was wrong.
+    #[test]
+    fn a_groom_file_is_drawn_alone_with_its_own_strand_count() {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenes/long_hair.hair");
+        let groom = read_groom(std::fs::read(path).unwrap(), "long_hair.hair").unwrap();
+        assert!(groom.strands > 1000, "{} strands", groom.strands);
+        assert_eq!(groom.segments, GROOM_SEGMENTS);
+        let (lo, hi) = groom.bounds();
+        let side = (hi - lo).max_element();
+        assert!(
+            (side - GROOM_FIT).abs() < 0.05 * GROOM_FIT,
+            "longest side {side}"
+        );
+        let settings = Settings {
+            strands: groom.strands,
+            ..Settings::default()
+        };
+        let s = groom_scene(&groom, &settings).unwrap();
+        assert_eq!(s.groom.as_ref(), Some(&groom));
+        assert_eq!(s.mesh.triangle_count(), 0);
+        let other = Settings {
+            strands: groom.strands + 1,
+            ..settings
+        };
+        let e = groom_scene(&groom, &other).unwrap_err().to_string();
+        assert!(e.contains("the groom's own count"), "{e}");
+        let e = read_groom(vec![0; 16], "groom.usda")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("groom.usda") && e.contains("usd"), "{e}");
+        let e = read_groom(b"HAIR".to_vec(), "broken.hair")
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("broken.hair: "), "{e}");
     }
 
     #[test]

@@ -5,6 +5,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 
 use pelage::gpu::{Gpu, wgpu};
+use pelage::scene::Resampled;
 use pelage::{FRAMES_IN_FLIGHT, Renderer, Scene, Update};
 use wasm_bindgen::prelude::*;
 
@@ -34,6 +35,8 @@ pub struct Demo {
     width: u32,
     height: u32,
     settings: Settings,
+    /// The groom shown instead of the creature, once one was loaded.
+    groom: Option<Resampled>,
     scene: Scene,
     renderer: Renderer,
     /// The newest GPU time per pass the renderer read back (a frame or more late).
@@ -117,6 +120,7 @@ impl Demo {
             width,
             height,
             settings,
+            groom: None,
             scene,
             renderer,
             passes: Vec::new(),
@@ -165,14 +169,78 @@ impl Demo {
     }
 
     /// Applies the controls: the wind in place, a new renderer for a new strand count or
-    /// method. A refused setting keeps the renderer drawing what it drew.
+    /// method. A refused setting keeps the renderer drawing what it drew. While a groom
+    /// is shown the strand count must be the groom's ([`Demo::strands`]).
     pub fn set(&mut self, strands: u32, wind: f32, method: String) -> Result<(), JsValue> {
         let settings = Settings {
             strands,
             wind,
             method,
         };
+        let scene = match &self.groom {
+            Some(groom) => crate::groom_scene(groom, &settings)?,
+            None => crate::scene(&settings)?,
+        };
+        self.show(settings, scene)
+    }
+
+    /// Shows the groom file `bytes` (`.hair` or `.tfx`, by `name`'s extension) instead
+    /// of the creature, with the current wind and method ([`crate::groom_scene`]), and
+    /// answers what it shows: `name: N strands x S segments`. A file that cannot be read
+    /// or drawn is an error naming it, and the page keeps drawing what it drew.
+    pub fn load_groom(&mut self, bytes: Vec<u8>, name: String) -> Result<String, JsValue> {
+        let groom = crate::read_groom(bytes, &name)?;
+        let settings = Settings {
+            strands: groom.strands,
+            ..self.settings.clone()
+        };
+        let scene = crate::groom_scene(&groom, &settings)?;
+        let said = format!(
+            "{name}: {} strands x {} segments{}",
+            groom.strands,
+            groom.segments,
+            match groom.skipped {
+                0 => String::new(),
+                n => format!(" ({n} degenerate strands skipped)"),
+            }
+        );
+        let previous = self.groom.replace(groom);
+        if let Err(e) = self.show(settings, scene) {
+            self.groom = previous;
+            return Err(e);
+        }
+        Ok(said)
+    }
+
+    /// Goes back to the creature with `strands` strands (and the current wind and
+    /// method).
+    pub fn show_creature(&mut self, strands: u32) -> Result<(), JsValue> {
+        let settings = Settings {
+            strands,
+            ..self.settings.clone()
+        };
         let scene = crate::scene(&settings)?;
+        let previous = self.groom.take();
+        if let Err(e) = self.show(settings, scene) {
+            self.groom = previous;
+            return Err(e);
+        }
+        Ok(())
+    }
+
+    /// The strands drawn: the groom's when one is shown, else the slider's.
+    pub fn strands(&self) -> u32 {
+        self.settings.strands
+    }
+
+    /// Whether a groom is shown (the strand slider does not apply).
+    pub fn has_groom(&self) -> bool {
+        self.groom.is_some()
+    }
+
+    /// Takes `settings` and `scene`: the renderer updated in place, or rebuilt when the
+    /// change shapes its buffers (a refused scene keeps the old renderer and settings).
+    fn show(&mut self, settings: Settings, scene: Scene) -> Result<(), JsValue> {
         match self
             .renderer
             .update(&self.gpu, &scene)
