@@ -18,6 +18,7 @@ pub mod names;
 pub mod obj;
 pub mod params;
 pub mod scene_file;
+mod sdf_grid;
 mod scene_keys;
 pub mod shading;
 pub mod skin;
@@ -46,6 +47,10 @@ pub use params::{
     WindParams,
 };
 pub use scene_file::{MeshSource, SceneFile, SceneFileError};
+pub use sdf_grid::{
+    MAX_SDF_RESOLUTION, MIN_SDF_RESOLUTION, SDF_BAND_CELLS, SDF_MARGIN_CELLS, SdfGrid,
+    check_sdf_resolution,
+};
 pub use shading::{
     ARTIST_EUMELANIN_SIGMA_A, ARTIST_PHEOMELANIN_SIGMA_A, Absorption, ChiangParams,
     DEFAULT_MELANIN_REDNESS, DEFAULT_VOLUME_GRID, DEFAULT_VOLUME_ITERATIONS, EUMELANIN_SIGMA_A,

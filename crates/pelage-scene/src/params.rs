@@ -850,6 +850,14 @@ pub struct DynamicsParams {
     /// Spheres and capsules the strands cannot enter, in the mesh's space (they move
     /// with a [`MeshMotion`]); at most [`MAX_COLLIDERS`].
     pub colliders: Vec<Collider>,
+    /// Nodes along the longest axis of a signed distance field of the mesh itself
+    /// (`pelage_strands::BodySdf`) that strands collide with besides the colliders: 0
+    /// (the default) for none, else in
+    /// [[`MIN_SDF_RESOLUTION`](crate::MIN_SDF_RESOLUTION),
+    /// [`MAX_SDF_RESOLUTION`](crate::MAX_SDF_RESOLUTION)] and at most the device's
+    /// `max_texture_dimension_3d`. Built once for a rigid or still mesh, every frame for
+    /// a skinned one.
+    pub sdf_resolution: u32,
 }
 
 /// The time the shape stiffnesses of [`DynamicsParams`] are given for, seconds: 1/120 s,
@@ -1053,6 +1061,7 @@ impl Default for DynamicsParams {
             max_frame: 0.1,
             teleport_distance: 1.0,
             colliders: Vec::new(),
+            sdf_resolution: 0,
         }
     }
 }
@@ -1109,7 +1118,7 @@ impl DynamicsParams {
         for (i, c) in self.colliders.iter().enumerate() {
             c.validate(&format!("dynamics.colliders[{i}]"))?;
         }
-        Ok(())
+        crate::check_sdf_resolution(self.sdf_resolution)
     }
 
     /// The steady acceleration the strands are under, scene units per second squared:
