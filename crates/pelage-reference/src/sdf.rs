@@ -102,6 +102,25 @@ pub fn depths(mesh: &Mesh, points: &[Vec3]) -> Vec<f32> {
         .collect()
 }
 
+/// The generalized winding number of `mesh` at `p` (Jacobson et al. 2013: the solid
+/// angles of its triangles over 4π, Van Oosterom and Strackee's formula): 1 inside a
+/// closed, outward-wound mesh, 0 outside, ½ on its surface, and the sum of the parts'
+/// where closed parts overlap (a point on one part's surface inside another: 1½).
+pub fn winding_number(mesh: &Mesh, p: Vec3) -> f64 {
+    let p = p.as_dvec3();
+    let mut total = 0.0;
+    for tri in mesh.indices.chunks_exact(3) {
+        let [a, b, c] = [0, 1, 2].map(|k| mesh.positions[tri[k] as usize].as_dvec3() - p);
+        let (la, lb, lc) = (a.length(), b.length(), c.length());
+        let det = a.dot(b.cross(c));
+        let div = la * lb * lc + a.dot(b) * lc + a.dot(c) * lb + b.dot(c) * la;
+        if det.is_finite() && div.is_finite() {
+            total += 2.0 * det.atan2(div);
+        }
+    }
+    total / (4.0 * std::f64::consts::PI)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -114,6 +133,8 @@ mod tests {
         assert!((d + 0.794_654_5).abs() < 1e-5, "{d}");
         let d = signed_distance(&ico, Vec3::new(0.0, 3.0, 0.0)).unwrap();
         assert!((2.0..2.21).contains(&d), "{d}");
+        assert!((winding_number(&ico, Vec3::ZERO) - 1.0).abs() < 1e-9);
+        assert!(winding_number(&ico, Vec3::new(0.0, 3.0, 0.0)).abs() < 1e-9);
         let mut broken = ico.clone();
         broken.positions.iter_mut().for_each(|p| *p = Vec3::NAN);
         assert_eq!(signed_distance(&broken, Vec3::ZERO), None);

@@ -1015,6 +1015,14 @@ impl MeshMotion {
             * glam::Quat::from_rotation_x(self.nod * (tau * self.nod_frequency * t).sin())
     }
 
+    /// The motion at time `t` as a matrix (world from rest): the rotation about the
+    /// pivot.
+    pub fn matrix(&self, t: f32) -> glam::Mat4 {
+        glam::Mat4::from_translation(self.pivot)
+            * glam::Mat4::from_quat(self.rotation(t))
+            * glam::Mat4::from_translation(-self.pivot)
+    }
+
     /// Where the point `p` of the mesh at rest is at time `t`.
     pub fn point(&self, p: Vec3, t: f32) -> Vec3 {
         self.pivot + self.rotation(t) * (p - self.pivot)

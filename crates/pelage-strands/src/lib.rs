@@ -53,7 +53,9 @@ pub use roots::{
     StrandRoot, hash_to_unit, pcg_hash, root_region, root_tint, sample_roots, strand_brightness,
 };
 pub use sdf::{BODY_SDF, BodySdf, SDF_LABEL, SdfUniforms, flood_steps};
-pub use simulate::{ColliderUniform, SIMULATION_STATE, STATE_HEADER, SimUniforms, SimulateStrands};
+pub use simulate::{
+    ColliderUniform, SIMULATE_LABEL, SIMULATION_STATE, STATE_HEADER, SimUniforms, SimulateStrands,
+};
 pub use skin::{MeshSkin, SKIN_LABEL, SKIN_NON_FINITE, SkinUniforms};
 
 use pelage_gpu::{GpuError, ShaderSources};
