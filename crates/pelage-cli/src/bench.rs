@@ -34,9 +34,8 @@ use pelage::scene::{
 use pelage::scene::{GuideParams, Resampled};
 use pelage::shadow::{ShadowMethod, VoxelShadow};
 use pelage::strands::{
-    BodySdf, GroomStrands, GrowStrands, GuideMemory, GuideStrands, MeshBuffers, MeshSkin, SDF_LABEL,
-    SKIN_LABEL,
-    SimulateStrands, StrandStage,
+    BodySdf, GroomStrands, GrowStrands, GuideMemory, GuideStrands, MeshBuffers, MeshSkin,
+    SDF_LABEL, SKIN_LABEL, SimulateStrands, StrandStage,
 };
 use pelage::{Renderer, Scene};
 use pelage_lab::{ScatterChart, ScatterPoint, Table};
@@ -937,13 +936,13 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
     })) {
         table.push(vec![
             "summary".into(),
-            name.into(),
+            name,
             String::new(),
             String::new(),
             String::new(),
             String::new(),
             format!("{value:.3}"),
-            note.into(),
+            note,
         ])?;
     }
     pelage_lab::create_dir(&opts.out)?;
@@ -1037,7 +1036,7 @@ const SKIN_STRANDS: u32 = 20_000;
 fn skinning_section(
     frames: usize,
     bar: &progress::Progress,
-) -> Result<(Vec<Row>, f64, Vec<(u32, f64)>), Error> {
+) -> Result<(Vec<Row>, f64, SdfRatios), Error> {
     let gpu = Gpu::headless()?;
     let s = scene(SKIN_STRANDS, 8);
     let mut mesh = MeshBuffers::upload(&gpu, &s.mesh)?;
@@ -1116,7 +1115,10 @@ fn skinning_section(
             )
         });
     }
-    let sdf_ratios = sdf_times.iter().map(|&(r, s, g, _, _)| (r, s / g)).collect();
+    let sdf_ratios = sdf_times
+        .iter()
+        .map(|&(r, s, g, _, _)| (r, s / g))
+        .collect();
     rows.extend([
             row(
                 SKIN_LABEL,
@@ -1135,6 +1137,9 @@ fn skinning_section(
         ]);
     Ok((rows, skin_ms / grow_ms, sdf_ratios))
 }
+
+/// The body's distance field's build over the growth pass, per resolution.
+type SdfRatios = Vec<(u32, f64)>;
 
 /// The resolutions of the body's distance field the skinning section times (the lab's;
 /// 128 takes about 8x as long, jump flooding's work growing with the nodes).

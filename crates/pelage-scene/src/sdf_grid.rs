@@ -55,9 +55,8 @@ impl SdfGrid {
         }
         let margin = SDF_MARGIN_CELLS as f32;
         let cell = longest / (resolution - 1 - 2 * SDF_MARGIN_CELLS) as f32;
-        let nodes = |s: f32| {
-            ((s / cell).ceil() as u32 + 1 + 2 * SDF_MARGIN_CELLS).clamp(2, resolution)
-        };
+        let nodes =
+            |s: f32| ((s / cell).ceil() as u32 + 1 + 2 * SDF_MARGIN_CELLS).clamp(2, resolution);
         let dims = UVec3::new(nodes(size.x), nodes(size.y), nodes(size.z));
         // Centred on the box: the leftover of the rounding is shared on both sides.
         let span = (dims - UVec3::ONE).as_vec3() * cell;
@@ -78,14 +77,17 @@ impl SdfGrid {
 
     /// The index of node `(i, j, k)` in the field (x fastest, then y, then z).
     pub fn index(&self, i: UVec3) -> usize {
-        (i.z as usize * self.dims.y as usize + i.y as usize) * self.dims.x as usize
-            + i.x as usize
+        (i.z as usize * self.dims.y as usize + i.y as usize) * self.dims.x as usize + i.x as usize
     }
 
     /// The node of `index` ([`SdfGrid::index`]'s inverse).
     pub fn node_of(&self, index: usize) -> UVec3 {
         let (x, y) = (self.dims.x as usize, self.dims.y as usize);
-        UVec3::new((index % x) as u32, (index / x % y) as u32, (index / (x * y)) as u32)
+        UVec3::new(
+            (index % x) as u32,
+            (index / x % y) as u32,
+            (index / (x * y)) as u32,
+        )
     }
 
     /// The distance within which every node's value is exact (the narrow band:

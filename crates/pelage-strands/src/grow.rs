@@ -4,8 +4,8 @@
 use encase::ShaderType;
 use glam::Vec3;
 use pelage_gpu::{
-    BindLayout, Gpu, GpuTimer, PassInfo, UniformBuffer,
-    compute_pipeline_with_constants, dispatch_size, storage_buffer, wgpu, zeroed_storage,
+    BindLayout, Gpu, GpuTimer, PassInfo, UniformBuffer, compute_pipeline_with_constants,
+    dispatch_size, storage_buffer, wgpu, zeroed_storage,
 };
 use pelage_scene::{
     Camera, GrowthParams, HairParams, HairType, Mesh, ParamError, SurfaceInterpolation, WindParams,
@@ -575,15 +575,19 @@ impl StrandPass {
                 binding: 0,
                 resource: uniforms.buffer.as_entire_binding(),
             }];
-            entries.extend((1..).zip(inputs).map(|(binding, input)| wgpu::BindGroupEntry {
-                binding,
-                resource: match input {
-                    Input::Read(b) | Input::ReadWrite(b) | Input::Uniform(b) => {
-                        b.as_entire_binding()
-                    }
-                    Input::Texture3d(view) => wgpu::BindingResource::TextureView(view),
-                },
-            }));
+            entries.extend(
+                (1..)
+                    .zip(inputs)
+                    .map(|(binding, input)| wgpu::BindGroupEntry {
+                        binding,
+                        resource: match input {
+                            Input::Read(b) | Input::ReadWrite(b) | Input::Uniform(b) => {
+                                b.as_entire_binding()
+                            }
+                            Input::Texture3d(view) => wgpu::BindingResource::TextureView(view),
+                        },
+                    }),
+            );
             for (binding, buffer) in [(inputs_end, &vertices), (inputs_end + 1, &roots_buffer)] {
                 entries.push(wgpu::BindGroupEntry {
                     binding,

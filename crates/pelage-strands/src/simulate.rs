@@ -641,9 +641,11 @@ impl StrandStage for SimulateStrands {
     /// and the field, writing the strands and its state).
     fn passes(&self) -> Vec<PassInfo> {
         let mut passes = Vec::new();
-        let mut simulate = PassInfo::new(SIMULATE_LABEL)
-            .reads([MESH])
-            .writes([STRAND_VERTICES, STRAND_ROOTS, SIMULATION_STATE]);
+        let mut simulate = PassInfo::new(SIMULATE_LABEL).reads([MESH]).writes([
+            STRAND_VERTICES,
+            STRAND_ROOTS,
+            SIMULATION_STATE,
+        ]);
         if let (Some(sdf), true) = (&self.sdf, self.sdf_every_frame) {
             passes.push(sdf.pass());
             simulate = simulate.reads([BODY_SDF]);

@@ -28,6 +28,14 @@
 //! whose shape stiffnesses hold the fur's groom (0.9 over the whole strand) against the
 //! same fur stateless.
 //!
+//! Two more rows collide with the body's own shape (its signed distance field,
+//! `dynamics.sdf_resolution` = [`LAB_SDF_RESOLUTION`]): `hair_sdf`, the head with the
+//! field instead of the sphere inside it (built once, moved with the head), and
+//! `fur_sdf`, the creature's fur at the default dynamics (which without a collider fall
+//! into the body) on the field rebuilt every frame after the skinning. Every row reports
+//! how deep the simulated strands are inside the body (exact distances to the posed mesh
+//! on the CPU, every k-th strand up to [`DEPTH_STRANDS`], in strand widths).
+//!
 //! `--scene FILE` takes a scene file with a `[dynamics]` table (`scenes/head_turn.toml`)
 //! instead, compared with the same scene without the table.
 //!
