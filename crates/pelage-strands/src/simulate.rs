@@ -535,9 +535,21 @@ impl SimulateStrands {
     }
 
     /// Replaces the dynamics parameters (validated) and the colliders in use with its
-    /// colliders, from the next `prepare` on.
+    /// colliders, from the next `prepare` on. The body's field is made with the
+    /// simulation: a different `sdf_resolution` is refused (build a new simulation).
     pub fn set_dynamics(&mut self, dynamics: &DynamicsParams) -> crate::Result<()> {
         dynamics.validate()?;
+        if dynamics.sdf_resolution != self.dynamics.sdf_resolution {
+            return Err(ParamError::new(
+                "dynamics.sdf_resolution",
+                dynamics.sdf_resolution,
+                &format!(
+                    "is fixed when the simulation is made (it has {}): make a new one to change it",
+                    self.dynamics.sdf_resolution
+                ),
+            )
+            .into());
+        }
         dynamics.validate_at_scale(self.scale, &self.wind)?;
         self.dynamics = dynamics.clone();
         self.colliders = dynamics.colliders.clone();

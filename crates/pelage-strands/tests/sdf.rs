@@ -400,7 +400,8 @@ fn hair_resting_on_the_head_stays_at_rest() {
 
 /// Bad input: a resolution of 0 (for the field itself), below the floor, past the
 /// device's `max_texture_dimension_3d` or past pelage's cap is refused naming
-/// `dynamics.sdf_resolution`; a mesh without triangles naming `mesh.indices`; a mesh
+/// `dynamics.sdf_resolution`, and so is a simulation's resolution changed after it is
+/// made; a mesh without triangles naming `mesh.indices`; a mesh
 /// whose every position is NaN (a skinning gone wrong) builds a field that is far
 /// outside everywhere (no collision, no NaN).
 #[test]
@@ -433,6 +434,19 @@ fn bad_input_is_refused_by_name_and_a_nan_mesh_reads_outside() {
     .unwrap();
     let e = BodySdf::new(&gpu, &empty, head.bounds(), 32).unwrap_err();
     assert!(e.to_string().contains("mesh.indices"), "{e}");
+
+    // The field is made with the simulation: a new resolution is refused, not ignored.
+    let mut sim = SimulateStrands::grown(
+        &gpu,
+        &head,
+        &buffers,
+        &head_hair(10, WindParams::calm()),
+        &head_dynamics(0),
+    )
+    .unwrap();
+    let e = sim.set_dynamics(&head_dynamics(32)).unwrap_err();
+    assert!(e.to_string().contains("dynamics.sdf_resolution"), "{e}");
+    assert!(sim.set_dynamics(&head_dynamics(0)).is_ok());
 
     let sdf = BodySdf::new(&gpu, &buffers, head.bounds(), 32).unwrap();
     let mut broken = head.clone();
