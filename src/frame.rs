@@ -298,7 +298,13 @@ impl Frame {
             .into());
         }
         let draw_mesh = target.draw_mesh && !groom_only;
-        let (mesh, strands) = StrandSource::of(scene).build(gpu, scene, mesh, groom_only)?;
+        let (mesh, mut strands) = StrandSource::of(scene).build(gpu, scene, mesh, groom_only)?;
+        // A skinned body's distance field is rebuilt every frame, after the skinning.
+        if skin.is_some()
+            && let Some(sim) = strands.as_simulation_mut()
+        {
+            sim.set_sdf_every_frame(true);
+        }
         // The resources that cross stages and that the frame may take from its caller,
         // named as the plan names them (for an audit of what each pass binds:
         // pelage_gpu::audit; nothing happens outside one). Stage 1 names its strands.
@@ -498,6 +504,8 @@ impl Frame {
                     .map(|c| c.moved(|p| motion.point(p, t)))
                     .collect();
                 sim.set_colliders(&moved)?;
+                // The body's field, built once at rest, moves with it.
+                sim.set_sdf_transform(motion.matrix(t))?;
             }
         }
         if let Some(camera) = camera {

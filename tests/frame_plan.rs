@@ -209,6 +209,20 @@ fn every_pass_binds_only_what_the_plan_declares() {
         let format = TargetFormat::for_params(&s.shade);
         scenes.push((file.into(), s, format));
     }
+    // The body's distance field: built once and moved with the head, and rebuilt every
+    // frame after the skinning pass (a pass of its own, declared).
+    for file in ["head_turn.toml", "creature_skinned.toml"] {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("scenes")
+            .join(file);
+        let mut s = Scene::from_file(&path).unwrap_or_else(|e| panic!("{file}: {e}"));
+        s.hair.roots.count = s.hair.roots.count.min(1500);
+        let mut dynamics = s.dynamics.clone().unwrap_or_default();
+        dynamics.sdf_resolution = 32;
+        s.dynamics = Some(dynamics);
+        let format = TargetFormat::for_params(&s.shade);
+        scenes.push((format!("{file} with the body's field"), s, format));
+    }
     for (name, s, format) in scenes {
         let audit = Audit::start();
         let mut renderer = match Renderer::with_format(&gpu, &s, 96, 72, &format) {

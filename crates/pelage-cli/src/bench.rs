@@ -34,8 +34,8 @@ use pelage::scene::{
 use pelage::scene::{GuideParams, Resampled};
 use pelage::shadow::{ShadowMethod, VoxelShadow};
 use pelage::strands::{
-    GroomStrands, GrowStrands, GuideMemory, GuideStrands, MeshBuffers, MeshSkin, SKIN_LABEL,
-    SimulateStrands, StrandStage,
+    BodySdf, GroomStrands, GrowStrands, GuideMemory, GuideStrands, MeshBuffers, MeshSkin,
+    SDF_LABEL, SKIN_LABEL, SimulateStrands, StrandStage,
 };
 use pelage::{Renderer, Scene};
 use pelage_lab::{ScatterChart, ScatterPoint, Table};
@@ -541,7 +541,7 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
     }
 
     // 1b. GPU skinning, stage 1's input, against the growth pass it feeds.
-    let (skin_rows, skin_ratio) = skinning_section(frames, &bar)?;
+    let (skin_rows, skin_ratio, sdf_ratios) = skinning_section(frames, &bar)?;
     rows.extend(skin_rows);
     bar.inc(1);
 
@@ -964,16 +964,25 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
             guide_simulation,
             "timestamps, 1000 guides simulated and interpolated into 50000 strands x 8 segments, over 50000 strands simulated; default dynamics, frames of 1/60 s",
         ),
-    ] {
+    ]
+    .into_iter()
+    .map(|(name, value, note)| (name.to_string(), value, note.to_string()))
+    .chain(sdf_ratios.iter().map(|&(r, ratio)| {
+        (
+            format!("sdf: body field {r} build over growth pass"),
+            ratio,
+            "timestamps, the creature's distance field rebuilt every frame on its skinned mesh (targets: <= 1 built once, <= 0.5 every frame), 20000 strands x 8 segments grown".to_string(),
+        )
+    })) {
         table.push(vec![
             "summary".into(),
-            name.into(),
+            name,
             String::new(),
             String::new(),
             String::new(),
             String::new(),
             format!("{value:.3}"),
-            note.into(),
+            note,
         ])?;
     }
     pelage_lab::create_dir(&opts.out)?;
@@ -1033,6 +1042,11 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
     println!(
         "  skinning: the skin pass takes {skin_ratio:.3}x the growth pass of a {SKIN_STRANDS}-strand creature (target <= 0.1)"
     );
+    for (r, ratio) in &sdf_ratios {
+        println!(
+            "  body sdf {r}: its build takes {ratio:.3}x the growth pass of a {SKIN_STRANDS}-strand creature (targets: <= 1 built once for a rigid body, <= 0.5 rebuilt every frame for a skinned one)"
+        );
+    }
     for line in raster.summary.iter().chain(&bridge.summary) {
         println!("  {line}");
     }
@@ -1059,13 +1073,44 @@ const SKIN_STRANDS: u32 = 20_000;
 /// ([`MeshSkin`], a compute pass over its vertices) then [`SKIN_STRANDS`] strands of 8
 /// segments grown on it, both timed with timestamps in the same frames; returns the two
 /// rows and the skin pass's time over the growth pass's.
-fn skinning_section(frames: usize, bar: &progress::Progress) -> Result<(Vec<Row>, f64), Error> {
+fn skinning_section(
+    frames: usize,
+    bar: &progress::Progress,
+) -> Result<(Vec<Row>, f64, SdfRatios), Error> {
     let gpu = Gpu::headless()?;
     let s = scene(SKIN_STRANDS, 8);
-    let mesh = MeshBuffers::upload(&gpu, &s.mesh)?;
+    let mut mesh = MeshBuffers::upload(&gpu, &s.mesh)?;
     let rig = SkinBend::default();
+    mesh.bounds = rig.reach(mesh.bounds);
     let skin = MeshSkin::new(&gpu, &s.mesh, &rig.skin(&s.mesh), &mesh)?;
     let mut grow = GrowStrands::new(&gpu, &s.mesh, &mesh, &s.hair)?;
+    // The body's distance field of the skinned creature, rebuilt every frame (what a
+    // simulation on a skinned body does; a rigid body builds the same pass once).
+    let sdfs = SDF_RESOLUTIONS
+        .iter()
+        .map(|&r| BodySdf::new(&gpu, &mesh, mesh.bounds, r))
+        .collect::<Result<Vec<_>, _>>()?;
+    let sdf_label = |r: u32| format!("{SDF_LABEL} {r}");
+    let mut sdf_times = Vec::new();
+    for (sdf, &r) in sdfs.iter().zip(&SDF_RESOLUTIONS) {
+        let times = time_frames(&gpu, frames, |encoder, mut timer, frame| {
+            let t = frame as f32 / 24.0;
+            skin.set_joint_matrices(&gpu.queue, &rig.joint_matrices(t))?;
+            let frame = grow.prepare(&gpu.queue, t)?;
+            skin.encode(encoder, timer.as_deref_mut());
+            sdf.encode(encoder, timer.as_deref_mut());
+            grow.encode(encoder, &frame, timer)?;
+            Ok(())
+        })?;
+        let (sdf_ms, grow_ms) = (get(&times, SDF_LABEL), get(&times, "strands: grow"));
+        let nodes = sdf.grid().nodes();
+        bar.println(format!(
+            "  {SKIN_STRANDS:>7} strands  {} ({nodes} nodes) {sdf_ms:9.3} ms, {:.3}x the growth pass ({grow_ms:.3} ms)",
+            sdf_label(r),
+            sdf_ms / grow_ms
+        ));
+        sdf_times.push((r, sdf_ms, grow_ms, nodes, sdf.bytes()));
+    }
     let times = time_frames(&gpu, frames, |encoder, mut timer, frame| {
         let t = frame as f32 / 24.0;
         skin.set_joint_matrices(&gpu.queue, &rig.joint_matrices(t))?;
@@ -1093,8 +1138,28 @@ fn skinning_section(frames: usize, bar: &progress::Progress) -> Result<(Vec<Row>
         copy_ratio: skin_ms / grow_ms,
         note,
     };
-    Ok((
-        vec![
+    let mut rows = Vec::new();
+    for &(r, sdf_ms, sdf_grow_ms, nodes, bytes) in &sdf_times {
+        rows.push(Row {
+            stage: sdf_label(r),
+            gpu_ms: sdf_ms,
+            bytes,
+            copy_ratio: sdf_ms / sdf_grow_ms,
+            ..row(
+                SDF_LABEL,
+                sdf_ms,
+                bytes,
+                format!(
+                    "the skinned creature's distance field, {nodes} nodes, rebuilt every frame; ratio: over the growth pass of the same frames"
+                ),
+            )
+        });
+    }
+    let sdf_ratios = sdf_times
+        .iter()
+        .map(|&(r, s, g, _, _)| (r, s / g))
+        .collect();
+    rows.extend([
             row(
                 SKIN_LABEL,
                 skin_ms,
@@ -1109,9 +1174,8 @@ fn skinning_section(frames: usize, bar: &progress::Progress) -> Result<(Vec<Row>
                 0,
                 "the growth pass on the skinned mesh, same frames; ratio: skin over grow".into(),
             ),
-        ],
-        skin_ms / grow_ms,
-    ))
+        ]);
+    Ok((rows, skin_ms / grow_ms, sdf_ratios))
 }
 
 /// Label prefix of the frame's target bridge passes (`src/bridge.rs`).
@@ -1242,6 +1306,13 @@ fn bridge_section(
     bar.inc(1);
     Ok(RasterSection { rows, summary })
 }
+
+/// The body's distance field's build over the growth pass, per resolution.
+type SdfRatios = Vec<(u32, f64)>;
+
+/// The resolutions of the body's distance field the skinning section times (the lab's;
+/// 128 takes about 8x as long, jump flooding's work growing with the nodes).
+const SDF_RESOLUTIONS: [u32; 1] = [64];
 
 /// What [`strand_raster_section`] measured.
 struct RasterSection {

@@ -237,6 +237,15 @@ pub fn constant(buffers: &[&wgpu::Buffer]) {
     });
 }
 
+/// Marks `view` as a constant for a running audit, as [`constant`] marks buffers: a
+/// texture built once (outside the frame) that passes only sample.
+pub fn constant_view(view: &wgpu::TextureView) {
+    with_state(|s| {
+        s.names
+            .insert(Resource::View(view.clone()), BoundName::Constant);
+    });
+}
+
 /// Names `view` `name` for a running audit, as [`name_buffer`].
 pub fn name_view(view: &wgpu::TextureView, name: &str) {
     with_state(|s| {

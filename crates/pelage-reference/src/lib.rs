@@ -26,6 +26,7 @@ pub mod noise;
 pub mod oit;
 pub mod oit_raster;
 pub mod path_tracer;
+pub mod sdf;
 pub mod shading;
 pub mod simulate;
 pub mod skin;

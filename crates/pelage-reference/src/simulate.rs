@@ -1,5 +1,10 @@
 //! Mirror of `wgsl/strands/simulate.wgsl` (stage 1 with dynamics), loop for loop: one
 //! frame of every strand, its substeps, its constraints in the same order.
+//!
+//! Not mirrored: the body's distance field (`SimUniforms::sdf_on`, `BodySdf`); the mirror
+//! collides with the spheres and capsules only, and is compared with simulations
+//! without a field. Collisions with the field are checked against exact distances
+//! instead ([`crate::sdf`], `crates/pelage-strands/tests/sdf.rs`).
 
 use glam::{Vec3, Vec4};
 use pelage_scene::Mesh;

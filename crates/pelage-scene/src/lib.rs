@@ -30,6 +30,7 @@ pub mod params;
 pub mod scene_file;
 #[cfg(feature = "scene-file")]
 mod scene_keys;
+mod sdf_grid;
 pub mod shading;
 pub mod skin;
 pub mod surface_map;
@@ -59,6 +60,10 @@ pub use params::{
 };
 #[cfg(feature = "scene-file")]
 pub use scene_file::{MeshSource, SceneFile, SceneFileError};
+pub use sdf_grid::{
+    MAX_SDF_RESOLUTION, MIN_SDF_RESOLUTION, SDF_BAND_CELLS, SDF_MARGIN_CELLS, SdfGrid,
+    check_sdf_resolution,
+};
 pub use shading::{
     ARTIST_EUMELANIN_SIGMA_A, ARTIST_PHEOMELANIN_SIGMA_A, Absorption, ChiangParams,
     DEFAULT_MELANIN_REDNESS, DEFAULT_VOLUME_GRID, DEFAULT_VOLUME_ITERATIONS, EUMELANIN_SIGMA_A,

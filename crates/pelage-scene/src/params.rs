@@ -850,6 +850,14 @@ pub struct DynamicsParams {
     /// Spheres and capsules the strands cannot enter, in the mesh's space (they move
     /// with a [`MeshMotion`]); at most [`MAX_COLLIDERS`].
     pub colliders: Vec<Collider>,
+    /// Nodes along the longest axis of a signed distance field of the mesh itself
+    /// (`pelage_strands::BodySdf`) that strands collide with besides the colliders: 0
+    /// (the default) for none, else in
+    /// [[`MIN_SDF_RESOLUTION`](crate::MIN_SDF_RESOLUTION),
+    /// [`MAX_SDF_RESOLUTION`](crate::MAX_SDF_RESOLUTION)] and at most the device's
+    /// `max_texture_dimension_3d`. Built once for a rigid or still mesh, every frame for
+    /// a skinned one.
+    pub sdf_resolution: u32,
 }
 
 /// The time the shape stiffnesses of [`DynamicsParams`] are given for, seconds: 1/120 s,
@@ -1007,6 +1015,14 @@ impl MeshMotion {
             * glam::Quat::from_rotation_x(self.nod * (tau * self.nod_frequency * t).sin())
     }
 
+    /// The motion at time `t` as a matrix (world from rest): the rotation about the
+    /// pivot.
+    pub fn matrix(&self, t: f32) -> glam::Mat4 {
+        glam::Mat4::from_translation(self.pivot)
+            * glam::Mat4::from_quat(self.rotation(t))
+            * glam::Mat4::from_translation(-self.pivot)
+    }
+
     /// Where the point `p` of the mesh at rest is at time `t`.
     pub fn point(&self, p: Vec3, t: f32) -> Vec3 {
         self.pivot + self.rotation(t) * (p - self.pivot)
@@ -1053,6 +1069,7 @@ impl Default for DynamicsParams {
             max_frame: 0.1,
             teleport_distance: 1.0,
             colliders: Vec::new(),
+            sdf_resolution: 0,
         }
     }
 }
@@ -1109,7 +1126,7 @@ impl DynamicsParams {
         for (i, c) in self.colliders.iter().enumerate() {
             c.validate(&format!("dynamics.colliders[{i}]"))?;
         }
-        Ok(())
+        crate::check_sdf_resolution(self.sdf_resolution)
     }
 
     /// The steady acceleration the strands are under, scene units per second squared:

@@ -4,8 +4,8 @@
 use encase::ShaderType;
 use glam::Vec3;
 use pelage_gpu::{
-    BindLayout, Gpu, GpuTimer, PassInfo, UniformBuffer, bind_buffers,
-    compute_pipeline_with_constants, dispatch_size, storage_buffer, wgpu, zeroed_storage,
+    BindLayout, Gpu, GpuTimer, PassInfo, UniformBuffer, compute_pipeline_with_constants,
+    dispatch_size, storage_buffer, wgpu, zeroed_storage,
 };
 use pelage_scene::{
     Camera, GrowthParams, HairParams, HairType, Mesh, ParamError, SurfaceInterpolation, WindParams,
@@ -550,6 +550,14 @@ impl StrandPass {
                         Input::Read(_) => layout.storage(binding),
                         Input::ReadWrite(_) => layout.storage_rw(binding),
                         Input::Uniform(_) => layout.uniform(binding),
+                        Input::Texture3d(_) => layout.entry(
+                            binding,
+                            wgpu::BindingType::Texture {
+                                sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                                view_dimension: wgpu::TextureViewDimension::D3,
+                                multisampled: false,
+                            },
+                        ),
                     },
                 )
                 .storage_rw(inputs_end)
@@ -563,13 +571,37 @@ impl StrandPass {
                 &[Some(&layout)],
                 overrides,
             );
-            let mut entries = vec![&uniforms.buffer];
-            entries.extend(inputs.iter().map(|input| match input {
-                Input::Read(b) | Input::ReadWrite(b) | Input::Uniform(b) => *b,
-            }));
-            entries.push(&vertices);
-            entries.push(&roots_buffer);
-            let bind_group = bind_buffers(device, label, &layout, &entries);
+            let mut entries = vec![wgpu::BindGroupEntry {
+                binding: 0,
+                resource: uniforms.buffer.as_entire_binding(),
+            }];
+            entries.extend(
+                (1..)
+                    .zip(inputs)
+                    .map(|(binding, input)| wgpu::BindGroupEntry {
+                        binding,
+                        resource: match input {
+                            Input::Read(b) | Input::ReadWrite(b) | Input::Uniform(b) => {
+                                b.as_entire_binding()
+                            }
+                            Input::Texture3d(view) => wgpu::BindingResource::TextureView(view),
+                        },
+                    }),
+            );
+            for (binding, buffer) in [(inputs_end, &vertices), (inputs_end + 1, &roots_buffer)] {
+                entries.push(wgpu::BindGroupEntry {
+                    binding,
+                    resource: buffer.as_entire_binding(),
+                });
+            }
+            let bind_group = pelage_gpu::create_bind_group(
+                device,
+                &wgpu::BindGroupDescriptor {
+                    label: Some(label),
+                    layout: &layout,
+                    entries: &entries,
+                },
+            );
             (pipeline, bind_group)
         })?;
         let style = StrandStyle {
@@ -654,6 +686,9 @@ pub(crate) enum Input<'a> {
     ReadWrite(&'a wgpu::Buffer),
     /// `var<uniform>`.
     Uniform(&'a wgpu::Buffer),
+    /// `texture_3d<f32>` read with `textureLoad` (not filterable: a simulation's body
+    /// distance field).
+    Texture3d(&'a wgpu::TextureView),
 }
 
 /// The shape every stage 1 method has: [`GrowStrands`] (fur grown from a mesh),

@@ -553,16 +553,25 @@ impl StrandStage for GuideStrands {
 
     fn passes(&self) -> Vec<PassInfo> {
         let guides = PassInfo::new(self.guide_stage().pass().label());
+        let mut passes = Vec::new();
         let guides = match &self.first {
             GuidePass::Bent(_) => guides,
-            GuidePass::Simulated(_) => guides.reads([MESH]),
+            GuidePass::Simulated(guides_sim) => match guides_sim.sim.body_sdf() {
+                // A field rebuilt every frame is built before the guides' simulation.
+                Some(sdf) if guides_sim.sim.sdf_every_frame() => {
+                    passes.push(sdf.pass());
+                    guides.reads([MESH, crate::BODY_SDF])
+                }
+                _ => guides.reads([MESH]),
+            },
         };
-        vec![
+        passes.extend([
             guides.writes([GUIDE_VERTICES]),
             PassInfo::new(self.pass.label())
                 .reads([MESH, GUIDE_VERTICES])
                 .writes([STRAND_VERTICES, STRAND_ROOTS]),
-        ]
+        ]);
+        passes
     }
 
     fn set_wind(&mut self, wind: WindParams) -> crate::Result<()> {

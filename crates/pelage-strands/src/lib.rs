@@ -34,6 +34,7 @@ mod guides;
 mod lod;
 mod mesh_buffers;
 mod roots;
+mod sdf;
 mod simulate;
 mod skin;
 
@@ -51,7 +52,10 @@ pub use mesh_buffers::MeshBuffers;
 pub use roots::{
     StrandRoot, hash_to_unit, pcg_hash, root_region, root_tint, sample_roots, strand_brightness,
 };
-pub use simulate::{ColliderUniform, SIMULATION_STATE, STATE_HEADER, SimUniforms, SimulateStrands};
+pub use sdf::{BODY_SDF, BodySdf, SDF_LABEL, SdfUniforms, flood_steps};
+pub use simulate::{
+    ColliderUniform, SIMULATE_LABEL, SIMULATION_STATE, STATE_HEADER, SimUniforms, SimulateStrands,
+};
 pub use skin::{MeshSkin, SKIN_LABEL, SKIN_NON_FINITE, SkinUniforms};
 
 use pelage_gpu::{GpuError, ShaderSources};
@@ -66,6 +70,7 @@ pub static SHADERS: ShaderSources = pelage_gpu::wgsl_sources!(
     "strands/guides.wgsl",
     "strands/lod.wgsl",
     "strands/rotation.wgsl",
+    "strands/sdf.wgsl",
     "strands/simulate.wgsl",
     "strands/skin.wgsl",
 );

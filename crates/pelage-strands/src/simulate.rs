@@ -3,16 +3,20 @@
 //! move every frame.
 
 use encase::ShaderType;
-use glam::{Vec2, Vec3, Vec4};
+use glam::{Mat4, UVec3, Vec2, Vec3, Vec4};
 use pelage_gpu::{Gpu, GpuTimer, UniformBuffer, read_buffer, storage_buffer, wgpu, zeroed_storage};
 use pelage_scene::{
     Camera, Collider, DynamicsParams, HairParams, HairType, MAX_COLLIDERS, Mesh, ParamError,
-    Resampled,
+    Resampled, SdfGrid,
 };
 
 use crate::groom::GroomShape;
 use crate::grow::{Input, MESH, StrandPass, StrandStage};
-use crate::{LodLevel, MeshBuffers, StrandFrame, StrandRoot, StrandsError};
+use crate::{
+    BODY_SDF, BodySdf, LodLevel, MeshBuffers, STRAND_ROOTS, STRAND_VERTICES, StrandFrame,
+    StrandRoot, StrandsError,
+};
+use pelage_gpu::PassInfo;
 
 /// `vec4`s of simulation state per strand before its vertices (`STATE_HEADER` in WGSL):
 /// the root's position (w = 1 once posed), normal and tangent in the last frame.
@@ -21,6 +25,32 @@ pub const STATE_HEADER: u32 = 3;
 /// The frame resource of a simulation's state (positions and velocities of the last
 /// substep, the held-strand count), kept from frame to frame.
 pub const SIMULATION_STATE: &str = "strands.state";
+
+/// The timestamp label of the simulation's pass.
+pub const SIMULATE_LABEL: &str = "strands: simulate";
+
+/// A 2³ `r32float` texture standing in for the body's field when there is none (the
+/// pass binds one either way; `sdf_on` is 0, so it is never read).
+fn no_sdf(gpu: &Gpu) -> crate::Result<wgpu::TextureView> {
+    Ok(gpu.scoped(|device| {
+        device
+            .create_texture(&wgpu::TextureDescriptor {
+                label: Some("pelage no body sdf"),
+                size: wgpu::Extent3d {
+                    width: 2,
+                    height: 2,
+                    depth_or_array_layers: 2,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D3,
+                format: wgpu::TextureFormat::R32Float,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING,
+                view_formats: &[],
+            })
+            .create_view(&wgpu::TextureViewDescriptor::default())
+    })?)
+}
 
 /// `collider` as the shader reads it.
 fn collider_uniform(collider: &Collider) -> ColliderUniform {
@@ -81,6 +111,17 @@ pub struct SimUniforms {
     pub collider_count: u32,
     /// The colliders.
     pub colliders: [ColliderUniform; MAX_COLLIDERS],
+    /// World space to the space the body's distance field was built in
+    /// ([`SimulateStrands::set_sdf_transform`]).
+    pub sdf_from_world: Mat4,
+    /// The field's node (0, 0, 0) ([`SdfGrid::origin`]).
+    pub sdf_origin: Vec3,
+    /// Its cell.
+    pub sdf_cell: f32,
+    /// Its nodes per axis.
+    pub sdf_dims: UVec3,
+    /// 1 when the strands collide with the field.
+    pub sdf_on: u32,
 }
 
 impl SimUniforms {
@@ -114,6 +155,24 @@ impl SimUniforms {
             teleport_distance: dynamics.teleport_distance,
             collider_count: colliders.len().min(MAX_COLLIDERS) as u32,
             colliders: uniforms,
+            sdf_from_world: Mat4::IDENTITY,
+            sdf_origin: Vec3::ZERO,
+            sdf_cell: 1.0,
+            sdf_dims: UVec3::splat(2),
+            sdf_on: 0,
+        }
+    }
+
+    /// These uniforms colliding with the body's field on `grid`, `from_world` taking
+    /// world space to the field's.
+    pub fn with_sdf(self, grid: &SdfGrid, from_world: Mat4) -> Self {
+        Self {
+            sdf_from_world: from_world,
+            sdf_origin: grid.origin,
+            sdf_cell: grid.cell,
+            sdf_dims: grid.dims,
+            sdf_on: 1,
+            ..self
         }
     }
 }
@@ -188,6 +247,12 @@ pub struct SimulateStrands {
     scale: f32,
     /// The wind, for the same.
     wind: pelage_scene::WindParams,
+    /// The body's distance field, if any.
+    sdf: Option<BodySdf>,
+    /// Whether `encode` rebuilds it before every frame.
+    sdf_every_frame: bool,
+    /// World space to the field's (the mesh's pose when the field was built).
+    sdf_from_world: Mat4,
 }
 
 impl SimulateStrands {
@@ -337,9 +402,22 @@ impl SimulateStrands {
         // 32-bit positions this far out must still hold a substep's motion.
         let scale = reach.0.abs().max(reach.1.abs()).max_element();
         dynamics.validate_at_scale(scale, &params.wind)?;
+        // The body's field, built now from the mesh buffers as they hold the mesh (its
+        // pose at construction), or a 2³ stand-in never sampled.
+        let (sdf, sdf_view) = match dynamics.sdf_resolution {
+            0 => (None, no_sdf(gpu)?),
+            resolution => {
+                let sdf = BodySdf::new(gpu, mesh_buffers, mesh_buffers.bounds, resolution)?;
+                sdf.build(gpu)?;
+                let view = sdf.view().clone();
+                (Some(sdf), view)
+            }
+        };
+        // Built outside the frame: a constant until the field is rebuilt every frame.
+        pelage_gpu::audit::constant_view(&sdf_view);
         let mut pass = StrandPass::with_inputs(
             gpu,
-            "strands: simulate",
+            SIMULATE_LABEL,
             "strands/simulate.wgsl",
             &params,
             reach,
@@ -352,6 +430,7 @@ impl SimulateStrands {
                 Input::Uniform(&sim.buffer),
                 Input::ReadWrite(&state),
                 Input::ReadWrite(&held),
+                Input::Texture3d(&sdf_view),
             ],
             &[],
         )?;
@@ -372,7 +451,62 @@ impl SimulateStrands {
             brightness_draw,
             scale,
             wind: params.wind.clone(),
+            sdf,
+            sdf_every_frame: false,
+            sdf_from_world: Mat4::IDENTITY,
         })
+    }
+
+    /// The body's signed distance field (`DynamicsParams::sdf_resolution` > 0), built
+    /// when the simulation was made from the mesh buffers' pose then.
+    pub fn body_sdf(&self) -> Option<&BodySdf> {
+        self.sdf.as_ref()
+    }
+
+    /// Rebuilds the body's field every frame, before the simulation's pass (a skinned
+    /// mesh: [`StrandStage::encode`] records [`BodySdf::encode`] first and
+    /// [`StrandStage::passes`] declares it), or only once (`false`, the default: a still
+    /// mesh, or a rigid one moved with [`SimulateStrands::set_sdf_transform`]). Does
+    /// nothing without a field.
+    pub fn set_sdf_every_frame(&mut self, every_frame: bool) {
+        if let Some(sdf) = &self.sdf {
+            self.sdf_every_frame = every_frame;
+            if every_frame {
+                pelage_gpu::audit::name_view(sdf.view(), BODY_SDF);
+                self.sdf_from_world = Mat4::IDENTITY;
+            } else {
+                pelage_gpu::audit::constant_view(sdf.view());
+            }
+        }
+    }
+
+    /// Whether the field is rebuilt every frame.
+    pub fn sdf_every_frame(&self) -> bool {
+        self.sdf_every_frame
+    }
+
+    /// Moves the body's field (built once) rigidly: `world_from_built` takes the mesh's
+    /// pose when the simulation was made to its pose this frame (a [`MeshMotion`]'s
+    /// rotation about its pivot), from the next `prepare` on. Refuses a matrix that is not
+    /// finite or not a rotation and translation (a scale would break distances), naming
+    /// `motion`.
+    ///
+    /// [`MeshMotion`]: pelage_scene::MeshMotion
+    pub fn set_sdf_transform(&mut self, world_from_built: Mat4) -> crate::Result<()> {
+        let inverse = world_from_built.inverse();
+        let (scale, _, _) = world_from_built.to_scale_rotation_translation();
+        let rigid = (scale - Vec3::ONE).abs().max_element() < 1e-4
+            && world_from_built.row(3).abs_diff_eq(Vec4::W, 1e-6);
+        if !(world_from_built.is_finite() && inverse.is_finite() && rigid) {
+            return Err(ParamError::new(
+                "motion",
+                world_from_built,
+                "the body's distance field moves only by finite rotations and translations",
+            )
+            .into());
+        }
+        self.sdf_from_world = inverse;
+        Ok(())
     }
 
     /// Replaces the colliders in use (world space, at most [`MAX_COLLIDERS`]; they start
@@ -401,9 +535,21 @@ impl SimulateStrands {
     }
 
     /// Replaces the dynamics parameters (validated) and the colliders in use with its
-    /// colliders, from the next `prepare` on.
+    /// colliders, from the next `prepare` on. The body's field is made with the
+    /// simulation: a different `sdf_resolution` is refused (build a new simulation).
     pub fn set_dynamics(&mut self, dynamics: &DynamicsParams) -> crate::Result<()> {
         dynamics.validate()?;
+        if dynamics.sdf_resolution != self.dynamics.sdf_resolution {
+            return Err(ParamError::new(
+                "dynamics.sdf_resolution",
+                dynamics.sdf_resolution,
+                &format!(
+                    "is fixed when the simulation is made (it has {}): make a new one to change it",
+                    self.dynamics.sdf_resolution
+                ),
+            )
+            .into());
+        }
         dynamics.validate_at_scale(self.scale, &self.wind)?;
         self.dynamics = dynamics.clone();
         self.colliders = dynamics.colliders.clone();
@@ -475,7 +621,10 @@ impl StrandStage for SimulateStrands {
             .last_time
             .filter(|&last| time >= last)
             .map(|last| time - last);
-        let uniforms = SimUniforms::new(&self.dynamics, &self.colliders, time, dt);
+        let mut uniforms = SimUniforms::new(&self.dynamics, &self.colliders, time, dt);
+        if let Some(sdf) = &self.sdf {
+            uniforms = uniforms.with_sdf(sdf.grid(), self.sdf_from_world);
+        }
         self.sim.write(queue, &uniforms)?;
         self.last_uniforms = uniforms;
         self.last_time = Some(time);
@@ -483,16 +632,38 @@ impl StrandStage for SimulateStrands {
         self.pass.begin_frame(queue, &grow)
     }
 
-    /// Clears the held counter and simulates every strand (drawn or not).
+    /// Rebuilds the body's field when it is rebuilt every frame, clears the held counter
+    /// and simulates every strand (drawn or not).
     fn encode(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         frame: &StrandFrame,
-        timer: Option<&mut GpuTimer>,
+        mut timer: Option<&mut GpuTimer>,
     ) -> crate::Result<()> {
+        frame.check_prepared(SIMULATE_LABEL, self.frame().map_or(0, |f| f.id))?;
+        if let (Some(sdf), true) = (&self.sdf, self.sdf_every_frame) {
+            sdf.encode(encoder, timer.as_deref_mut());
+        }
         encoder.clear_buffer(&self.held, 0, None);
         self.pass
             .record(encoder, frame, timer, self.buffers().strand_count)
+    }
+
+    /// The field's build when it runs every frame, then the simulation (reading the mesh
+    /// and the field, writing the strands and its state).
+    fn passes(&self) -> Vec<PassInfo> {
+        let mut passes = Vec::new();
+        let mut simulate = PassInfo::new(SIMULATE_LABEL).reads([MESH]).writes([
+            STRAND_VERTICES,
+            STRAND_ROOTS,
+            SIMULATION_STATE,
+        ]);
+        if let (Some(sdf), true) = (&self.sdf, self.sdf_every_frame) {
+            passes.push(sdf.pass());
+            simulate = simulate.reads([BODY_SDF]);
+        }
+        passes.push(simulate);
+        passes
     }
 
     fn set_color(

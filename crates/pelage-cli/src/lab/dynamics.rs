@@ -28,6 +28,14 @@
 //! whose shape stiffnesses hold the fur's groom (0.9 over the whole strand) against the
 //! same fur stateless.
 //!
+//! Two more rows collide with the body's own shape (its signed distance field,
+//! `dynamics.sdf_resolution` = [`LAB_SDF_RESOLUTION`]): `hair_sdf`, the head with the
+//! field instead of the sphere inside it (built once, moved with the head), and
+//! `fur_sdf`, the creature's fur at the default dynamics (which without a collider fall
+//! into the body) on the field rebuilt every frame after the skinning. Every row reports
+//! how deep the simulated strands are inside the body (exact distances to the posed mesh
+//! on the CPU, every k-th strand up to [`DEPTH_STRANDS`], in strand widths).
+//!
 //! `--scene FILE` takes a scene file with a `[dynamics]` table (`scenes/head_turn.toml`)
 //! instead, compared with the same scene without the table.
 //!
@@ -170,10 +178,19 @@ global_stiffness = 0.9
 global_range = 1.0
 "#;
 
+/// The resolution of the body's distance field in the lab's `hair_sdf` and `fur_sdf`
+/// rows (nodes along the longest axis of the box the body moves in).
+pub const LAB_SDF_RESOLUTION: u32 = 64;
+
+/// Strands whose depth inside the body is measured each frame (every k-th strand up to
+/// this many: exact distances on the CPU cost `O(vertices · triangles)`).
+const DEPTH_STRANDS: usize = 400;
+
 /// One comparison of the lab: the same hair stateless and simulated, and (grown hair
 /// only) the stateless hair from other roots.
 struct Scenario {
-    /// Its name in the tables (`hair` or `fur`, or `scene` for `--scene`).
+    /// Its name in the tables (`hair`, `hair_sdf`, `fur` or `fur_sdf`, or `scene` for
+    /// `--scene`).
     name: &'static str,
     stateless: Scene,
     simulated: Scene,
@@ -207,7 +224,57 @@ fn scenarios(path: Option<&Path>, strands: u32, fur_strands: u32) -> LabResult<V
     let file = SceneFile::parse(FUR_SCENE)?;
     let mut fur = Scene::from_scene_file(&file, Path::new("lab dynamics fur"))?;
     fur.hair.roots.count = fur_strands;
-    Ok(vec![compared("hair", hair), compared("fur", fur)])
+    // The same head with the body's distance field instead of the sphere inside it, and
+    // the fur at the default dynamics (the shape stiffnesses of long hair, which let it
+    // fall into the body without a collider) on the creature's field rebuilt every frame.
+    let mut hair_sdf = hair.clone();
+    if let Some(d) = hair_sdf.dynamics.as_mut() {
+        d.colliders.clear();
+        d.sdf_resolution = LAB_SDF_RESOLUTION;
+    }
+    let mut fur_sdf = fur.clone();
+    fur_sdf.dynamics = Some(pelage::scene::DynamicsParams {
+        sdf_resolution: LAB_SDF_RESOLUTION,
+        ..Default::default()
+    });
+    Ok(vec![
+        compared("hair", hair),
+        compared("hair_sdf", hair_sdf),
+        compared("fur", fur),
+        compared("fur_sdf", fur_sdf),
+    ])
+}
+
+/// The scene's mesh in its pose at time `t` (its motion or its rig), on the CPU.
+fn posed_mesh(scene: &Scene, t: f32) -> pelage::scene::Mesh {
+    if let Some(motion) = &scene.motion {
+        motion.apply(&scene.mesh, t)
+    } else if let Some(rig) = &scene.skin {
+        let skin = rig.skin(&scene.mesh);
+        pelage_reference::skin::skin_mesh(&scene.mesh, &skin, &rig.joint_matrices(t))
+    } else {
+        scene.mesh.clone()
+    }
+}
+
+/// How deep the vertices of every `every`-th strand (its root left out) are inside
+/// `mesh`, in strand widths (the exact signed distance, `pelage_reference::sdf`): the
+/// largest and the mean, depths outside counting 0.
+fn depth_in_widths(
+    mesh: &pelage::scene::Mesh,
+    vertices: &[[f32; 3]],
+    per_strand: usize,
+    every: usize,
+    width: f32,
+) -> (f64, f64) {
+    let points: Vec<glam::Vec3> = vertices
+        .chunks_exact(per_strand)
+        .step_by(every.max(1))
+        .flat_map(|s| s[1..].iter().map(|&v| glam::Vec3::from(v)))
+        .collect();
+    let depths = pelage_reference::sdf::depths(mesh, &points);
+    let widths = depths.iter().map(|&d| f64::from(d.max(0.0) / width));
+    (widths.clone().fold(0.0, f64::max), mean(widths))
 }
 
 /// The scenes one comparison draws: `simulated`, the same without its `[dynamics]`, and
@@ -287,6 +354,8 @@ struct Row {
     /// Mean over strands of each strand's largest turn, stateless and simulated.
     turn: [f64; 2],
     wall_ms: [f64; 2],
+    /// How deep the simulated strands are inside the body (strand widths): largest, mean.
+    depth: (f64, f64),
 }
 
 /// What one comparison measured.
@@ -373,7 +442,16 @@ fn measure(
                 f64::from(d) / length.max(f64::MIN_POSITIVE)
             })
             .collect();
+        let every = (b.len() / per_strand).div_ceil(DEPTH_STRANDS);
+        let depth = depth_in_widths(
+            &posed_mesh(simulated, t),
+            &b,
+            per_strand,
+            every,
+            simulated.hair.growth.width,
+        );
         let row = Row {
+            depth,
             t,
             flip_sim,
             flip_floor,
@@ -452,11 +530,14 @@ fn summarise(outcome: &Outcome) -> Vec<f64> {
         strand_ms[1] / strand_ms[0],
         strand_ms[0],
         strand_ms[1],
+        // Every frame: the body moves from the first.
+        rows.iter().map(|r| r.depth.0).fold(0.0, f64::max),
+        mean(rows.iter().map(|r| r.depth.1)),
     ]
 }
 
 /// The measures of the summary, in [`summarise`]'s order.
-const SUMMARY: [&str; 12] = [
+const SUMMARY: [&str; 14] = [
     "mean FLIP, simulated vs stateless (image)",
     "mean FLIP, simulated vs stateless (body and hair)",
     "mean FLIP, other roots vs stateless (image): the floor",
@@ -469,6 +550,8 @@ const SUMMARY: [&str; 12] = [
     "strand stage alone, simulated over stateless (median)",
     "strand stage alone, stateless (ms)",
     "strand stage alone, simulated (ms)",
+    "penetration depth into the body, largest (strand widths, every frame)",
+    "penetration depth into the body, mean (strand widths, every frame)",
 ];
 
 /// Runs the lab: writes `dynamics.csv`, `dynamics_summary.csv`, `dynamics_sheet.png`
@@ -503,6 +586,8 @@ pub fn run(opts: &LabOpts, scene: Option<&Path>) -> LabResult<()> {
         "largest_turn_deg_simulated",
         "frame_ms_stateless",
         "frame_ms_simulated",
+        "depth_max_widths",
+        "depth_mean_widths",
     ]);
     for (scenario, outcome) in scenarios.iter().zip(&outcomes) {
         for r in &outcome.rows {
@@ -519,6 +604,8 @@ pub fn run(opts: &LabOpts, scene: Option<&Path>) -> LabResult<()> {
                 format!("{:.2}", r.turn[1]),
                 format!("{:.2}", r.wall_ms[0]),
                 format!("{:.2}", r.wall_ms[1]),
+                format!("{:.3}", r.depth.0),
+                format!("{:.4}", r.depth.1),
             ])?;
         }
     }
@@ -536,8 +623,8 @@ pub fn run(opts: &LabOpts, scene: Option<&Path>) -> LabResult<()> {
     summary.write_csv(&opts.out.join("dynamics_summary.csv"))?;
     for (scenario, outcome) in scenarios.iter().zip(&outcomes) {
         let file = match scenario.name {
-            "fur" => "dynamics_sheet_fur.png",
-            _ => "dynamics_sheet.png",
+            "hair" | "scene" => "dynamics_sheet.png".to_string(),
+            other => format!("dynamics_sheet_{other}.png"),
         };
         crate::output::save_png(&contact_sheet(&outcome.cells, 2)?, &opts.out.join(file))?;
     }

@@ -28,7 +28,8 @@
 //     groom.wgsl turns a groom); both pulls move the previous position with the vertex,
 //     so they shape the strand without giving it speed; then COLLISION_PASSES rounds of
 //     collisions (out of every sphere and capsule; friction, in the first round only,
-//     taking tangential velocity off) and follow-the-leader (the vertex put at its rest
+//     taking tangential velocity off; then out of the body's signed distance field when
+//     there is one, along its gradient) and follow-the-leader (the vertex put at its rest
 //     length from its parent), then onto_length_outside (at its length and out of the
 //     colliders at once, where the rounds left it inside), and the parent's velocity is
 //     corrected by -length_damping times the follow-the-leader corrections (Mueller et
@@ -79,6 +80,13 @@ struct SimUniforms {
     teleport_distance: f32,
     collider_count: u32,
     colliders: array<Collider, MAX_COLLIDERS>,
+    // The body's signed distance field (BodySdf, strands/sdf.wgsl): world space to the
+    // space it was built in, its node (0, 0, 0), cell and nodes per axis, 1 when on.
+    sdf_from_world: mat4x4<f32>,
+    sdf_origin: vec3<f32>,
+    sdf_cell: f32,
+    sdf_dims: vec3<u32>,
+    sdf_on: u32,
 }
 
 @group(0) @binding(1) var<storage, read> positions: array<f32>;
@@ -88,8 +96,9 @@ struct SimUniforms {
 @group(0) @binding(5) var<uniform> sim: SimUniforms;
 @group(0) @binding(6) var<storage, read_write> state: array<vec4<f32>>;
 @group(0) @binding(7) var<storage, read_write> held: array<atomic<u32>>;
-@group(0) @binding(8) var<storage, read_write> vertices: array<vec4<f32>>;
-@group(0) @binding(9) var<storage, read_write> drawn: array<StrandRoot>;
+@group(0) @binding(8) var sdf: texture_3d<f32>;
+@group(0) @binding(9) var<storage, read_write> vertices: array<vec4<f32>>;
+@group(0) @binding(10) var<storage, read_write> drawn: array<StrandRoot>;
 
 fn load_position(i: u32) -> vec3<f32> {
     return vec3<f32>(positions[3u * i], positions[3u * i + 1u], positions[3u * i + 2u]);
@@ -155,6 +164,51 @@ fn axis_point(col: Collider, p: vec3<f32>) -> vec3<f32> {
     return col.a + axis * s;
 }
 
+// The body's field at a world point: the signed distance (trilinear between the eight
+// nodes around it) and its gradient (the trilinear's own, in world space). A point
+// outside the grid, or not finite, is far outside (`d` = 3.4e38, no gradient).
+struct BodySample {
+    d: f32,
+    grad: vec3<f32>,
+}
+
+fn sdf_node(i: vec3<u32>) -> f32 {
+    return textureLoad(sdf, vec3<i32>(i), 0).x;
+}
+
+fn body_sample(p_world: vec3<f32>) -> BodySample {
+    var out = BodySample(3.4e38, vec3<f32>(0.0));
+    let p = (sim.sdf_from_world * vec4<f32>(p_world, 1.0)).xyz;
+    let x = (p - sim.sdf_origin) / sim.sdf_cell;
+    let top = vec3<f32>(sim.sdf_dims - vec3<u32>(1u));
+    if !all_finite3(x) || any(x < vec3<f32>(0.0)) || any(x > top) {
+        return out;
+    }
+    let i = min(vec3<u32>(floor(x)), sim.sdf_dims - vec3<u32>(2u));
+    let f = x - vec3<f32>(i);
+    let c000 = sdf_node(i);
+    let c100 = sdf_node(i + vec3<u32>(1u, 0u, 0u));
+    let c010 = sdf_node(i + vec3<u32>(0u, 1u, 0u));
+    let c110 = sdf_node(i + vec3<u32>(1u, 1u, 0u));
+    let c001 = sdf_node(i + vec3<u32>(0u, 0u, 1u));
+    let c101 = sdf_node(i + vec3<u32>(1u, 0u, 1u));
+    let c011 = sdf_node(i + vec3<u32>(0u, 1u, 1u));
+    let c111 = sdf_node(i + vec3<u32>(1u, 1u, 1u));
+    let c00 = mix(c000, c100, f.x);
+    let c10 = mix(c010, c110, f.x);
+    let c01 = mix(c001, c101, f.x);
+    let c11 = mix(c011, c111, f.x);
+    out.d = mix(mix(c00, c10, f.y), mix(c01, c11, f.y), f.z);
+    let gx = mix(mix(c100 - c000, c110 - c010, f.y), mix(c101 - c001, c111 - c011, f.y), f.z);
+    let gy = mix(mix(c010 - c000, c110 - c100, f.x), mix(c011 - c001, c111 - c101, f.x), f.z);
+    let gz = mix(mix(c001 - c000, c101 - c100, f.x), mix(c011 - c010, c111 - c110, f.x), f.y);
+    // The field's space turns rigidly from world space: its gradient turns back with
+    // the transpose.
+    let r = mat3x3<f32>(sim.sdf_from_world[0].xyz, sim.sdf_from_world[1].xyz, sim.sdf_from_world[2].xyz);
+    out.grad = transpose(r) * (vec3<f32>(gx, gy, gz) / sim.sdf_cell);
+    return out;
+}
+
 // `p` pushed out of every collider to `margin` beyond its surface (along the direction
 // from the nearest point of its axis; `fallback` when on the axis), and `prev` moved along
 // the contact's tangent plane by `friction` of the tangential motion (the first round of
@@ -170,6 +224,16 @@ fn collide(p_in: vec3<f32>, prev_in: vec3<f32>, margin: f32, fallback: vec3<f32>
         if dot(d, d) < r * r {
             let n = safe_normalize(d, fallback);
             m.p = nearest + n * r;
+            let v = m.p - m.prev;
+            m.prev = m.prev + (v - n * dot(v, n)) * friction;
+        }
+    }
+    // The body's own shape: out along the field's gradient to `margin` from its surface.
+    if sim.sdf_on == 1u {
+        let s = body_sample(m.p);
+        if s.d < margin {
+            let n = safe_normalize(s.grad, fallback);
+            m.p = m.p + n * (margin - s.d);
             let v = m.p - m.prev;
             m.prev = m.prev + (v - n * dot(v, n)) * friction;
         }
@@ -197,6 +261,18 @@ fn onto_length_outside(p_in: vec3<f32>, parent: vec3<f32>, len: f32, margin: f32
             let along = (d * d + len * len - r * r) / (2.0 * d);
             let o = parent + toward * along;
             p = o + perpendicular(toward, p - o) * sqrt(max(len * len - along * along, 0.0));
+        }
+    }
+    // The body's field, taken as its tangent plane at `p`: the point of the sphere
+    // around `parent` at height `margin` above that plane nearest `p`.
+    if sim.sdf_on == 1u {
+        let s = body_sample(p);
+        if s.d < margin {
+            let n = safe_normalize(s.grad, vec3<f32>(0.0, 1.0, 0.0));
+            let h = dot(n, p - parent) + margin - s.d;
+            if abs(h) < len {
+                p = parent + n * h + perpendicular(n, p - parent) * sqrt(len * len - h * h);
+            }
         }
     }
     return p;

@@ -1,0 +1,458 @@
+//! The body's signed distance field (`BodySdf`, `wgsl/strands/sdf.wgsl`) against the CPU
+//! mirror's exact distances, and its bad input.
+
+use glam::{Vec3, Vec4};
+use pelage_gpu::Gpu;
+use pelage_reference::sdf::{depths, exact_field, winding_number};
+use pelage_reference::skin::skin_mesh;
+use pelage_scene::{DynamicsParams, HairParams, Mesh, MeshMotion, SkinBend, WindParams};
+use pelage_strands::{BodySdf, MeshBuffers, MeshSkin, SimulateStrands, StrandStage};
+
+mod common;
+use common::{gpu, grow_on_gpu, read_vertices};
+
+const SEGMENTS: u32 = 16;
+/// The head's hair: `scenes/head_turn.toml`'s width.
+const WIDTH: f32 = 0.003;
+
+/// The GPU field of `mesh` at `resolution` and the exact one, with the grid's band and
+/// the largest error (in cells) inside and outside the band.
+fn compare(mesh: &Mesh, resolution: u32) -> (f32, f32, usize) {
+    let gpu = gpu();
+    let buffers = MeshBuffers::upload(&gpu, mesh).unwrap();
+    let sdf = BodySdf::new(&gpu, &buffers, mesh.bounds(), resolution).unwrap();
+    sdf.build(&gpu).unwrap();
+    let field = sdf.read(&gpu).unwrap();
+    let grid = *sdf.grid();
+    let exact = exact_field(mesh, &grid, f32::MAX);
+    assert_eq!(field.len(), exact.len());
+    let (mut band_err, mut far_err, mut sign_flips) = (0.0f32, 0.0f32, 0);
+    for (g, e) in field.iter().zip(&exact) {
+        // Magnitudes: where the sign flips (see the callers), the distance is still
+        // that of a triangle about as near.
+        let err = (g.abs() - e.abs()).abs() / grid.cell;
+        if e.abs() <= grid.band() {
+            band_err = band_err.max(err);
+            assert_eq!(g.signum(), e.signum(), "band node: gpu {g}, exact {e}");
+        } else {
+            far_err = far_err.max(err);
+            sign_flips += usize::from(g.signum() != e.signum());
+        }
+    }
+    eprintln!(
+        "{} nodes {:?}, cell {}: band error {band_err:e} cells, far error {far_err:e} cells, \
+         {sign_flips} far sign flips",
+        grid.nodes(),
+        grid.dims,
+        grid.cell
+    );
+    (band_err, far_err, sign_flips)
+}
+
+#[test]
+fn the_head_field_is_exact_in_the_band_and_close_beyond() {
+    let head = Mesh::icosphere(0.5, 3).unwrap();
+    let (band, far, flips) = compare(&head, 48);
+    // Measured: 2.7e-6 cells in the band (float rounding), 0.032 beyond.
+    assert!(band < 1e-4, "band error {band} cells");
+    assert!(far < 0.1, "far error {far} cells");
+    assert_eq!(flips, 0);
+}
+
+#[test]
+fn the_creature_field_is_exact_in_the_band_and_close_beyond() {
+    let creature = Mesh::creature();
+    let (band, far, flips) = compare(&creature, 40);
+    // Measured: 1.6e-6 cells in the band, 0.041 beyond; 2 of 28 160 nodes flip sign. The
+    // creature's parts overlap unwelded, so inside the body a buried part's surface
+    // faces outward: a node about as far from it as from the body's own surface takes
+    // either side, and jump flooding may hold the other (never in the band).
+    assert!(band < 1e-4, "band error {band} cells");
+    assert!(far < 0.1, "far error {far} cells");
+    assert!(
+        flips <= 28,
+        "{flips} far sign flips (at most 0.1% of the nodes)"
+    );
+}
+
+/// How deep the strands' vertices are inside the body: the largest and the mean over
+/// every non-root vertex and frame, in strand widths (exact distances, CPU mirror).
+#[derive(Debug, Default)]
+struct Depth {
+    max: f32,
+    sum: f64,
+    count: usize,
+    /// Vertices deeper than half a strand width.
+    deep: usize,
+}
+
+impl Depth {
+    fn add(&mut self, mesh: &Mesh, vertices: &[Vec4], width: f32) {
+        let points: Vec<Vec3> = vertices
+            .chunks(SEGMENTS as usize + 1)
+            .flat_map(|s| s[1..].iter().map(|v| v.truncate()))
+            .collect();
+        for d in depths(mesh, &points) {
+            let d = d.max(0.0) / width;
+            self.max = self.max.max(d);
+            self.sum += f64::from(d);
+            self.count += 1;
+            self.deep += usize::from(d > 0.5);
+        }
+    }
+
+    fn mean(&self) -> f64 {
+        self.sum / self.count.max(1) as f64
+    }
+
+    fn deep_fraction(&self) -> f64 {
+        self.deep as f64 / self.count.max(1) as f64
+    }
+}
+
+/// `scenes/head_turn.toml`'s dynamics without its collider, with the body's field at
+/// `sdf_resolution` (0: none).
+fn head_dynamics(sdf_resolution: u32) -> DynamicsParams {
+    DynamicsParams {
+        wind_response: 2.0,
+        damping: 3.0,
+        local_stiffness: 0.3,
+        global_stiffness: 0.25,
+        global_range: 0.4,
+        friction: 0.3,
+        sdf_resolution,
+        ..DynamicsParams::default()
+    }
+}
+
+/// The head's hair: `scenes/head_turn.toml`'s, grown (0.9 long), `count` strands.
+fn head_hair(count: u32, wind: WindParams) -> HairParams {
+    let mut p = HairParams::default();
+    p.roots.count = count;
+    p.roots.seed = 7;
+    p.growth.segments = SEGMENTS;
+    p.growth.length = 0.9;
+    p.growth.direction_jitter = 0.15;
+    p.growth.width = WIDTH;
+    p.wind = wind;
+    p
+}
+
+/// A fast head turn: twice `scenes/head_turn.toml`'s amplitude and five times its pace
+/// (1.8 rad at 2 turns per second, peak 22 rad/s), nodding at 3 per second.
+fn fast_turn() -> MeshMotion {
+    MeshMotion {
+        pivot: Vec3::new(0.0, -0.3, 0.0),
+        turn: 1.8,
+        turn_frequency: 2.0,
+        nod: 0.4,
+        nod_frequency: 3.0,
+    }
+}
+
+/// The head turning fast for `frames` at 60 fps, the field built once and moved with
+/// the head: the depth of every vertex after each frame.
+fn head_turn_depth(gpu: &Gpu, sdf_resolution: u32, frames: u32) -> Depth {
+    let head = Mesh::icosphere(0.5, 3).unwrap();
+    let buffers = MeshBuffers::upload(gpu, &head).unwrap();
+    let mut sim = SimulateStrands::grown(
+        gpu,
+        &head,
+        &buffers,
+        &head_hair(200, WindParams::default()),
+        &head_dynamics(sdf_resolution),
+    )
+    .unwrap();
+    let motion = fast_turn();
+    let mut depth = Depth::default();
+    for frame in 0..frames {
+        let t = frame as f32 / 60.0;
+        let posed = motion.apply(&head, t);
+        buffers.update(&gpu.queue, &posed).unwrap();
+        sim.set_sdf_transform(motion.matrix(t)).unwrap();
+        let v = grow_on_gpu(gpu, &mut sim, t);
+        depth.add(&posed, &v, WIDTH);
+    }
+    depth
+}
+
+/// Over a fast head turn (1.5 s) no vertex goes deeper than half a strand width inside
+/// the head, measured by exact distance to the posed mesh; without the field the hair
+/// falls through it.
+#[test]
+fn no_vertex_goes_half_a_width_into_the_head_over_a_fast_turn() {
+    let gpu = gpu();
+    let with = head_turn_depth(&gpu, 64, 90);
+    let without = head_turn_depth(&gpu, 0, 90);
+    eprintln!(
+        "fast head turn, depth in strand widths: with the field max {:.3} mean {:.2e}; \
+         without max {:.1} mean {:.2e}",
+        with.max,
+        with.mean(),
+        without.max,
+        without.mean()
+    );
+    assert!(with.max <= 0.5, "{with:?}");
+    assert!(
+        without.max > 0.5,
+        "the turn never pushed hair into the head: {without:?}"
+    );
+}
+
+/// The creature's rig (`scenes/creature_skinned.toml`'s, at twice its pace: a bend of
+/// 0.6 rad once a second and a twist of 0.3 rad 1.4 times a second).
+fn creature_rig() -> SkinBend {
+    SkinBend {
+        bend_frequency: 1.0,
+        twist_frequency: 1.4,
+        ..SkinBend::default()
+    }
+}
+
+/// Fur on the creature skinned on the GPU every frame, simulated at the default dynamics
+/// for `frames` at 60 fps with the field rebuilt every frame (or none): the depth of every
+/// vertex after each frame, over the strands that start outside the body (the creature's
+/// parts overlap unwelded, and fur rooted on a part's surface buried inside another is
+/// inside the body from the start).
+fn creature_depth(gpu: &Gpu, sdf_resolution: u32, frames: u32) -> Depth {
+    let bind = Mesh::creature();
+    let rig = creature_rig();
+    let skin = rig.skin(&bind);
+    let mut buffers = MeshBuffers::upload(gpu, &bind).unwrap();
+    buffers.bounds = rig.reach(buffers.bounds);
+    let mesh_skin = MeshSkin::new(gpu, &bind, &skin, &buffers).unwrap();
+    let mut hair = HairParams::default();
+    hair.roots.count = 200;
+    hair.growth.segments = SEGMENTS;
+    hair.wind = WindParams::calm();
+    let width = hair.growth.width;
+    let dynamics = DynamicsParams {
+        sdf_resolution,
+        ..DynamicsParams::default()
+    };
+    let mut sim = SimulateStrands::grown(gpu, &bind, &buffers, &hair, &dynamics).unwrap();
+    sim.set_sdf_every_frame(true);
+    let per = SEGMENTS as usize + 1;
+    let mut outside: Option<Vec<bool>> = None;
+    let mut depth = Depth::default();
+    let mut buried = 0;
+    for frame in 0..frames {
+        let t = frame as f32 / 60.0;
+        let matrices = rig.joint_matrices(t);
+        mesh_skin.set_joint_matrices(&gpu.queue, &matrices).unwrap();
+        let strand_frame = sim.prepare(&gpu.queue, t).unwrap();
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        mesh_skin.encode(&mut encoder, None);
+        sim.encode(&mut encoder, &strand_frame, None).unwrap();
+        gpu.submit_and_wait([encoder.finish()]).unwrap();
+        let v = read_vertices(gpu, &sim.buffers().vertices);
+        let posed = skin_mesh(&bind, &skin, &matrices);
+        // Frame 0 is the rest pose: the strands wholly outside then are the ones measured.
+        let keep = outside.get_or_insert_with(|| {
+            v.chunks(per)
+                .map(|s| {
+                    let points: Vec<Vec3> = s[1..].iter().map(|p| p.truncate()).collect();
+                    depths(&posed, &points).iter().all(|&d| d <= 0.0)
+                })
+                .collect()
+        });
+        // A root on one part's surface that the rig has pushed inside another (winding
+        // number 1½ rather than ½) holds its strand inside the body whatever the
+        // collisions do: such strands are left out of the frame (and counted).
+        let kept: Vec<Vec4> = v
+            .chunks(per)
+            .zip(keep.iter())
+            .filter(|(s, k)| {
+                let free = winding_number(&posed, s[0].truncate()) < 1.0;
+                buried += usize::from(**k && !free);
+                **k && free
+            })
+            .flat_map(|(s, _)| s.iter().copied())
+            .collect();
+        depth.add(&posed, &kept, width);
+    }
+    depth
+}
+
+/// Over the creature's rig cycle (1 s), fur at the default dynamics, which falls into
+/// the body without a collider, stays out of it but at the junctions of its parts: the
+/// creature is overlapping closed parts, not welded, and where a part's surface runs on
+/// inside another the field's sign (the nearest surface's side) says "outside" within a
+/// cell of the crease, so a vertex can slip through there. Measured at resolution 64:
+/// the mean depth falls from 2.25 strand widths without the field to 0.062 with it, and
+/// 3.1% of the vertices (32% without) end a frame deeper than half a width; the deepest
+/// 14.1 widths (34.4 without).
+#[test]
+fn fur_stays_out_of_the_skinned_creature_but_at_its_part_junctions() {
+    let gpu = gpu();
+    let with = creature_depth(&gpu, 64, 60);
+    let without = creature_depth(&gpu, 0, 60);
+    eprintln!(
+        "creature rig, depth in strand widths: with the field max {:.3} mean {:.2e}, \
+         {:.2}% deeper than half a width; without max {:.1} mean {:.2e}, {:.2}%",
+        with.max,
+        with.mean(),
+        100.0 * with.deep_fraction(),
+        without.max,
+        without.mean(),
+        100.0 * without.deep_fraction()
+    );
+    assert!(with.mean() <= 0.1, "{with:?}");
+    assert!(with.deep_fraction() <= 0.05, "{with:?}");
+    assert!(
+        without.mean() > 10.0 * with.mean(),
+        "the fur did not fall into the body without the field: {without:?}"
+    );
+}
+
+/// How far the vertices move in a frame once the hair has settled: the largest, the
+/// 99th percentile and the mean over vertices and frames, in strand widths.
+#[derive(Debug)]
+struct Movement {
+    max: f32,
+    p99: f32,
+    mean: f64,
+}
+
+/// Hair on the still head under gravity with the field (or none; `sphere`: the head's
+/// sphere collider of `scenes/head_turn.toml` instead): settles for 3 s at 60 fps, then
+/// how far its vertices move per frame over the next second, and the depth of the last
+/// frame.
+fn resting(gpu: &Gpu, sdf_resolution: u32, sphere: bool) -> (Movement, Depth) {
+    let head = Mesh::icosphere(0.5, 3).unwrap();
+    let buffers = MeshBuffers::upload(gpu, &head).unwrap();
+    let mut sim = SimulateStrands::grown(
+        gpu,
+        &head,
+        &buffers,
+        &head_hair(200, WindParams::calm()),
+        &head_dynamics(sdf_resolution),
+    )
+    .unwrap();
+    if sphere {
+        sim.set_colliders(&[pelage_scene::Collider::sphere(Vec3::ZERO, 0.48)])
+            .unwrap();
+    }
+    let mut last: Vec<Vec4> = Vec::new();
+    let mut moves = Vec::new();
+    for frame in 0..240 {
+        let v = grow_on_gpu(gpu, &mut sim, frame as f32 / 60.0);
+        if frame > 180 {
+            moves.extend(
+                v.iter()
+                    .zip(&last)
+                    .map(|(a, b)| (a.truncate() - b.truncate()).length() / WIDTH),
+            );
+        }
+        last = v;
+    }
+    moves.sort_by(f32::total_cmp);
+    let movement = Movement {
+        max: moves.last().copied().unwrap_or(0.0),
+        p99: moves[moves.len() * 99 / 100],
+        mean: moves.iter().map(|&m| f64::from(m)).sum::<f64>() / moves.len() as f64,
+    };
+    let mut depth = Depth::default();
+    depth.add(&head, &last, WIDTH);
+    (movement, depth)
+}
+
+/// Hair resting on the still head stays on it as still as on the sphere collider: after
+/// settling, its mean move per frame is at most 1.5x the sphere collider's (measured
+/// 0.085 against 0.072 strand widths: 1.2x), and no vertex is deeper than half a width
+/// inside the head; without the field the hair hangs through the head (113 widths
+/// deep). Neither comes wholly to rest: friction takes a fraction of the tangential
+/// velocity at each contact (no static friction), so hair on a slope of the head keeps
+/// sliding slowly (99th percentile 1.5 widths per frame, largest 24).
+#[test]
+fn hair_resting_on_the_head_stays_at_rest() {
+    let gpu = gpu();
+    let (moved, depth) = resting(&gpu, 64, false);
+    let (moved_sphere, sphere) = resting(&gpu, 0, true);
+    let (moved_without, without) = resting(&gpu, 0, false);
+    eprintln!(
+        "resting hair, moves per frame after settling in strand widths (max / p99 / mean) \
+         and deepest vertex: field {:.2e} / {:.2e} / {:.2e}, {:.3}; sphere collider \
+         {:.2e} / {:.2e} / {:.2e}, {:.2}; nothing {:.2e} / {:.2e} / {:.2e}, {:.1}",
+        moved.max,
+        moved.p99,
+        moved.mean,
+        depth.max,
+        moved_sphere.max,
+        moved_sphere.p99,
+        moved_sphere.mean,
+        sphere.max,
+        moved_without.max,
+        moved_without.p99,
+        moved_without.mean,
+        without.max
+    );
+    assert!(
+        moved.mean <= 1.5 * moved_sphere.mean,
+        "{moved:?} against {moved_sphere:?}"
+    );
+    assert!(depth.max <= 0.5, "{depth:?}");
+    assert!(
+        without.max > 0.5,
+        "the hair did not fall into the head: {without:?}"
+    );
+}
+
+/// Bad input: a resolution of 0 (for the field itself), below the floor, past the
+/// device's `max_texture_dimension_3d` or past pelage's cap is refused naming
+/// `dynamics.sdf_resolution`, and so is a simulation's resolution changed after it is
+/// made; a mesh without triangles naming `mesh.indices`; a mesh
+/// whose every position is NaN (a skinning gone wrong) builds a field that is far
+/// outside everywhere (no collision, no NaN).
+#[test]
+fn bad_input_is_refused_by_name_and_a_nan_mesh_reads_outside() {
+    let gpu = gpu();
+    let head = Mesh::icosphere(0.5, 1).unwrap();
+    let buffers = MeshBuffers::upload(&gpu, &head).unwrap();
+    let device_max = gpu.limits().max_texture_dimension_3d;
+    for r in [0, 15, 513, device_max + 1] {
+        let e = BodySdf::new(&gpu, &buffers, head.bounds(), r).unwrap_err();
+        assert!(
+            e.to_string().contains("dynamics.sdf_resolution"),
+            "{r}: {e}"
+        );
+    }
+    let bad = DynamicsParams {
+        sdf_resolution: 8,
+        ..DynamicsParams::default()
+    };
+    let e = bad.validate().unwrap_err();
+    assert!(e.to_string().contains("dynamics.sdf_resolution"), "{e}");
+    let empty = MeshBuffers::from_buffers(
+        buffers.positions.clone(),
+        buffers.normals.clone(),
+        buffers.indices.clone(),
+        buffers.vertex_count,
+        0,
+        buffers.bounds,
+    )
+    .unwrap();
+    let e = BodySdf::new(&gpu, &empty, head.bounds(), 32).unwrap_err();
+    assert!(e.to_string().contains("mesh.indices"), "{e}");
+
+    // The field is made with the simulation: a new resolution is refused, not ignored.
+    let mut sim = SimulateStrands::grown(
+        &gpu,
+        &head,
+        &buffers,
+        &head_hair(10, WindParams::calm()),
+        &head_dynamics(0),
+    )
+    .unwrap();
+    let e = sim.set_dynamics(&head_dynamics(32)).unwrap_err();
+    assert!(e.to_string().contains("dynamics.sdf_resolution"), "{e}");
+    assert!(sim.set_dynamics(&head_dynamics(0)).is_ok());
+
+    let sdf = BodySdf::new(&gpu, &buffers, head.bounds(), 32).unwrap();
+    let mut broken = head.clone();
+    broken.positions.iter_mut().for_each(|p| *p = Vec3::NAN);
+    buffers.update(&gpu.queue, &broken).unwrap();
+    sdf.build(&gpu).unwrap();
+    let field = sdf.read(&gpu).unwrap();
+    assert!(field.iter().all(|&d| d.is_finite() && d > 0.0));
+}
