@@ -24,7 +24,7 @@ const THETA_SAMPLES: usize = 8;
 /// Mean chord of a cube in cell edges (`VOLUME_CHORD`).
 const CHORD: f64 = 2.0 / 3.0;
 /// Directions of the sky's injection (`VOLUME_SKY_DIRECTIONS`).
-pub const SKY_DIRECTIONS: usize = 32;
+pub const SKY_DIRECTIONS: usize = 15;
 
 /// `volume_sky_direction`: the `k`-th of [`SKY_DIRECTIONS`] directions of a Fibonacci
 /// lattice on the sphere (z uniform, azimuth stepped by the golden angle).
@@ -364,36 +364,32 @@ pub fn volume_grid(input: &VolumeInput<'_>) -> VolumeGridCpu {
         let table = &tables[&keys[c]];
         // The sky (`inject`'s second half): SKY_DIRECTIONS directional lights of
         // irradiance 4 ambient / SKY_DIRECTIONS (radiance ambient / π over 4π / K sr
-        // each); its unscattered light is the cell's fluence, averaged over the cell's own
-        // fibres.
+        // each); what arrives unscattered the fibres scatter (A_iso, g_iso) and the body
+        // reflects, and, averaged over the cell's own fibres, it is the cell's fluence.
         let mut sky = DVec4::ZERO;
         if ambient > 0.0 {
             let irradiance = ambient * 4.0 / SKY_DIRECTIONS as f64;
+            let mut lit = 0.0;
             for k in 0..SKY_DIRECTIONS {
                 let l = sky_direction(k);
-                let seen = clear_toward(pos, l, 4.0 * n as f64 * cell);
-                let f = -irradiance * seen * l;
-                sky += DVec4::new(irradiance * seen, f.x, f.y, f.z);
-                if meet > 0.0 {
-                    let theta = t.dot(l).abs().min(1.0).asin();
-                    let aligned = table.at(theta);
-                    let albedo = s * aligned.albedo + (1.0 - s) * iso[c].albedo;
-                    let scattered = irradiance * (seen * meet) * albedo;
-                    for ch in 0..3 {
-                        let dir = scatter_direction(-l, t, s, aligned.g[ch], iso[c].g[ch]);
-                        let f = scattered[ch] * dir;
-                        state[c][ch] += DVec4::new(scattered[ch], f.x, f.y, f.z);
-                    }
-                }
-                if lit_mesh > 0.0 {
-                    let bounce = irradiance
-                        * (seen * (-kappa).exp() * surface[c].dot(l).max(0.0))
-                        * mesh_albedo;
-                    let d = (2.0 / 3.0) * surface[c] / lit_mesh;
-                    for ch in 0..3 {
-                        let f = bounce[ch] * d;
-                        state[c][ch] += DVec4::new(bounce[ch], f.x, f.y, f.z);
-                    }
+                let seen = irradiance * clear_toward(pos, l, 4.0 * n as f64 * cell);
+                let f = -seen * l;
+                sky += DVec4::new(seen, f.x, f.y, f.z);
+                lit += seen * surface[c].dot(l).max(0.0);
+            }
+            // Scattered by the cell's fibres as `propagate` scatters what arrives.
+            let flux = DVec3::new(sky.y, sky.z, sky.w);
+            for ch in 0..3 {
+                let a = meet * iso[c].albedo[ch];
+                let f = a * scatter_direction(flux, t, s, iso[c].g[ch], iso[c].g[ch]);
+                state[c][ch] += DVec4::new(a * sky.x, f.x, f.y, f.z);
+            }
+            if lit_mesh > 0.0 {
+                let bounce = lit * (-kappa).exp() * mesh_albedo;
+                let d = (2.0 / 3.0) * surface[c] / lit_mesh;
+                for ch in 0..3 {
+                    let f = bounce[ch] * d;
+                    state[c][ch] += DVec4::new(bounce[ch], f.x, f.y, f.z);
                 }
             }
             if kappa > 1e-6 {

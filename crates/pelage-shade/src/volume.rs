@@ -8,7 +8,7 @@
 //! optical depth, tangent and colour (u32 atomics, fixed point: it runs where 64-bit and
 //! float atomics do not, the browser included); inject the light each cell scatters once
 //! from each light and from the sky (`shade.ambient`, radiance `ambient/π` from every
-//! direction, 32 directions), through the grid's own transmittance toward the light (so
+//! direction, 15 directions), through the grid's own transmittance toward the light (so
 //! it works with every shadow method), and add the sky's unscattered light to the fluence
 //! (the hair's single scattering of the sky is read from the grid); propagate it `volume_iterations` cells, scattering with
 //! Chiang's energies at each cell; keep the fluence and flux per cell and channel (order-1

@@ -384,37 +384,35 @@ fn inject(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups
     }
     // The sky: uniform radiance frame.ambient / pi from every direction (the path
     // tracer's `sky`), as VOLUME_SKY_DIRECTIONS directional lights of irradiance
-    // 4 ambient / VOLUME_SKY_DIRECTIONS each, marched to the grid's border like a light:
-    // what the cell's fibres and the body's lit area scatter of it joins the injection
-    // (orders >= 2 of the sky once it propagates), and the light reaching the cell
-    // unscattered is its fluence and flux (order 1: what hair_scattered makes of it is
-    // the fibre's single scattering of the sky, with the grid's visibility).
+    // 4 ambient / VOLUME_SKY_DIRECTIONS each, marched to the grid's border like a light.
+    // What reaches the cell unscattered (fluence and flux) the cell's fibres scatter as
+    // `propagate` scatters what arrives (the share 1 - exp(-kappa), A_iso and g_iso), and
+    // the body's lit area reflects: that joins the injection (orders >= 2 of the sky once
+    // it propagates); times the cell's own mean transmittance it is the cell's fluence
+    // (order 1: what hair_scattered makes of it is the fibre's single scattering of the
+    // sky, with the grid's visibility).
     var sky = vec4<f32>(0.0);
     if frame.ambient > 0.0 {
-        let irradiance = vec3<f32>(frame.ambient * 4.0 / f32(VOLUME_SKY_DIRECTIONS));
+        let irradiance = frame.ambient * 4.0 / f32(VOLUME_SKY_DIRECTIONS);
+        var lit = 0.0;
         for (var k = 0u; k < VOLUME_SKY_DIRECTIONS; k += 1u) {
             let l = volume_sky_direction(k);
-            let seen = volume_clear_toward(p, l, origin, cell, 4.0 * f32(n) * cell);
-            sky += vec4<f32>(irradiance.x * seen, -irradiance.x * seen * l);
-            if meet > 0.0 {
-                let cos_i = length(cross(t, l));
-                let theta = fibre_angle(abs(dot(t, l)), min(cos_i, 1.0));
-                let aligned = volume_fibre_at(theta, x);
-                let albedo = s * aligned.albedo + (1.0 - s) * iso.albedo;
-                let scattered = irradiance * (seen * meet) * albedo;
-                e += scattered;
-                flux_r += scattered.x * volume_scatter_direction(-l, t, s, aligned.g.x, iso.g.x);
-                flux_g += scattered.y * volume_scatter_direction(-l, t, s, aligned.g.y, iso.g.y);
-                flux_b += scattered.z * volume_scatter_direction(-l, t, s, aligned.g.z, iso.g.z);
-            }
-            if lit_mesh > 0.0 {
-                let bounce = irradiance * (seen * exp(-kappa) * max(0.0, dot(surface, l))) * u.mesh_albedo;
-                e += bounce;
-                let d = (2.0 / 3.0) * surface / lit_mesh;
-                flux_r += bounce.x * d;
-                flux_g += bounce.y * d;
-                flux_b += bounce.z * d;
-            }
+            let seen = irradiance * volume_clear_toward(p, l, origin, cell, 4.0 * f32(n) * cell);
+            sky += vec4<f32>(seen, -seen * l);
+            lit += seen * max(0.0, dot(surface, l));
+        }
+        let scattered = sky.x * meet * iso.albedo;
+        e += scattered;
+        flux_r += meet * iso.albedo.x * volume_scatter_direction(sky.yzw, t, s, iso.g.x, iso.g.x);
+        flux_g += meet * iso.albedo.y * volume_scatter_direction(sky.yzw, t, s, iso.g.y, iso.g.y);
+        flux_b += meet * iso.albedo.z * volume_scatter_direction(sky.yzw, t, s, iso.g.z, iso.g.z);
+        if lit_mesh > 0.0 {
+            let bounce = lit * exp(-kappa) * u.mesh_albedo;
+            e += bounce;
+            let d = (2.0 / 3.0) * surface / lit_mesh;
+            flux_r += bounce.x * d;
+            flux_g += bounce.y * d;
+            flux_b += bounce.z * d;
         }
         // The mean over the cell of its own fibres' transmittance along a cell edge.
         sky *= select(1.0, meet / kappa, kappa > 1e-6);
