@@ -379,10 +379,10 @@ pub fn volume_grid(input: &VolumeInput<'_>) -> VolumeGridCpu {
             }
             // Scattered by the cell's fibres as `propagate` scatters what arrives.
             let flux = DVec3::new(sky.y, sky.z, sky.w);
-            for ch in 0..3 {
+            for (ch, out) in state[c].iter_mut().enumerate() {
                 let a = meet * iso[c].albedo[ch];
                 let f = a * scatter_direction(flux, t, s, iso[c].g[ch], iso[c].g[ch]);
-                state[c][ch] += DVec4::new(a * sky.x, f.x, f.y, f.z);
+                *out += DVec4::new(a * sky.x, f.x, f.y, f.z);
             }
             if lit_mesh > 0.0 {
                 let bounce = lit * (-kappa).exp() * mesh_albedo;
