@@ -6,8 +6,9 @@
 //! mesh as the frame posed it. The hair is Chiang fibres: the scene's own parameters for
 //! the Chiang model (a σ_a per strand from its colour when the absorption is
 //! colour-driven), Chiang's defaults with each strand's colour for any other model. The
-//! mesh is a Lambertian of albedo `π · shade.mesh_color` (the renderer's mesh shading,
-//! see the path tracer's module docs).
+//! mesh is a Lambertian of albedo `π · shade.mesh_color`, at most 1 per channel
+//! (`pelage_scene::mesh_albedo`: the renderer's mesh shading and its volume grid, see the
+//! path tracer's module docs).
 
 use glam::{DVec3, Vec3, Vec4};
 use image::RgbaImage;
@@ -63,8 +64,11 @@ pub struct TracedScene {
     pub mesh_positions: Vec<Vec3>,
     /// Mesh triangles.
     pub mesh_triangles: Vec<[u32; 3]>,
-    /// The mesh's albedo, `π · shade.mesh_color`.
+    /// The mesh's albedo, `pelage_scene::mesh_albedo` of `shade.mesh_color` (`π ·
+    /// mesh_color`, at most 1 per channel, as the volume grid takes it).
     pub mesh_albedo: DVec3,
+    /// Set when `shade.mesh_color` is above `1/π` in a channel: the albedo is capped at 1.
+    pub mesh_note: Option<String>,
     /// The scene's lights.
     pub lights: Vec<pelage::scene::Light>,
     /// Set when the hair's model is not Chiang's: what the path tracer traces instead.
@@ -164,7 +168,18 @@ impl TracedScene {
             strand_sigma_a,
             mesh_positions,
             mesh_triangles,
-            mesh_albedo: (scene.shade.mesh_color * std::f32::consts::PI).as_dvec3(),
+            mesh_albedo: scene.shade.mesh_albedo().as_dvec3(),
+            mesh_note: (scene.shade.mesh_color.max_element() > std::f32::consts::FRAC_1_PI).then(
+                || {
+                    format!(
+                        "shade.mesh_color = {} is above 1/π = 0.318 in a channel: the body's \
+                         albedo π·mesh_color is capped at 1 there (the volume grid does the \
+                         same), {}",
+                        scene.shade.mesh_color,
+                        scene.shade.mesh_albedo()
+                    )
+                },
+            ),
             lights: scene.lights.clone(),
             model_note,
         })

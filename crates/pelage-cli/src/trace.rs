@@ -214,7 +214,10 @@ pub fn run(opts: &TraceOpts) -> Result<(), CliError> {
     renderer.finish(&gpu)?;
     let traced = TracedScene::from_renderer(&scene, &renderer, &gpu)?;
     drop(renderer);
-    if let Some(note) = &traced.model_note {
+    for note in [&traced.model_note, &traced.mesh_note]
+        .into_iter()
+        .flatten()
+    {
         println!("note: {note}");
     }
     let opacity = scene.hair.growth.opacity;

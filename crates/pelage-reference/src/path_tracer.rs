@@ -12,8 +12,9 @@
 //!   the geometric normal turned toward the incoming ray (no vertex normals). pelage's
 //!   `wgsl/shade/mesh.wgsl` shades its mesh `style.color · Σ E max(n·l, 0)` (+ ambient), which
 //!   is a Lambertian of albedo `ρ = π · style.color` lit directly; pass that albedo for a
-//!   like-for-like direct term (albedos above 1 are accepted but then multiple bounces add
-//!   energy).
+//!   like-for-like direct term, at most 1 per channel (`pelage_scene::mesh_albedo`, as
+//!   the volume grid takes it; an albedo above 1 is refused: it would make light at every
+//!   bounce).
 //! - **Lights** (`pelage_scene::Light`, as `wgsl/shade/frame.wgsl` delivers them): a
 //!   directional light is a delta light of irradiance `color · intensity` (on a surface facing
 //!   it) from `-direction`; a point light delivers `color · intensity / max(d², 1e-4)` at
@@ -593,10 +594,14 @@ impl PathTracer {
         if !scene.mesh_albedo.is_finite() {
             return Err(non_finite("mesh_albedo".into()));
         }
-        if scene.mesh_albedo.min_element() < 0.0 {
+        if scene.mesh_albedo.min_element() < 0.0 || scene.mesh_albedo.max_element() > 1.0 {
             return Err(PathTraceError::Invalid {
                 what: "mesh_albedo".into(),
-                reason: format!("{:?} must be >= 0", scene.mesh_albedo),
+                reason: format!(
+                    "{:?}: every channel must be in [0, 1] (a Lambertian above 1 makes light \
+                     at every bounce; pelage's `shade.mesh_color` gives `pelage_scene::mesh_albedo`)",
+                    scene.mesh_albedo
+                ),
             });
         }
         for (i, p) in scene.mesh_positions.iter().enumerate() {

@@ -23,6 +23,17 @@ const THETA_TEXELS: usize = 32;
 const THETA_SAMPLES: usize = 8;
 /// Mean chord of a cube in cell edges (`VOLUME_CHORD`).
 const CHORD: f64 = 2.0 / 3.0;
+/// Directions of the sky's injection (`VOLUME_SKY_DIRECTIONS`).
+pub const SKY_DIRECTIONS: usize = 15;
+
+/// `volume_sky_direction`: the `k`-th of [`SKY_DIRECTIONS`] directions of a Fibonacci
+/// lattice on the sphere (z uniform, azimuth stepped by the golden angle).
+pub fn sky_direction(k: usize) -> DVec3 {
+    let z = 1.0 - (2.0 * k as f64 + 1.0) / SKY_DIRECTIONS as f64;
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let phi = PI * (3.0 - 5f64.sqrt()) * k as f64;
+    DVec3::new(r * phi.cos(), r * phi.sin(), z)
+}
 
 /// The strands as stage 1 hands them over, and what lights and shades them.
 #[derive(Clone, Copy, Debug)]
@@ -40,6 +51,9 @@ pub struct VolumeInput<'a> {
     pub tip_width: f32,
     /// The lights (as the scene gives them).
     pub lights: &'a [Light],
+    /// `shade.ambient`: a sky of uniform radiance `ambient / π` from every direction (the
+    /// path tracer's `sky`).
+    pub ambient: f32,
     /// The fibre, the grid's size and its steps.
     pub params: &'a ChiangParams,
     /// The body under the hair, if any.
@@ -73,7 +87,8 @@ pub struct VolumeGridCpu {
     pub depth: Vec<f64>,
     /// The share of each cell inside the mesh.
     pub solid: Vec<f64>,
-    /// Per cell and channel: fluence and flux vector `(φ, Φ)`.
+    /// Per cell and channel: fluence and flux vector `(φ, Φ)` of the lights' light
+    /// scattered at least once and of all the sky's (its unscattered light included).
     pub fluence: Vec<[DVec4; 3]>,
     /// Total energy leaving the cells at each step (index 0: the injection), channels
     /// summed: the energy test watches it.
@@ -268,8 +283,9 @@ pub fn volume_grid(input: &VolumeInput<'_>) -> VolumeGridCpu {
     let mut surface = vec![DVec3::ZERO; cells];
     let mut mesh_albedo = DVec3::ZERO;
     if let Some(mesh) = input.mesh {
-        // At most 1 (`VolumeGrid::new`): a brighter body would make light every step.
-        mesh_albedo = (mesh.color.as_dvec3() * PI).min(DVec3::ONE);
+        // At most 1 (`pelage_scene::mesh_albedo`): a brighter body would make light
+        // every step.
+        mesh_albedo = pelage_scene::mesh_albedo(mesh.color).as_dvec3();
         splat_mesh(&mesh, origin, cell, n, &mut surface);
     }
     let solid = occupancy(&surface, n);
@@ -318,17 +334,74 @@ pub fn volume_grid(input: &VolumeInput<'_>) -> VolumeGridCpu {
     let mut state = vec![[DVec4::ZERO; 3]; cells];
     let mut fluence = vec![[DVec4::ZERO; 3]; cells];
     let half = 0.5 * CHORD;
+    // `volume_clear_toward`: exp(-τ) times the body's clear share from `pos` toward `l`,
+    // one cell edge at a time (nearest cell) up to `reach` or the grid's border.
+    let clear_toward = |pos: DVec3, l: DVec3, reach: f64| {
+        let mut tau = 0.0;
+        let mut clear = 1.0;
+        for k in 1..4 * n {
+            if k as f64 * cell > reach {
+                break;
+            }
+            let q = (pos + l * (k as f64 * cell) - origin) / cell;
+            if q.min_element() < 0.0 || q.max_element() >= n as f64 {
+                break;
+            }
+            let j = index(q.floor().as_ivec3());
+            tau += depth[j];
+            clear *= 1.0 - solid[j];
+        }
+        (-tau).exp() * clear
+    };
+    let ambient = f64::from(input.ambient);
     for c in 0..cells {
         let kappa = depth[c];
         let meet = 1.0 - (-kappa).exp();
         let lit_mesh = surface[c].length();
-        if meet <= 0.0 && lit_mesh <= 0.0 {
-            continue;
-        }
         let xyz = IVec3::new((c % n) as i32, ((c / n) % n) as i32, (c / (n * n)) as i32);
         let pos = origin + (xyz.as_dvec3() + 0.5) * cell;
         let (t, s) = (medium_t[c], medium_s[c]);
         let table = &tables[&keys[c]];
+        // The sky (`inject`'s second half): SKY_DIRECTIONS directional lights of
+        // irradiance 4 ambient / SKY_DIRECTIONS (radiance ambient / π over 4π / K sr
+        // each); what arrives unscattered the fibres scatter (A_iso, g_iso) and the body
+        // reflects, and, averaged over the cell's own fibres, it is the cell's fluence.
+        let mut sky = DVec4::ZERO;
+        if ambient > 0.0 {
+            let irradiance = ambient * 4.0 / SKY_DIRECTIONS as f64;
+            let mut lit = 0.0;
+            for k in 0..SKY_DIRECTIONS {
+                let l = sky_direction(k);
+                let seen = irradiance * clear_toward(pos, l, 4.0 * n as f64 * cell);
+                let f = -seen * l;
+                sky += DVec4::new(seen, f.x, f.y, f.z);
+                lit += seen * surface[c].dot(l).max(0.0);
+            }
+            // Scattered by the cell's fibres as `propagate` scatters what arrives.
+            let flux = DVec3::new(sky.y, sky.z, sky.w);
+            for (ch, out) in state[c].iter_mut().enumerate() {
+                let a = meet * iso[c].albedo[ch];
+                let f = a * scatter_direction(flux, t, s, iso[c].g[ch], iso[c].g[ch]);
+                *out += DVec4::new(a * sky.x, f.x, f.y, f.z);
+            }
+            if lit_mesh > 0.0 {
+                let bounce = lit * (-kappa).exp() * mesh_albedo;
+                let d = (2.0 / 3.0) * surface[c] / lit_mesh;
+                for ch in 0..3 {
+                    let f = bounce[ch] * d;
+                    state[c][ch] += DVec4::new(bounce[ch], f.x, f.y, f.z);
+                }
+            }
+            if kappa > 1e-6 {
+                sky *= meet / kappa;
+            }
+        }
+        if meet <= 0.0 && lit_mesh <= 0.0 {
+            for ch in 0..3 {
+                fluence[c][ch] = half * state[c][ch] + sky;
+            }
+            continue;
+        }
         for light in input.lights.iter().take(pelage_scene::MAX_LIGHTS) {
             let (l, irradiance, reach) = match light {
                 Light::Directional(d) => (
@@ -347,34 +420,19 @@ pub fn volume_grid(input: &VolumeInput<'_>) -> VolumeGridCpu {
                     )
                 }
             };
-            let reach = reach.min(4.0 * n as f64 * cell);
-            let mut tau = 0.0;
-            let mut clear = 1.0;
-            for k in 1..4 * n {
-                if k as f64 * cell > reach {
-                    break;
-                }
-                let q = (pos + l * (k as f64 * cell) - origin) / cell;
-                if q.min_element() < 0.0 || q.max_element() >= n as f64 {
-                    break;
-                }
-                let j = index(q.floor().as_ivec3());
-                tau += depth[j];
-                clear *= 1.0 - solid[j];
-            }
+            let seen = clear_toward(pos, l, reach.min(4.0 * n as f64 * cell));
             let theta = t.dot(l).abs().min(1.0).asin();
             let aligned = table.at(theta);
             let albedo = s * aligned.albedo + (1.0 - s) * iso[c].albedo;
-            let scattered = irradiance * ((-tau).exp() * clear * meet) * albedo;
+            let scattered = irradiance * (seen * meet) * albedo;
             for ch in 0..3 {
                 let dir = scatter_direction(-l, t, s, aligned.g[ch], iso[c].g[ch]);
                 let f = scattered[ch] * dir;
                 state[c][ch] += DVec4::new(scattered[ch], f.x, f.y, f.z);
             }
             if lit_mesh > 0.0 {
-                let bounce = irradiance
-                    * ((-tau - kappa).exp() * clear * surface[c].dot(l).max(0.0))
-                    * mesh_albedo;
+                let bounce =
+                    irradiance * (seen * (-kappa).exp() * surface[c].dot(l).max(0.0)) * mesh_albedo;
                 let d = (2.0 / 3.0) * surface[c] / lit_mesh;
                 for ch in 0..3 {
                     let f = bounce[ch] * d;
@@ -383,7 +441,7 @@ pub fn volume_grid(input: &VolumeInput<'_>) -> VolumeGridCpu {
             }
         }
         for ch in 0..3 {
-            fluence[c][ch] = half * state[c][ch];
+            fluence[c][ch] = half * state[c][ch] + sky;
         }
     }
     let energy = |st: &[[DVec4; 3]]| st.iter().map(|c| c[0].x + c[1].x + c[2].x).sum::<f64>();

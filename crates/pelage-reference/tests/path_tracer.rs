@@ -749,6 +749,18 @@ fn bad_settings_and_inputs_are_typed_errors() {
         }),
         Err(PathTraceError::Invalid { .. })
     ));
+    // A skin brighter than a Lambertian can be (`scenes/long_hair.toml`'s old skin, π ·
+    // mesh_color = 1.73, 1.26, 1.04) is refused: it made light at every bounce.
+    let bright = PathTracer::new(&HairScene {
+        mesh_albedo: DVec3::new(1.73, 1.26, 1.04),
+        ..scene(&segments, ChiangFibre::default(), &lights)
+    })
+    .unwrap_err();
+    assert!(
+        matches!(&bright, PathTraceError::Invalid { what, reason }
+            if what == "mesh_albedo" && reason.contains("[0, 1]")),
+        "{bright}"
+    );
     let nan_pos = [Vec3::ZERO, Vec3::X, Vec3::new(0.0, f32::INFINITY, 0.0)];
     assert!(matches!(
         PathTracer::new(&HairScene {

@@ -56,7 +56,7 @@ pub use params::{
     MAX_REGIONS, MAX_SEGMENTS, MAX_WAVES, MapParams, MeshMotion, OpacityFormat, ParamError,
     RegionParams, RootParams, RootTextures, STIFFNESS_INTERVAL, SUBSTEP_SLACK, SUBSTEP_ULPS,
     ShadeParams, ShadowMapParams, ShadowParams, Splat, SurfaceInterpolation, VoxelParams,
-    WindParams,
+    WindParams, mesh_albedo,
 };
 #[cfg(feature = "scene-file")]
 pub use scene_file::{MeshSource, SceneFile, SceneFileError};

@@ -1364,13 +1364,25 @@ impl HairParams {
     }
 }
 
+/// The Lambertian albedo of a body of colour `mesh_color` (`shade.mesh_color`, its BRDF
+/// `ρ/π`): `π · mesh_color`, at most 1 per channel (a brighter Lambertian would make light
+/// at every bounce). One definition for every renderer that carries the body's bounce: the
+/// volume grid and the path tracer.
+pub fn mesh_albedo(mesh_color: Vec3) -> Vec3 {
+    (mesh_color * std::f32::consts::PI).min(Vec3::ONE)
+}
+
 /// How stage 3 draws, shades and composites the hair.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct ShadeParams {
     /// Clear colour, linear RGB.
     pub background: Vec3,
-    /// Colour of the opaque mesh, linear RGB.
+    /// Colour of the opaque mesh (the body), linear RGB: its Lambertian BRDF `ρ/π` (the
+    /// raster shades it `mesh_color · (ambient + Σ E max(n·l, 0))`). The light the body
+    /// bounces into the hair (the volume grid, the path tracer of `pelage trace` and the
+    /// lab) uses the albedo [`ShadeParams::mesh_albedo`], `π · mesh_color` at most 1 per
+    /// channel: above `1/π` a channel is as white as a Lambertian can be.
     pub mesh_color: Vec3,
     /// Ambient light, a fraction of the base colour.
     pub ambient: f32,
@@ -1408,6 +1420,12 @@ impl Default for ShadeParams {
 }
 
 impl ShadeParams {
+    /// The body's Lambertian albedo for the light it bounces into the hair:
+    /// [`mesh_albedo`] of `mesh_color`.
+    pub fn mesh_albedo(&self) -> Vec3 {
+        mesh_albedo(self.mesh_color)
+    }
+
     /// Checks every field; the error names the first bad one.
     pub fn validate(&self) -> Result<(), ParamError> {
         color("shade.background", self.background)?;

@@ -7,8 +7,10 @@
 //! Per frame: fit a cube of `volume_grid`³ cells to the hair's bounds; splat every segment's
 //! optical depth, tangent and colour (u32 atomics, fixed point: it runs where 64-bit and
 //! float atomics do not, the browser included); inject the light each cell scatters once
-//! from each light, through the grid's own transmittance toward the light (so it works
-//! with every shadow method); propagate it `volume_iterations` cells, scattering with
+//! from each light and from the sky (`shade.ambient`, radiance `ambient/π` from every
+//! direction, 15 directions), through the grid's own transmittance toward the light (so
+//! it works with every shadow method), and add the sky's unscattered light to the fluence
+//! (the hair's single scattering of the sky is read from the grid); propagate it `volume_iterations` cells, scattering with
 //! Chiang's energies at each cell; keep the fluence and flux per cell and channel (order-1
 //! spherical harmonics, 4 coefficients per channel).
 
@@ -17,7 +19,7 @@ use pelage_gpu::{
     BindLayout, Gpu, GpuTimer, PassInfo, UniformBuffer, bind_numbered,
     compute_pipeline_with_layouts, dispatch_size, wgpu, zeroed_storage,
 };
-use pelage_scene::{ChiangParams, MAX_VOLUME_GRID, MIN_VOLUME_GRID, ParamError};
+use pelage_scene::{ChiangParams, MAX_VOLUME_GRID, MIN_VOLUME_GRID, ParamError, mesh_albedo};
 use pelage_strands::{MeshBuffers, StrandBuffers, StrandLayout};
 
 use crate::models::ChiangTables;
@@ -162,13 +164,6 @@ impl VolumeField {
     pub fn resolution(&self) -> u32 {
         self.value.resolution
     }
-}
-
-/// The body's albedo in the grid: `π · mesh_color`, at most 1 per channel (a brighter
-/// Lambertian makes light, and light that reaches the body's inside bounces there from
-/// cell to cell, so it would grow every step).
-fn mesh_albedo(mesh_color: glam::Vec3) -> glam::Vec3 {
-    (mesh_color * std::f32::consts::PI).min(glam::Vec3::ONE)
 }
 
 fn cells(n: u32) -> u64 {

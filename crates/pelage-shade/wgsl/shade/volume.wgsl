@@ -29,7 +29,12 @@
 // Inject: per cell and light, the light reaching the cell unscattered, exp(-tau) with tau
 // the optical depth marched one cell at a time toward the light, times the share that
 // meets the cell's fibres (1 - exp(-kappa)), scattered once: E = irradiance exp(-tau)
-// (1 - exp(-kappa)) A(theta_l), its flux E times the scattered mean direction.
+// (1 - exp(-kappa)) A(theta_l), its flux E times the scattered mean direction. The sky
+// (radiance frame.ambient / pi from every direction, the path tracer's `sky`) likewise,
+// as VOLUME_SKY_DIRECTIONS directional lights marched to the grid's border; the sky's
+// unscattered light (fluence and flux, times the cell's own mean transmittance
+// (1 - exp(-kappa)) / kappa) is added to the cell's fluence: the hair reads its single
+// scattering of the sky from the grid (orders: lights 1 explicit, >= 2 grid; sky all grid).
 // The mesh (the body under the hair, a Lambertian of albedo pi mesh_color, as the path
 // tracer's): `splat_mesh` adds its area-weighted outward normal to the cells, `occupy`
 // derives the share of each cell inside it; the march toward a light is stopped by the
@@ -354,25 +359,12 @@ fn inject(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups
             if light.position.w != 0.0 {
                 reach = min(reach, length(light.position.xyz - p));
             }
-            var tau = 0.0;
-            var clear = 1.0;
-            for (var k = 1u; k < 4u * n; k += 1u) {
-                if f32(k) * cell > reach {
-                    break;
-                }
-                let q = (p + l * (f32(k) * cell) - origin) / cell;
-                if any(q < vec3<f32>(0.0)) || any(q >= vec3<f32>(f32(n))) {
-                    break;
-                }
-                let j = cell_index(vec3<i32>(floor(q)));
-                tau += depth_at(j);
-                clear *= 1.0 - solid_at(j);
-            }
+            let seen = volume_clear_toward(p, l, origin, cell, reach);
             let cos_i = length(cross(t, l));
             let theta = fibre_angle(abs(dot(t, l)), min(cos_i, 1.0));
             let aligned = volume_fibre_at(theta, x);
             let albedo = s * aligned.albedo + (1.0 - s) * iso.albedo;
-            let scattered = irradiance * (exp(-tau) * clear * meet) * albedo;
+            let scattered = irradiance * (seen * meet) * albedo;
             let dir = -l;
             e += scattered;
             flux_r += scattered.x * volume_scatter_direction(dir, t, s, aligned.g.x, iso.g.x);
@@ -381,7 +373,7 @@ fn inject(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups
             if lit_mesh > 0.0 {
                 // The mesh's lit area in the cell, under the cell's own fibres, reflected
                 // as a Lambertian (mean direction 2/3 of its normal).
-                let bounce = irradiance * (exp(-tau - kappa) * clear * max(0.0, dot(surface, l))) * u.mesh_albedo;
+                let bounce = irradiance * (seen * exp(-kappa) * max(0.0, dot(surface, l))) * u.mesh_albedo;
                 e += bounce;
                 let d = (2.0 / 3.0) * surface / lit_mesh;
                 flux_r += bounce.x * d;
@@ -390,6 +382,41 @@ fn inject(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups
             }
         }
     }
+    // The sky: uniform radiance frame.ambient / pi from every direction (the path
+    // tracer's `sky`), as VOLUME_SKY_DIRECTIONS directional lights of irradiance
+    // 4 ambient / VOLUME_SKY_DIRECTIONS each, marched to the grid's border like a light.
+    // What reaches the cell unscattered (fluence and flux) the cell's fibres scatter as
+    // `propagate` scatters what arrives (the share 1 - exp(-kappa), A_iso and g_iso), and
+    // the body's lit area reflects: that joins the injection (orders >= 2 of the sky once
+    // it propagates); times the cell's own mean transmittance it is the cell's fluence
+    // (order 1: what hair_scattered makes of it is the fibre's single scattering of the
+    // sky, with the grid's visibility).
+    var sky = vec4<f32>(0.0);
+    if frame.ambient > 0.0 {
+        let irradiance = frame.ambient * 4.0 / f32(VOLUME_SKY_DIRECTIONS);
+        var lit = 0.0;
+        for (var k = 0u; k < VOLUME_SKY_DIRECTIONS; k += 1u) {
+            let l = volume_sky_direction(k);
+            let seen = irradiance * volume_clear_toward(p, l, origin, cell, 4.0 * f32(n) * cell);
+            sky += vec4<f32>(seen, -seen * l);
+            lit += seen * max(0.0, dot(surface, l));
+        }
+        let scattered = sky.x * meet * iso.albedo;
+        e += scattered;
+        flux_r += meet * iso.albedo.x * volume_scatter_direction(sky.yzw, t, s, iso.g.x, iso.g.x);
+        flux_g += meet * iso.albedo.y * volume_scatter_direction(sky.yzw, t, s, iso.g.y, iso.g.y);
+        flux_b += meet * iso.albedo.z * volume_scatter_direction(sky.yzw, t, s, iso.g.z, iso.g.z);
+        if lit_mesh > 0.0 {
+            let bounce = lit * exp(-kappa) * u.mesh_albedo;
+            e += bounce;
+            let d = (2.0 / 3.0) * surface / lit_mesh;
+            flux_r += bounce.x * d;
+            flux_g += bounce.y * d;
+            flux_b += bounce.z * d;
+        }
+        // The mean over the cell of its own fibres' transmittance along a cell edge.
+        sky *= select(1.0, meet / kappa, kappa > 1e-6);
+    }
     let r = vec4<f32>(e.x, flux_r);
     let g = vec4<f32>(e.y, flux_g);
     let b = vec4<f32>(e.z, flux_b);
@@ -397,9 +424,39 @@ fn inject(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups
     state_out[3u * i + 1u] = g;
     state_out[3u * i + 2u] = b;
     let w = 0.5 * VOLUME_CHORD;
-    fluence[1u + 3u * i] = w * r;
-    fluence[2u + 3u * i] = w * g;
-    fluence[3u + 3u * i] = w * b;
+    fluence[1u + 3u * i] = w * r + sky;
+    fluence[2u + 3u * i] = w * g + sky;
+    fluence[3u + 3u * i] = w * b + sky;
+}
+
+// The k-th of VOLUME_SKY_DIRECTIONS directions spread evenly over the sphere (a
+// Fibonacci lattice: z uniform, azimuth stepped by the golden angle).
+fn volume_sky_direction(k: u32) -> vec3<f32> {
+    let z = 1.0 - (2.0 * f32(k) + 1.0) / f32(VOLUME_SKY_DIRECTIONS);
+    let r = sqrt(max(0.0, 1.0 - z * z));
+    let phi = 2.399963229728653 * f32(k);
+    return vec3<f32>(r * cos(phi), r * sin(phi), z);
+}
+
+// The transmittance from cell centre p toward l up to `reach`: exp(-tau) times the clear
+// share of the body, marched one cell edge at a time (nearest cell) until the border.
+fn volume_clear_toward(p: vec3<f32>, l: vec3<f32>, origin: vec3<f32>, cell: f32, reach: f32) -> f32 {
+    let n = u.resolution;
+    var tau = 0.0;
+    var clear = 1.0;
+    for (var k = 1u; k < 4u * n; k += 1u) {
+        if f32(k) * cell > reach {
+            break;
+        }
+        let q = (p + l * (f32(k) * cell) - origin) / cell;
+        if any(q < vec3<f32>(0.0)) || any(q >= vec3<f32>(f32(n))) {
+            break;
+        }
+        let j = cell_index(vec3<i32>(floor(q)));
+        tau += depth_at(j);
+        clear *= 1.0 - solid_at(j);
+    }
+    return exp(-tau) * clear;
 }
 
 // The share of a cell's energy with mean direction m that leaves through the face toward d.

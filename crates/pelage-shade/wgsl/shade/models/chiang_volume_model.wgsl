@@ -1,8 +1,9 @@
 // The hair model contract (shade/hair_model.wgsl) implemented by Chiang et al. 2016 fibres
 // with the volume method's multiple scattering: single scattering per light (times stage
 // 2's visibility), plus hair_scattered, the fibre's response to the light in the grid the
-// passes of shade/volume.wgsl filled this frame (scattered at least once: with the
-// fibre's own scattering, orders >= 2).
+// passes of shade/volume.wgsl filled this frame: the lights' light scattered at least once
+// (with the fibre's own scattering, orders >= 2) and all of the sky's (orders >= 1; the
+// sky's order 1 is the grid's unscattered sky, so hair_ambient is zero).
 //
 // Reads: @group(2) @binding(0..2) the model's parameters and tables (chiang.wgsl),
 //        @group(2) @binding(3) the grid's uniform (VolumeUniforms),
@@ -33,10 +34,11 @@ fn hair_light(t: vec3<f32>, l: vec3<f32>, v: vec3<f32>, base_color: vec3<f32>, s
     return chiang_radiance(chiang, t, l, v, base_color, strand_random) * visibility;
 }
 
-// As chiang_model.wgsl's.
+// None: the grid carries all of the sky's light (shade/volume.wgsl's injection), its
+// single scattering included (hair_scattered reads the sky's unscattered fluence and flux,
+// shadowed by the grid's hair and body, so root occlusion does not apply).
 fn hair_ambient(base_color: vec3<f32>) -> vec3<f32> {
-    let sigma = chiang_sigma_a(chiang, base_color);
-    return exp(-sqrt(sigma) * chiang.color_scale) * INV_PI;
+    return vec3<f32>(0.0);
 }
 
 // Fluence and flux of the three channels at p (trilinear between cell centres, clamped

@@ -6,9 +6,10 @@
 //
 // The grid: resolution^3 cubic cells over the hair's bounds. `fluence` holds a header
 // (fluence[0] = origin.xyz, cell edge) and then, per cell and colour channel c, at
-// 1 + 3 * cell + c, the vec4 (phi, Phi.xyz): the fluence phi = int L dw of the light
-// scattered at least once, and its flux vector Phi = int L w dw (w the direction the
-// light travels). That is order-1 spherical harmonics (4 coefficients) per channel in
+// 1 + 3 * cell + c, the vec4 (phi, Phi.xyz): the fluence phi = int L dw of the lights'
+// light scattered at least once and of all the sky's light (unscattered too: the sky's
+// single scattering is read from the grid, with its visibility), and its flux vector
+// Phi = int L w dw (w the direction the light travels). That is order-1 spherical harmonics (4 coefficients) per channel in
 // moment form: L(w) = (phi + 3 Phi . w) / (4 pi).
 //
 // The fibre phase function (azimuthally averaged): light travelling along p that a fibre
@@ -64,6 +65,11 @@ const VOLUME_TANGENT_SCALE: f32 = 0.25;
 // Mean chord of a cube under isotropic light (4 V / S = 2/3 of the edge): how far, in cell
 // edges, scattered light travels through a cell per step.
 const VOLUME_CHORD: f32 = 0.6666667;
+// Directions of the sky's injection (shade/volume.wgsl's volume_sky_direction). Odd, so
+// that no march from a cell centre lands exactly on a cell face along z (z = m / K with
+// m even: k z is never a half integer), where f32 and the mirror's f64 would pick
+// different cells; 15 and 32 give the same lab figures within 0.4 points.
+const VOLUME_SKY_DIRECTIONS: u32 = 15u;
 // Samples of |theta| in [0, pi/2] for the isotropic averages.
 const VOLUME_THETA_SAMPLES: u32 = 8u;
 
