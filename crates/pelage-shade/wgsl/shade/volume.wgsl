@@ -467,12 +467,82 @@ fn face_share(m: vec3<f32>, d: vec3<f32>) -> f32 {
     return max(0.0, 1.0 / 6.0 + dot(m, d) / 3.0) / total;
 }
 
-const VOLUME_FACES = array<vec3<i32>, 6>(
-    vec3<i32>(1, 0, 0), vec3<i32>(-1, 0, 0),
-    vec3<i32>(0, 1, 0), vec3<i32>(0, -1, 0),
-    vec3<i32>(0, 0, 1), vec3<i32>(0, 0, -1),
-);
+// What one channel's state `st` of a neighbour sends across the face toward `d` (the
+// direction from the neighbour to this cell): its flux's share through that face and
+// the direction it carries.
+fn moved_across(st: vec4<f32>, df: vec3<f32>) -> vec4<f32> {
+    if st.x > 0.0 {
+        let moved = st.x * face_share(st.yzw / st.x, df);
+        return vec4<f32>(moved, moved * (2.0 / 3.0) * df);
+    }
+    return vec4<f32>(0.0);
+}
 
+// The light arriving at a cell, per channel.
+struct VolumeArrivals {
+    r: vec4<f32>,
+    g: vec4<f32>,
+    b: vec4<f32>,
+}
+
+// `acc` plus what the neighbour at `c - d` sends to cell `c` (nothing from outside the
+// grid). Called once per face with a constant `d`, so that no loop indexes a private
+// array (lavapipe keeps the arrivals in registers).
+fn arrive_across(c: vec3<i32>, d: vec3<i32>, acc: VolumeArrivals) -> VolumeArrivals {
+    let y = c - d;
+    if any(y < vec3<i32>(0)) || any(y >= vec3<i32>(i32(u.resolution))) {
+        return acc;
+    }
+    let j = 3u * cell_index(y);
+    let df = vec3<f32>(d);
+    return VolumeArrivals(
+        acc.r + moved_across(state_in[j], df),
+        acc.g + moved_across(state_in[j + 1u], df),
+        acc.b + moved_across(state_in[j + 2u], df),
+    );
+}
+
+// The medium of a cell as a propagation step reads it.
+struct VolumeCell {
+    index: u32,
+    // Unit mean fibre direction, its alignment, the light a step keeps unscattered.
+    t: vec3<f32>,
+    s: f32,
+    keep: f32,
+    albedo: vec3<f32>,
+    g: vec3<f32>,
+    // The mesh's solid share and the unit normal of its surface (zero for none).
+    solid: f32,
+    normal: vec3<f32>,
+}
+
+// Channel `ch`'s step at the cell: what arrived, `a`, partly reflected by the mesh's
+// solid share, the rest kept or scattered by the fibres; written to the next state, and
+// the step's mean added to the fluence.
+fn step_channel(cell: VolumeCell, ch: u32, a: vec4<f32>) {
+    let free = (1.0 - cell.solid) * a;
+    let scatter = (1.0 - cell.keep) * cell.albedo[ch];
+    let bounce = cell.solid * a.x * u.mesh_albedo[ch];
+    var normal = cell.normal;
+    let al = length(a.yzw);
+    if all(normal == vec3<f32>(0.0)) && al > 0.0 {
+        normal = -a.yzw / al;
+    }
+    let out = vec4<f32>(
+        (cell.keep + scatter) * free.x + bounce,
+        cell.keep * free.yzw
+            + scatter * volume_scatter_direction(free.yzw, cell.t, cell.s, cell.g[ch], cell.g[ch])
+            + bounce * (2.0 / 3.0) * normal,
+    );
+    state_out[3u * cell.index + ch] = out;
+    fluence[1u + 3u * cell.index + ch] += 0.5 * VOLUME_CHORD * (a + out);
+}
+
+// One propagation step: every cell takes what its six neighbours send through the
+// shared faces (x+, x-, y+, y-, z+, z-, in that order), then the mesh reflects its solid
+// share (Lambertian, toward its normal; inside the mesh, back the way it came) and the
+// fibres keep or scatter the rest. Faces and channels are written out (no loop over a
+// private array).
 @compute @workgroup_size(64)
 fn propagate(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let n = u.resolution;
@@ -481,53 +551,28 @@ fn propagate(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
         return;
     }
     let c = vec3<i32>(i32(i % n), i32((i / n) % n), i32(i / (n * n)));
-    var arrive = array<vec4<f32>, 3>(vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0));
-    for (var f = 0u; f < 6u; f += 1u) {
-        let d = VOLUME_FACES[f];
-        let y = c - d;
-        if any(y < vec3<i32>(0)) || any(y >= vec3<i32>(i32(n))) {
-            continue;
-        }
-        let j = cell_index(y);
-        let df = vec3<f32>(d);
-        for (var ch = 0u; ch < 3u; ch += 1u) {
-            let st = state_in[3u * j + ch];
-            if st.x > 0.0 {
-                let moved = st.x * face_share(st.yzw / st.x, df);
-                arrive[ch] += vec4<f32>(moved, moved * (2.0 / 3.0) * df);
-            }
-        }
-    }
+    var acc = VolumeArrivals(vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0));
+    acc = arrive_across(c, vec3<i32>(1, 0, 0), acc);
+    acc = arrive_across(c, vec3<i32>(-1, 0, 0), acc);
+    acc = arrive_across(c, vec3<i32>(0, 1, 0), acc);
+    acc = arrive_across(c, vec3<i32>(0, -1, 0), acc);
+    acc = arrive_across(c, vec3<i32>(0, 0, 1), acc);
+    acc = arrive_across(c, vec3<i32>(0, 0, -1), acc);
     let med = medium[3u * i];
     let s = length(med.xyz);
-    let t = select(vec3<f32>(0.0, 1.0, 0.0), med.xyz / s, s > 0.0);
-    let keep = exp(-VOLUME_CHORD * med.w);
-    let albedo = medium[3u * i + 1u].xyz;
-    let g = medium[3u * i + 2u].xyz;
-    let w = 0.5 * VOLUME_CHORD;
-    // The mesh: the cell's solid share reflects what arrives (Lambertian, toward its
-    // normal; inside the mesh, back the way it came); the rest meets the fibres.
-    let solid = solid_at(i);
     let surface = surface_at(i);
     let sl = length(surface);
-    for (var ch = 0u; ch < 3u; ch += 1u) {
-        let a = arrive[ch];
-        let free = (1.0 - solid) * a;
-        let scatter = (1.0 - keep) * albedo[ch];
-        let bounce = solid * a.x * u.mesh_albedo[ch];
-        var normal = vec3<f32>(0.0);
-        let al = length(a.yzw);
-        if sl > 0.0 {
-            normal = surface / sl;
-        } else if al > 0.0 {
-            normal = -a.yzw / al;
-        }
-        let out = vec4<f32>(
-            (keep + scatter) * free.x + bounce,
-            keep * free.yzw + scatter * volume_scatter_direction(free.yzw, t, s, g[ch], g[ch])
-                + bounce * (2.0 / 3.0) * normal,
-        );
-        state_out[3u * i + ch] = out;
-        fluence[1u + 3u * i + ch] += w * (a + out);
-    }
+    let cell = VolumeCell(
+        i,
+        select(vec3<f32>(0.0, 1.0, 0.0), med.xyz / s, s > 0.0),
+        s,
+        exp(-VOLUME_CHORD * med.w),
+        medium[3u * i + 1u].xyz,
+        medium[3u * i + 2u].xyz,
+        solid_at(i),
+        select(vec3<f32>(0.0), surface / sl, sl > 0.0),
+    );
+    step_channel(cell, 0u, acc.r);
+    step_channel(cell, 1u, acc.g);
+    step_channel(cell, 2u, acc.b);
 }
