@@ -170,7 +170,8 @@ fn cells(n: u32) -> u64 {
     u64::from(n).pow(3)
 }
 
-/// The grid passes of one frame: fit, splat, inject, propagate (`wgsl/shade/volume.wgsl`).
+/// The grid passes of one frame: fit, splat, occupy, describe, inject, propagate
+/// (`wgsl/shade/volume.wgsl`).
 #[derive(Debug)]
 pub struct VolumeGrid {
     field_uniform: wgpu::Buffer,
@@ -183,6 +184,8 @@ pub struct VolumeGrid {
     splat_mesh: wgpu::ComputePipeline,
     occupy: wgpu::ComputePipeline,
     mesh_group: wgpu::BindGroup,
+    /// Writes the medium the later passes read without atomics.
+    describe: wgpu::ComputePipeline,
     inject: wgpu::ComputePipeline,
     propagate: wgpu::ComputePipeline,
     fit_group: wgpu::BindGroup,
@@ -296,6 +299,11 @@ impl VolumeGrid {
                 &[Some(&mesh_layout)],
             );
             let occupy = pipe("pelage volume occupy", "occupy", &[Some(&mesh_layout)]);
+            let describe = pipe(
+                "pelage volume describe",
+                "describe",
+                &[Some(&inject_layout), None, Some(&chiang_layout)],
+            );
             let inject = pipe(
                 "pelage volume inject",
                 "inject",
@@ -389,6 +397,7 @@ impl VolumeGrid {
                 splat_mesh,
                 occupy,
                 mesh_group,
+                describe,
                 inject,
                 propagate,
                 fit_group,
@@ -475,6 +484,8 @@ impl VolumeGrid {
         pass.dispatch_workgroups(x, y, 1);
         pelage_gpu::set_bind_group(&mut pass, 0, &self.inject_group);
         pelage_gpu::set_bind_group(&mut pass, 2, &self.chiang_group);
+        pass.set_pipeline(&self.describe);
+        pass.dispatch_workgroups(x, y, 1);
         pass.set_pipeline(&self.inject);
         pass.dispatch_workgroups(x, y, 1);
         pass.set_pipeline(&self.propagate);

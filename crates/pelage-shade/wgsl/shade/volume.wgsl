@@ -8,8 +8,10 @@
 //         triangle list), Chiang's model and tables at @group(2).
 // Writes: bounds (6 x atomic<u32>, cleared to 0 before `fit`), accum (VOLUME_ACCUM u32 per
 //         cell, cleared to 0 before `splat`), medium (3 vec4 per cell: mean tangent times
-//         alignment and optical depth; A_iso; g_iso), state_in/state_out (3 vec4 per cell:
-//         per channel the energy E leaving the cell this step and its flux vector),
+//         alignment and optical depth; A_iso and the march's extinction; g_iso and the
+//         body's solid share: `describe`), state_in/state_out (3 vec4 per cell:
+//         per channel the energy E leaving the cell this step and its flux vector, both
+//         divided by the faces' normalisation: `sendable`),
 //         fluence (header + 3 vec4 per cell, see volume_common.wgsl).
 // Dispatch, in order:
 //   `fit`: fit_invocations / 256 workgroups of 256 (grid-stride loop over the vertices);
@@ -18,6 +20,7 @@
 //            gid.y * num_workgroups.x * 64 + gid.x (pelage_gpu::dispatch_size);
 //   `splat_mesh`: one invocation per triangle, flattened the same way (none without one);
 //   `occupy`: one invocation per cell, flattened the same way;
+//   `describe`: one invocation per cell, workgroups of 64, flattened the same way;
 //   `inject`: one invocation per cell, workgroups of 64, flattened the same way;
 //   `propagate`: as `inject`, `iterations` times, state_in and state_out swapped each time.
 //
@@ -249,6 +252,12 @@ fn surface_at(index: u32) -> vec3<f32> {
     ) * (u.inv_fixed_scale / VOLUME_TANGENT_SCALE);
 }
 
+// Component `axis` of `surface_at(index)`, one atomic load.
+fn surface_component(index: u32, axis: u32) -> f32 {
+    let at = VOLUME_ACCUM * index + VOLUME_SURFACE + axis;
+    return f32(bitcast<i32>(atomicLoad(&accum[at]))) * (u.inv_fixed_scale / VOLUME_TANGENT_SCALE);
+}
+
 fn solid_at(index: u32) -> f32 {
     return bitcast<f32>(atomicLoad(&accum[VOLUME_ACCUM * index + VOLUME_SOLID]));
 }
@@ -278,7 +287,7 @@ fn occupy(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups
             }
             var y = c;
             y[axis] = k;
-            let s = surface_at(cell_index(y))[axis];
+            let s = surface_component(cell_index(y), axis);
             if k < c[axis] {
                 low -= s;
             } else {
@@ -299,18 +308,17 @@ fn flat_cell(gid: vec3<u32>, groups: vec3<u32>) -> u32 {
     return gid.y * groups.x * 64u + gid.x;
 }
 
-@compute @workgroup_size(64)
-fn inject(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let n = u.resolution;
-    let i = flat_cell(gid, groups);
-    if i >= n * n * n {
-        return;
-    }
-    let c = vec3<i32>(i32(i % n), i32((i / n) % n), i32(i / (n * n)));
-    let header = fluence[0];
-    let origin = header.xyz;
-    let cell = header.w;
-    // The cell's fibres: optical depth, mean tangent and alignment, mean colour.
+// A cell's fibres from the splat: optical depth, unit mean tangent and alignment, the
+// absorption coordinates of its mean colour and the isotropic phase function's A and g.
+struct CellFibres {
+    kappa: f32,
+    t: vec3<f32>,
+    s: f32,
+    x: vec3<f32>,
+    iso: VolumeFibre,
+}
+
+fn cell_fibres(i: u32) -> CellFibres {
     let at = VOLUME_ACCUM * i;
     let kappa = depth_at(i);
     let tangent_sum = vec3<f32>(
@@ -335,11 +343,46 @@ fn inject(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups
         t = tangent_sum / tl;
     }
     let x = volume_sigma_coordinates(chiang_sigma_a(chiang, color));
-    let iso = volume_fibre_isotropic(x);
-    medium[3u * i] = vec4<f32>(t * s, kappa);
-    medium[3u * i + 1u] = vec4<f32>(iso.albedo, 0.0);
-    medium[3u * i + 2u] = vec4<f32>(iso.g, 0.0);
+    return CellFibres(kappa, t, s, x, volume_fibre_isotropic(x));
+}
 
+// Per cell, after `occupy`: the medium the later passes read with plain loads (the
+// march toward a light one load per cell crossed, not two atomics): the mean tangent times the
+// alignment and the optical depth; A_iso and the extinction a march toward a light
+// crosses in the cell (the optical depth plus -ln of the body's clear share, so that
+// exp(-sum) is exp(-tau) times the product of the clear shares); g_iso and the solid share.
+@compute @workgroup_size(64)
+fn describe(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let n = u.resolution;
+    let i = flat_cell(gid, groups);
+    if i >= n * n * n {
+        return;
+    }
+    let fibres = cell_fibres(i);
+    let solid = solid_at(i);
+    let extinction = fibres.kappa - log(max(1.0 - solid, 1e-30));
+    medium[3u * i] = vec4<f32>(fibres.t * fibres.s, fibres.kappa);
+    medium[3u * i + 1u] = vec4<f32>(fibres.iso.albedo, extinction);
+    medium[3u * i + 2u] = vec4<f32>(fibres.iso.g, solid);
+}
+
+@compute @workgroup_size(64)
+fn inject(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let n = u.resolution;
+    let i = flat_cell(gid, groups);
+    if i >= n * n * n {
+        return;
+    }
+    let c = vec3<i32>(i32(i % n), i32((i / n) % n), i32(i / (n * n)));
+    let header = fluence[0];
+    let origin = header.xyz;
+    let cell = header.w;
+    let fibres = cell_fibres(i);
+    let kappa = fibres.kappa;
+    let t = fibres.t;
+    let s = fibres.s;
+    let x = fibres.x;
+    let iso = fibres.iso;
     let meet = 1.0 - exp(-kappa);
     let surface = surface_at(i);
     let lit_mesh = length(surface);
@@ -420,9 +463,9 @@ fn inject(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups
     let r = vec4<f32>(e.x, flux_r);
     let g = vec4<f32>(e.y, flux_g);
     let b = vec4<f32>(e.z, flux_b);
-    state_out[3u * i] = r;
-    state_out[3u * i + 1u] = g;
-    state_out[3u * i + 2u] = b;
+    state_out[3u * i] = sendable(r);
+    state_out[3u * i + 1u] = sendable(g);
+    state_out[3u * i + 2u] = sendable(b);
     let w = 0.5 * VOLUME_CHORD;
     fluence[1u + 3u * i] = w * r + sky;
     fluence[2u + 3u * i] = w * g + sky;
@@ -443,7 +486,6 @@ fn volume_sky_direction(k: u32) -> vec3<f32> {
 fn volume_clear_toward(p: vec3<f32>, l: vec3<f32>, origin: vec3<f32>, cell: f32, reach: f32) -> f32 {
     let n = u.resolution;
     var tau = 0.0;
-    var clear = 1.0;
     for (var k = 1u; k < 4u * n; k += 1u) {
         if f32(k) * cell > reach {
             break;
@@ -452,30 +494,34 @@ fn volume_clear_toward(p: vec3<f32>, l: vec3<f32>, origin: vec3<f32>, cell: f32,
         if any(q < vec3<f32>(0.0)) || any(q >= vec3<f32>(f32(n))) {
             break;
         }
-        let j = cell_index(vec3<i32>(floor(q)));
-        tau += depth_at(j);
-        clear *= 1.0 - solid_at(j);
+        tau += medium[3u * cell_index(vec3<i32>(floor(q))) + 1u].w;
     }
-    return exp(-tau) * clear;
+    return exp(-tau);
 }
 
-// The share of a cell's energy with mean direction m that leaves through the face toward d.
-fn face_share(m: vec3<f32>, d: vec3<f32>) -> f32 {
+// A channel's state `st` (energy E leaving the cell, its flux vector) as the state
+// buffers hold it for the next step's gather: divided by the sum over the six faces of
+// max(0, 1/6 + m.d/3) (m = flux / E; the sum is 1 unless a component of m passes 1/2), so
+// that the share leaving through the face toward d is max(0, E'/6 + flux'.d/3) for the
+// stored E', flux' (`moved_across`): the normalisation once per cell and channel instead
+// of once per face in every neighbour. Zero where no energy leaves.
+fn sendable(st: vec4<f32>) -> vec4<f32> {
+    if st.x <= 0.0 {
+        return vec4<f32>(0.0);
+    }
+    let m = st.yzw / st.x;
     let w = max(vec3<f32>(0.0), vec3<f32>(1.0 / 6.0) + m / 3.0);
     let v = max(vec3<f32>(0.0), vec3<f32>(1.0 / 6.0) - m / 3.0);
-    let total = w.x + w.y + w.z + v.x + v.y + v.z;
-    return max(0.0, 1.0 / 6.0 + dot(m, d) / 3.0) / total;
+    return st / (w.x + w.y + w.z + v.x + v.y + v.z);
 }
 
-// What one channel's state `st` of a neighbour sends across the face toward `d` (the
-// direction from the neighbour to this cell): its flux's share through that face and
-// the direction it carries.
-fn moved_across(st: vec4<f32>, df: vec3<f32>) -> vec4<f32> {
-    if st.x > 0.0 {
-        let moved = st.x * face_share(st.yzw / st.x, df);
-        return vec4<f32>(moved, moved * (2.0 / 3.0) * df);
-    }
-    return vec4<f32>(0.0);
+// What a neighbour whose stored state (`sendable`) has energy `e` and flux component
+// `f` along `d` (the axis direction from the neighbour to this cell) sends across the
+// face toward `d`: its energy's share through that face, arriving with flux (2/3) d
+// times that energy.
+fn moved_across(e: f32, f: f32, df: vec3<f32>) -> vec4<f32> {
+    let moved = max(0.0, e / 6.0 + f / 3.0);
+    return vec4<f32>(moved, moved * (2.0 / 3.0) * df);
 }
 
 // The light arriving at a cell, per channel.
@@ -495,10 +541,14 @@ fn arrive_across(c: vec3<i32>, d: vec3<i32>, acc: VolumeArrivals) -> VolumeArriv
     }
     let j = 3u * cell_index(y);
     let df = vec3<f32>(d);
+    // Two scalars per channel (the energy and the flux along the face's axis), not the
+    // vec4: these loads are most of a step's time on lavapipe.
+    let axis = select(select(3u, 2u, d.y != 0), 1u, d.x != 0);
+    let sign = f32(d.x + d.y + d.z);
     return VolumeArrivals(
-        acc.r + moved_across(state_in[j], df),
-        acc.g + moved_across(state_in[j + 1u], df),
-        acc.b + moved_across(state_in[j + 2u], df),
+        acc.r + moved_across(state_in[j].x, sign * state_in[j][axis], df),
+        acc.g + moved_across(state_in[j + 1u].x, sign * state_in[j + 1u][axis], df),
+        acc.b + moved_across(state_in[j + 2u].x, sign * state_in[j + 2u][axis], df),
     );
 }
 
@@ -534,7 +584,7 @@ fn step_channel(cell: VolumeCell, ch: u32, a: vec4<f32>) {
             + scatter * volume_scatter_direction(free.yzw, cell.t, cell.s, cell.g[ch], cell.g[ch])
             + bounce * (2.0 / 3.0) * normal,
     );
-    state_out[3u * cell.index + ch] = out;
+    state_out[3u * cell.index + ch] = sendable(out);
     fluence[1u + 3u * cell.index + ch] += 0.5 * VOLUME_CHORD * (a + out);
 }
 
@@ -560,17 +610,24 @@ fn propagate(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
     acc = arrive_across(c, vec3<i32>(0, 0, -1), acc);
     let med = medium[3u * i];
     let s = length(med.xyz);
-    let surface = surface_at(i);
-    let sl = length(surface);
+    let phase = medium[3u * i + 2u];
+    let solid = phase.w;
+    // The body's normal matters only where it reflects (a solid share).
+    var normal = vec3<f32>(0.0);
+    if solid > 0.0 {
+        let surface = surface_at(i);
+        let sl = length(surface);
+        normal = select(vec3<f32>(0.0), surface / sl, sl > 0.0);
+    }
     let cell = VolumeCell(
         i,
         select(vec3<f32>(0.0, 1.0, 0.0), med.xyz / s, s > 0.0),
         s,
         exp(-VOLUME_CHORD * med.w),
         medium[3u * i + 1u].xyz,
-        medium[3u * i + 2u].xyz,
-        solid_at(i),
-        select(vec3<f32>(0.0), surface / sl, sl > 0.0),
+        phase.xyz,
+        solid,
+        normal,
     );
     step_channel(cell, 0u, acc.r);
     step_channel(cell, 1u, acc.g);
