@@ -421,8 +421,8 @@ impl GuideStrands {
     }
 
     /// The guide pass when the guides are bent by the wind ([`GuideStrands::new`]): the
-    /// guides' rest points, roots and per-frame uniforms (inputs of the CPU mirror), and
-    /// their bent points ([`StrandStage::buffers`]). `None` when they are simulated.
+    /// guides' rest points and roots (inputs of the CPU mirror), and their bent points
+    /// ([`StrandStage::buffers`]). `None` when they are simulated.
     pub fn guides(&self) -> Option<&GroomStrands> {
         match &self.first {
             GuidePass::Bent(bend) => Some(bend.as_ref()),
