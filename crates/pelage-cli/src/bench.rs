@@ -456,7 +456,8 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
             sim.encode(encoder, &frame, timer)?;
             Ok(())
         })?;
-        let substeps = u64::from(sim.sim_uniforms().substeps.max(1));
+        // The substeps of a frame of 1/60 s, as the dynamics cut it (every frame here).
+        let substeps = u64::from(sim.dynamics().substeps(1.0 / 60.0).0.max(1));
         let vertex_count =
             u64::from(sim.buffers().strand_count) * u64::from(sim.buffers().vertices_per_strand());
         let sim_ms = get(&sim_times, "strands: simulate");

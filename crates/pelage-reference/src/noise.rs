@@ -1,7 +1,19 @@
 //! Mirror of `wgsl/shared/noise.wgsl`.
 
 use glam::{IVec3, Vec3};
-pub use pelage_strands::{hash_to_unit, pcg_hash};
+
+/// `pcg_hash` in WGSL: the PCG hash of Jarzynski and Olano 2020 (the mirror's own copy, so
+/// that a change to pelage-strands' CPU hash cannot hide a change to the shader's).
+pub fn pcg_hash(v: u32) -> u32 {
+    let state = v.wrapping_mul(747_796_405).wrapping_add(2_891_336_453);
+    let word = ((state >> ((state >> 28) + 4)) ^ state).wrapping_mul(277_803_737);
+    (word >> 22) ^ word
+}
+
+/// `hash_to_unit` in WGSL: a float in [0, 1) from the top 24 bits of `h`.
+pub fn hash_to_unit(h: u32) -> f32 {
+    (h >> 8) as f32 / 16_777_216.0
+}
 
 /// `hash_cell` in WGSL.
 pub fn hash_cell(c: IVec3, seed: u32) -> u32 {
@@ -47,6 +59,24 @@ pub fn value_noise_3d(p: Vec3, seed: u32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_hashes_keep_their_known_values() {
+        // The PCG hash of Jarzynski and Olano 2020, computed by a separate implementation
+        // (Python, arbitrary-precision integers masked to 32 bits).
+        for (v, h) in [
+            (0, 129_708_002),
+            (1, 2_831_084_092),
+            (42, 1_223_963_391),
+            (0xdead_beef, 1_730_779_506),
+            (u32::MAX, 3_861_530_882),
+        ] {
+            assert_eq!(pcg_hash(v), h, "pcg_hash({v})");
+        }
+        assert_eq!(hash_to_unit(129_708_002), 506_671.0 / 16_777_216.0);
+        assert_eq!(hash_to_unit(u32::MAX), 1.0 - 1.0 / 16_777_216.0);
+        assert_eq!(hash_to_unit(255), 0.0);
+    }
 
     #[test]
     fn noise_is_bounded_and_continuous() {

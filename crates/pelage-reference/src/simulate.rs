@@ -1,16 +1,107 @@
 //! Mirror of `wgsl/strands/simulate.wgsl` (stage 1 with dynamics), loop for loop: one
 //! frame of every strand, its substeps, its constraints in the same order.
 //!
-//! Not mirrored: the body's distance field (`SimUniforms::sdf_on`, `BodySdf`); the mirror
+//! The mirror takes the parameters ([`Step`]: the hair, the dynamics, the colliders, the
+//! frame's time and time step, the level of detail) and works out the frame's substeps
+//! itself, as `DynamicsParams` documents them: the step clamped to `max_frame`, cut into
+//! `ceil(dt / (max_substep (1 + SUBSTEP_SLACK)))` equal substeps, velocities kept by
+//! `exp(-damping h)` per substep, each stiffness `s` (given per `STIFFNESS_INTERVAL`)
+//! taking `1 - (1 - s)^(h / STIFFNESS_INTERVAL)` per substep, the acceleration
+//! `gravity + wind_response · F` with `F` the wind's force field alone.
+//!
+//! Not mirrored: the body's distance field (`DynamicsParams::sdf_resolution`); the mirror
 //! collides with the spheres and capsules only, and is compared with simulations
 //! without a field. Collisions with the field are checked against exact distances
 //! instead ([`crate::sdf`], `crates/pelage-strands/tests/sdf.rs`).
 
 use glam::{Vec3, Vec4};
-use pelage_scene::Mesh;
-use pelage_strands::{ColliderUniform, GrowUniforms, STATE_HEADER, SimUniforms, StrandRoot};
+use pelage_scene::{
+    Collider, DynamicsParams, HairParams, MAX_COLLIDERS, Mesh, STIFFNESS_INTERVAL, SUBSTEP_SLACK,
+};
 
-use crate::strands::{force, perpendicular, quat_between, quat_mul, quat_rotate, safe_normalize};
+use crate::strands::{
+    Drawn, Field, Level, Root, force, perpendicular, quat_between, quat_mul, quat_rotate,
+    safe_normalize,
+};
+
+/// `vec4`s of state per strand before its vertices (`STATE_HEADER` in WGSL): the root's
+/// position (w = 1 once posed), normal and tangent in the last frame.
+pub const STATE_HEADER: usize = 3;
+
+/// One frame of a simulation, as the caller of `SimulateStrands` sets it up.
+#[derive(Clone, Copy, Debug)]
+pub struct Step<'a> {
+    /// The parameters of the simulated strands (`StrandStage::params`): segments, strand
+    /// count, the wind and its seed.
+    pub hair: &'a HairParams,
+    /// The dynamics in use.
+    pub dynamics: &'a DynamicsParams,
+    /// The colliders in use (the first `MAX_COLLIDERS`).
+    pub colliders: &'a [Collider],
+    /// The frame's time, seconds.
+    pub time: f32,
+    /// The time since the last frame (`time` minus the last frame's), or `None` when the
+    /// strands start at rest in this frame's pose (the first frame, a reset, time going
+    /// backwards).
+    pub dt: Option<f32>,
+    /// The level of detail drawn (every strand is simulated).
+    pub level: Level,
+}
+
+/// A capsule (a sphere when `a == b`).
+#[derive(Clone, Copy, Debug)]
+struct Capsule {
+    a: Vec3,
+    b: Vec3,
+    radius: f32,
+}
+
+/// What the frame's substeps are, from the dynamics and the step (see the module's docs).
+#[derive(Clone, Copy, Debug)]
+struct Substeps {
+    count: u32,
+    /// Length of each, seconds.
+    h: f32,
+    /// The time the first substep starts at.
+    time0: f32,
+    /// Velocity kept per substep.
+    keep: f32,
+    local_stiffness: f32,
+    global_stiffness: f32,
+}
+
+/// The fraction of the way a substep of `h` takes for a stiffness `s` given per
+/// `STIFFNESS_INTERVAL`: `1 - (1 - s)^(h / interval)`, in `f64`.
+fn per_substep(s: f32, h: f32) -> f32 {
+    let s = f64::from(s.clamp(0.0, 1.0));
+    if h <= 0.0 {
+        return s as f32;
+    }
+    let ratio = f64::from(h) / f64::from(STIFFNESS_INTERVAL);
+    (1.0 - (1.0 - s).powf(ratio)) as f32
+}
+
+impl Substeps {
+    fn new(dynamics: &DynamicsParams, time: f32, dt: Option<f32>) -> Self {
+        let dt = dt
+            .filter(|d| d.is_finite())
+            .map(|d| d.clamp(0.0, dynamics.max_frame));
+        let longest = dynamics.max_substep * (1.0 + SUBSTEP_SLACK);
+        let count = dt.map_or(0, |dt| (dt / longest).ceil() as u32);
+        let h = match (dt, count) {
+            (Some(dt), 1..) => dt / count as f32,
+            _ => 0.0,
+        };
+        Self {
+            count,
+            h,
+            time0: time - h * count as f32,
+            keep: (-dynamics.damping * h).exp(),
+            local_stiffness: per_substep(dynamics.local_stiffness, h),
+            global_stiffness: per_substep(dynamics.global_stiffness, h),
+        }
+    }
+}
 
 /// Rounds of collision and length projection per vertex and substep
 /// (`COLLISION_PASSES` in WGSL).
@@ -59,7 +150,7 @@ fn to_world(pose: &Pose, local: Vec3) -> Vec3 {
 }
 
 /// `axis_point` in WGSL: the point of `col`'s axis nearest `p`.
-fn axis_point(col: &ColliderUniform, p: Vec3) -> Vec3 {
+fn axis_point(col: &Capsule, p: Vec3) -> Vec3 {
     let axis = col.b - col.a;
     let len2 = axis.dot(axis);
     let s = if len2 > 0.0 {
@@ -70,10 +161,10 @@ fn axis_point(col: &ColliderUniform, p: Vec3) -> Vec3 {
     col.a + axis * s
 }
 
-/// `collide` in WGSL: `(p, prev)` pushed out of every collider of `sim`, `prev` moved
-/// by `friction` of the tangential motion.
+/// `collide` in WGSL: `(p, prev)` pushed out of every collider, `prev` moved by
+/// `friction` of the tangential motion.
 fn collide(
-    sim: &SimUniforms,
+    colliders: &[Capsule],
     p_in: Vec3,
     prev_in: Vec3,
     margin: f32,
@@ -81,7 +172,7 @@ fn collide(
     friction: f32,
 ) -> (Vec3, Vec3) {
     let (mut p, mut prev) = (p_in, prev_in);
-    for col in sim.colliders.iter().take(sim.collider_count as usize) {
+    for col in colliders {
         let nearest = axis_point(col, p);
         let r = col.radius + margin;
         let d = p - nearest;
@@ -97,9 +188,15 @@ fn collide(
 
 /// `onto_length_outside` in WGSL: `p` (at `len` from `parent`) moved along that sphere onto
 /// the circle where it meets each collider it is inside.
-fn onto_length_outside(sim: &SimUniforms, p_in: Vec3, parent: Vec3, len: f32, margin: f32) -> Vec3 {
+fn onto_length_outside(
+    colliders: &[Capsule],
+    p_in: Vec3,
+    parent: Vec3,
+    len: f32,
+    margin: f32,
+) -> Vec3 {
     let mut p = p_in;
-    for col in sim.colliders.iter().take(sim.collider_count as usize) {
+    for col in colliders {
         let center = axis_point(col, p);
         let r = col.radius + margin;
         let off = p - center;
@@ -116,24 +213,45 @@ fn onto_length_outside(sim: &SimUniforms, p_in: Vec3, parent: Vec3, len: f32, ma
 }
 
 /// One frame of `simulate.wgsl` for every strand: steps `state` (the layout of
-/// `SimulateStrands::state`, as read back) in place on `mesh` (the pose the mesh
-/// buffers hold this frame) and returns the vertices of the drawn strands (the layout of
-/// `StrandBuffers::vertices`) and the number of strands held because their root's
-/// triangle is not finite.
+/// `SimulateStrands::state`, as read back: per strand [`STATE_HEADER`] `vec4`s of root
+/// pose, then its rest shape, positions and previous positions, `segments + 1` each) in
+/// place on `mesh` (the pose the mesh buffers hold this frame) and returns the vertices
+/// of the drawn strands (the layout of `StrandBuffers::vertices`) and the number of
+/// strands held because their root's triangle is not finite.
 pub fn simulate_frame(
     mesh: &Mesh,
-    roots: &[StrandRoot],
+    roots: &[Root],
     state: &mut [Vec4],
-    u: &GrowUniforms,
-    sim: &SimUniforms,
+    frame: &Step<'_>,
 ) -> (Vec<Vec4>, u32) {
-    let n = u.segments as usize + 1;
-    let header = STATE_HEADER as usize;
-    let step = u.step.max(1) as usize;
-    let per_drawn = u.segments as usize / step + 1;
-    let mut vertices = vec![Vec4::ZERO; u.strand_count as usize * per_drawn];
+    let drawn = Drawn::new(frame.hair, frame.level);
+    let sub = Substeps::new(frame.dynamics, frame.time, frame.dt);
+    let reset = frame.dt.is_none();
+    let d = frame.dynamics;
+    // The wind's force field alone: `wind_response` turns it into an acceleration.
+    let field = Field::new(frame.hair, Vec3::ZERO);
+    let phase_spread = frame.hair.wind.phase_spread;
+    let colliders: Vec<Capsule> = frame
+        .colliders
+        .iter()
+        .take(MAX_COLLIDERS)
+        .map(|c| {
+            let (a, b) = c.axis();
+            Capsule {
+                a,
+                b,
+                radius: c.radius,
+            }
+        })
+        .collect();
+    let n = drawn.segments as usize + 1;
+    let header = STATE_HEADER;
+    let step = drawn.step as usize;
+    let per_drawn = drawn.per_strand();
+    let mut vertices = vec![Vec4::ZERO; drawn.strands as usize * per_drawn];
     let mut held = 0;
-    for (strand, root) in roots.iter().enumerate().take(u.strand_total as usize) {
+    let total = frame.hair.roots.count as usize;
+    for (strand, root) in roots.iter().enumerate().take(total) {
         let base = strand * (header + 3 * n);
         let rest = base + header;
         let pos = rest + n;
@@ -149,14 +267,14 @@ pub fn simulate_frame(
                 ok: true,
             };
             let jump = now.position - last.position;
-            let mut at_rest = sim.reset == 1
+            let mut at_rest = reset
                 || state[base].w != 1.0
-                || jump.dot(jump) > sim.teleport_distance * sim.teleport_distance;
+                || jump.dot(jump) > d.teleport_distance * d.teleport_distance;
             let margin = 0.5 * root.width;
-            let segments = u.segments as f32;
-            let mut sub = 0;
-            while sub < sim.substeps && !at_rest {
-                let s = (sub + 1) as f32 / sim.substeps as f32;
+            let segments = drawn.segments as f32;
+            let mut i = 0;
+            while i < sub.count && !at_rest {
+                let s = (i + 1) as f32 / sub.count as f32;
                 let normal = safe_normalize(mix(last.normal, now.normal, s), now.normal);
                 let pose = Pose {
                     position: mix(last.position, now.position, s),
@@ -164,8 +282,8 @@ pub fn simulate_frame(
                     tangent: perpendicular(normal, mix(last.tangent, now.tangent, s)),
                     ok: true,
                 };
-                let t = sim.time0 + sim.h * (sub + 1) as f32 + root.phase * u.phase_spread;
-                let h2 = sim.h * sim.h;
+                let t = sub.time0 + sub.h * (i + 1) as f32 + root.phase * phase_spread;
+                let h2 = sub.h * sub.h;
 
                 let x0 = to_world(&pose, state[rest].truncate());
                 state[pos] = x0.extend(0.0);
@@ -177,36 +295,37 @@ pub fn simulate_frame(
                 for k in 1..n {
                     let mut p = state[pos + k].truncate();
                     let mut prev = state[prv + k].truncate();
-                    let a = sim.gravity + force(u, p, t) * sim.wind_response;
-                    let v = (p - prev) * sim.keep;
+                    let a = d.gravity + force(&field, p, t) * d.wind_response;
+                    let v = (p - prev) * sub.keep;
                     prev = p;
                     p = p + v + a * h2;
                     let rest_k = to_world(&pose, state[rest + k].truncate());
-                    let reach = 1.0 - k as f32 / segments / sim.global_range;
-                    let held = mix(p, rest_k, sim.global_stiffness * reach.max(0.0));
+                    let reach = 1.0 - k as f32 / segments / d.global_range;
+                    let held = mix(p, rest_k, sub.global_stiffness * reach.max(0.0));
                     prev += held - p;
                     p = held;
                     let rest_offset = rest_k - rest_parent;
                     let len = rest_offset.length();
                     let rest_dir = quat_rotate(q, safe_normalize(rest_offset, pose.normal));
-                    let pulled = mix(p, parent + rest_dir * len, sim.local_stiffness);
+                    let pulled = mix(p, parent + rest_dir * len, sub.local_stiffness);
                     prev += pulled - p;
                     p = pulled;
                     let mut dir = rest_dir;
                     let mut correction = Vec3::ZERO;
                     for round in 0..COLLISION_PASSES {
-                        let friction = if round == 0 { sim.friction } else { 0.0 };
-                        let (mp, mprev) = collide(sim, p, prev, margin, pose.normal, friction);
+                        let friction = if round == 0 { d.friction } else { 0.0 };
+                        let (mp, mprev) =
+                            collide(&colliders, p, prev, margin, pose.normal, friction);
                         dir = safe_normalize(mp - parent, rest_dir);
                         let fixed = parent + dir * len;
                         correction += fixed - mp;
                         p = fixed;
                         prev = mprev;
                     }
-                    p = onto_length_outside(sim, p, parent, len, margin);
+                    p = onto_length_outside(&colliders, p, parent, len, margin);
                     dir = safe_normalize(p - parent, dir);
                     if k > 1 {
-                        parent_prev += correction * sim.length_damping;
+                        parent_prev += correction * d.length_damping;
                         state[prv + k - 1] = parent_prev.extend(0.0);
                     }
                     q = quat_mul(quat_between(rest_dir, dir), q);
@@ -220,7 +339,7 @@ pub fn simulate_frame(
                     rest_parent = rest_k;
                 }
                 state[prv + n - 1] = parent_prev.extend(0.0);
-                sub += 1;
+                i += 1;
             }
             if at_rest {
                 for k in 0..n {
@@ -233,14 +352,14 @@ pub fn simulate_frame(
             state[base + 1] = now.normal.extend(0.0);
             state[base + 2] = now.tangent.extend(0.0);
         }
-        if strand >= u.strand_count as usize {
+        if strand >= drawn.strands as usize {
             continue;
         }
         let out = strand * per_drawn;
         for k in (0..n).step_by(step) {
             vertices[out + k / step] = state[pos + k]
                 .truncate()
-                .extend(k as f32 / u.segments as f32);
+                .extend(k as f32 / drawn.segments as f32);
         }
     }
     (vertices, held)

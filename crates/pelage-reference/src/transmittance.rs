@@ -19,8 +19,8 @@
 //! ([`crate::path_tracer`]): a ray hits a cylinder where it *enters* it, so a ray that starts
 //! inside a cylinder does not hit that one.
 
+use crate::noise::{hash_to_unit, pcg_hash};
 use glam::{DVec3, Vec3, Vec4};
-use pelage_strands::{hash_to_unit, pcg_hash};
 
 /// One strand segment as a cylinder from `a` to `b`.
 #[derive(Clone, Copy, Debug, PartialEq)]

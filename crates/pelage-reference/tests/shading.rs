@@ -6,12 +6,12 @@
 use std::f64::consts::PI;
 
 use glam::{DVec3, Vec3};
+use pelage_reference::noise::{hash_to_unit, pcg_hash};
 use pelage_reference::shading::{
     fibre_angles, kajiya_kay, marschner, marschner_albedo, marschner_albedo_lobes, marschner_bsdf,
     marschner_lobes, marschner_radiance, sadeghi, sadeghi_radiance,
 };
 use pelage_scene::{KajiyaKayParams, MarschnerParams, SadeghiParams};
-use pelage_strands::{hash_to_unit, pcg_hash};
 
 /// Small deterministic RNG on top of `pcg_hash`.
 struct Rng(u32);

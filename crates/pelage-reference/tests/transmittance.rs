@@ -3,11 +3,11 @@
 use std::time::Instant;
 
 use glam::{Vec3, Vec4};
+use pelage_reference::noise::{hash_to_unit, pcg_hash};
 use pelage_reference::transmittance::{
     Segment, SegmentBvh, directional_transmittance, point_transmittance, ray_hits_segment,
     rmse_p95, segments_from_strands, transmittance_at_vertices,
 };
-use pelage_strands::{hash_to_unit, pcg_hash};
 
 /// Small deterministic RNG on top of `pcg_hash`.
 struct Rng(u32);

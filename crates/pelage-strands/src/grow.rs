@@ -24,9 +24,10 @@ pub const MESH: &str = "mesh";
 const WORKGROUP: u32 = 64;
 
 /// The uniforms of `grow.wgsl` and `groom.wgsl` (`GrowUniforms` in `strands/force.wgsl`),
-/// rewritten every frame.
+/// rewritten every frame. Internal: the CPU mirrors work them out from the parameters on
+/// their own, so that a mistake here shows as a difference from the mirror.
 #[derive(Clone, Copy, Debug, PartialEq, ShaderType)]
-pub struct GrowUniforms {
+pub(crate) struct GrowUniforms {
     /// Strands grown this frame (a prefix of the groom: see [`LodLevel`]).
     pub strand_count: u32,
     /// Segments per strand of the groom (each strand is grown at this resolution).
@@ -120,7 +121,7 @@ impl GrowUniforms {
 /// storage buffer of a [`GrowStrands`] holds one per region, region 0 first, and each
 /// strand reads the one of its [`StrandRoot::region`].
 #[derive(Clone, Copy, Debug, Default, PartialEq, ShaderType)]
-pub struct RegionShape {
+pub(crate) struct RegionShape {
     /// 0 = straight, 1 = wavy, 2 = curly.
     pub kind: u32,
     /// Wavy: amplitude. Curly: radius.
@@ -317,8 +318,6 @@ pub struct GrowStrands {
     pass: StrandPass,
     /// The rest roots the pass reads (rewritten by [`StrandStage::set_color`]).
     rest_roots: wgpu::Buffer,
-    /// Every region's shape, as the pass's storage buffer holds them.
-    shapes: Vec<RegionShape>,
     /// Each strand's colour texture factor ([`crate::root_tint`]); empty without one.
     tints: Vec<Vec3>,
 }
@@ -380,15 +379,8 @@ impl GrowStrands {
             roots,
             pass,
             rest_roots,
-            shapes,
             tints,
         })
-    }
-
-    /// Every region's shape, region 0 first (what the CPU mirror grows each strand's
-    /// [`StrandRoot::region`] with).
-    pub fn region_shapes(&self) -> &[RegionShape] {
-        &self.shapes
     }
 
     /// A world box holding every point fur grown on `mesh` with `params` can reach: the
@@ -462,7 +454,7 @@ impl StrandStage for GrowStrands {
 }
 
 /// What every stage 1 method shares: its pipeline and bind group, the per-frame
-/// [`GrowUniforms`], the [`StrandBuffers`] it writes and the level of detail it draws.
+/// uniforms, the [`StrandBuffers`] it writes and the level of detail it draws.
 /// A method's shader reads the uniforms at binding 0, its own inputs next, then writes
 /// the vertices and the drawn roots at the last two bindings.
 #[derive(Debug)]
@@ -674,6 +666,11 @@ impl StrandPass {
     pub(crate) fn label(&self) -> &'static str {
         self.label
     }
+
+    /// The uniforms of a frame at `time`, at the level of detail last set.
+    pub(crate) fn uniforms_at(&self, time: f32) -> GrowUniforms {
+        GrowUniforms::at_level(&self.params, time, &self.level)
+    }
 }
 
 /// How a method's shader binds one of its own inputs (between the uniforms at binding
@@ -735,7 +732,7 @@ pub trait StrandStage: std::fmt::Debug + wgpu::WasmNotSendSync {
             }
             .into());
         }
-        let uniforms = self.uniforms_at(time);
+        let uniforms = self.pass().uniforms_at(time);
         self.pass_mut().begin_frame(queue, &uniforms)
     }
 
@@ -804,12 +801,6 @@ pub trait StrandStage: std::fmt::Debug + wgpu::WasmNotSendSync {
     fn reach_with_wind(&self, wind: &WindParams) -> crate::Result<(Vec3, Vec3)> {
         wind.validate()?;
         Ok(self.buffers().reach)
-    }
-
-    /// The uniforms the pass uses at `time` (what the CPU mirror needs to reproduce a frame).
-    fn uniforms_at(&self, time: f32) -> GrowUniforms {
-        let pass = self.pass();
-        GrowUniforms::at_level(&pass.params, time, &pass.level)
     }
 
     /// Records the pass for `frame`, which must be the one the last

@@ -28,7 +28,7 @@ pub const GUIDE_VERTICES: &str = "strands.guides";
 /// compiler leaves out the terms that add exactly 0 (guides past `k`, no noise, no
 /// clumping).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct GuideUniforms {
+pub(crate) struct GuideUniforms {
     /// Guides blended per strand (1 to 4; fewer when the groom has fewer guides).
     pub k: u32,
     /// Clumping toward the nearest guide, in [0, 1].
@@ -52,7 +52,7 @@ impl GuideUniforms {
 /// first; words 0 and 1, low half first; slots past `k` repeat the nearest) and the first `k - 1` weights as 10-bit
 /// fractions of 1023 (word 2, lowest bits first); the `k`-th weight is 1 minus the
 /// others, so they sum to 1. 12 bytes per render strand.
-pub type GuideRecord = [u32; 3];
+pub(crate) type GuideRecord = [u32; 3];
 
 /// Largest 10-bit weight (a weight of 1).
 const WEIGHT_ONE: u32 = 1023;
@@ -77,7 +77,8 @@ const WEIGHT_ONE: u32 = 1023;
 /// clumping (a fraction `clump · s` of the way to the nearest guide, `s` the strand
 /// parameter).
 ///
-/// **Memory.** Per render strand: a [`GuideRecord`] (12 bytes) besides the
+/// **Memory.** Per render strand: a guide record (12 bytes: four 16-bit guide indices,
+/// nearest first, and the first `k − 1` weights as 10-bit fractions) besides the
 /// [`StrandRoot`] every method keeps; the rest shape of render strands is never stored.
 /// Per guide: its rest and bent points (`segments + 1` `vec4` each) and two roots; with
 /// simulated guides, the simulation's state instead of the rest points. See
@@ -107,15 +108,14 @@ pub struct GuideStrands {
     /// The frame the guide pass was last prepared for.
     guide_frame: Option<StrandFrame>,
     roots: Vec<StrandRoot>,
-    records: Vec<GuideRecord>,
+    /// One [`GuideRecord`] per render strand, as the second pass reads them.
+    records: wgpu::Buffer,
     /// Per render strand, the weighted blend of its guides' own colours (before the
     /// brightness jitter), when the guides have colours.
     file_colors: Option<Vec<Vec3>>,
     constants: GuideUniforms,
     pass: StrandPass,
     rest_roots: wgpu::Buffer,
-    /// Bytes of the records buffer.
-    record_bytes: u64,
     /// The box the mesh stays in ([`MeshBuffers::bounds`]).
     mesh_bounds: (Vec3, Vec3),
 }
@@ -165,7 +165,7 @@ pub struct GuideMemory {
     pub guide_vertices: u64,
     /// The guides' rest and drawn roots.
     pub guide_roots: u64,
-    /// One [`GuideRecord`] per render strand.
+    /// One guide record (12 bytes) per render strand.
     pub records: u64,
     /// The simulated guides' state ([`SimulateStrands::state`], 0 when not simulated):
     /// root pose, rest shape, positions and previous positions.
@@ -355,12 +355,11 @@ impl GuideStrands {
             first,
             guide_frame: None,
             roots,
-            records,
+            records: records_buffer,
             file_colors,
             constants,
             pass,
             rest_roots,
-            record_bytes: records_buffer.size(),
             mesh_bounds,
         })
     }
@@ -422,8 +421,8 @@ impl GuideStrands {
     }
 
     /// The guide pass when the guides are bent by the wind ([`GuideStrands::new`]): the
-    /// guides' rest points, roots and per-frame uniforms (inputs of the CPU mirror), and
-    /// their bent points ([`StrandStage::buffers`]). `None` when they are simulated.
+    /// guides' rest points and roots (inputs of the CPU mirror), and their bent points
+    /// ([`StrandStage::buffers`]). `None` when they are simulated.
     pub fn guides(&self) -> Option<&GroomStrands> {
         match &self.first {
             GuidePass::Bent(bend) => Some(bend.as_ref()),
@@ -440,8 +439,8 @@ impl GuideStrands {
         }
     }
 
-    /// The guides' rest roots (length, width, colour, seed), in the order the
-    /// [`GuideRecord`]s index, whichever the first pass.
+    /// The guides' rest roots (length, width, colour, seed), in the order the guide
+    /// records index, whichever the first pass.
     pub fn guide_roots(&self) -> &[StrandRoot] {
         &self.first.shape().roots
     }
@@ -449,16 +448,6 @@ impl GuideStrands {
     /// The first pass: the simulation, or the guides bent by the wind.
     fn guide_stage(&self) -> &dyn StrandStage {
         self.first.stage()
-    }
-
-    /// One [`GuideRecord`] per render strand, in buffer order.
-    pub fn records(&self) -> &[GuideRecord] {
-        &self.records
-    }
-
-    /// The interpolation's constants.
-    pub fn constants(&self) -> GuideUniforms {
-        self.constants
     }
 
     /// The bytes this method keeps beyond the buffers every stage 1 method keeps.
@@ -472,7 +461,7 @@ impl GuideStrands {
             guide_rest,
             guide_vertices: guides.vertices.size(),
             guide_roots: 2 * guides.roots.size(),
-            records: self.record_bytes,
+            records: self.records.size(),
             guide_state,
         }
     }
@@ -524,7 +513,7 @@ impl StrandStage for GuideStrands {
             GuidePass::Simulated(guides) => guides.sim.prepare(queue, time)?,
         };
         self.guide_frame = Some(guide_frame);
-        let uniforms = self.uniforms_at(time);
+        let uniforms = self.pass.uniforms_at(time);
         self.pass.begin_frame(queue, &uniforms)
     }
 
@@ -945,6 +934,7 @@ impl TriangleGrid {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use pelage_gpu::read_buffer;
 
     #[test]
     fn nearest_points_match_a_brute_force_search() {
@@ -992,6 +982,98 @@ mod tests {
             (w[0] - 0.5).abs() < 1e-3 && (w[1] - 0.5).abs() < 1e-3,
             "{w:?}"
         );
+    }
+
+    /// `count` guides rooted on the upper half of a sphere of radius 0.5 (a golden-angle
+    /// spiral), hanging out and down, 8 segments each.
+    fn spiral_guides(count: usize) -> Resampled {
+        let strands: Vec<Vec<Vec3>> = (0..count)
+            .map(|i| {
+                let a = i as f32 * 2.399_963;
+                let y = 1.0 - (i as f32 + 0.5) / count as f32;
+                let r = (1.0 - y * y).sqrt();
+                let n = Vec3::new(r * a.cos(), y, r * a.sin());
+                (0..12)
+                    .map(|k| n * (0.5 + 0.3 * k as f32 / 11.0) - Vec3::Y * (0.02 * k as f32))
+                    .collect()
+            })
+            .collect();
+        pelage_scene::Groom::from_strands(&strands)
+            .and_then(|g| g.resample(8))
+            .expect("a valid groom")
+    }
+
+    /// The records the GPU pass reads (its storage buffer, read back and decoded as
+    /// `guides.wgsl` decodes them) hold, for every render strand, the guides and weights
+    /// the CPU mirror chooses from the roots' positions by the documented rule: the
+    /// choice is checked, not handed to the mirror. Also: `k` is capped by the guide
+    /// count, and two builds give the same records.
+    #[test]
+    fn the_records_on_the_gpu_hold_the_guides_the_mirror_chooses() {
+        use pelage_reference::guides::{choose_guides, decode_record, guide_count};
+        use pelage_reference::strands::Root;
+
+        let gpu = Gpu::headless().unwrap_or_else(|e| panic!("this test needs a GPU adapter: {e}"));
+        let mesh = Mesh::icosphere(0.5, 2).expect("icosphere");
+        let buffers = MeshBuffers::upload(&gpu, &mesh).expect("mesh buffers");
+        let hair = HairParams::default();
+        for (guides, k) in [(40, 1), (40, 2), (40, 3), (40, 4), (3, 4), (1, 4)] {
+            let groom = spiral_guides(guides);
+            let params = GuideParams {
+                strands: 700,
+                k,
+                ..GuideParams::default()
+            };
+            let build = || GuideStrands::new(&gpu, &mesh, &buffers, &groom, &hair, &params);
+            let strands = build().expect("guide strands");
+            let want_k = guide_count(&params, guides);
+            assert_eq!(strands.constants.k, want_k, "{guides} guides, k = {k}");
+            assert_eq!(want_k, k.min(guides as u32));
+            let words = read_buffer(&gpu, &strands.records).expect("read the records");
+            let words: &[u32] = bytemuck::cast_slice(&words);
+            let roots: Vec<Root> = strands
+                .roots
+                .iter()
+                .map(|r| Root {
+                    triangle: r.triangle,
+                    seed: r.seed,
+                    bary: r.bary,
+                    length: r.length,
+                    width: r.width,
+                    phase: r.phase,
+                    tilt: r.tilt,
+                    azimuth: r.azimuth,
+                    color: r.color,
+                    region: r.region,
+                })
+                .collect();
+            let per_guide = groom.segments as usize + 1;
+            let guide_roots: Vec<Vec3> = strands
+                .first
+                .shape()
+                .rest
+                .iter()
+                .step_by(per_guide)
+                .copied()
+                .collect();
+            let chosen = choose_guides(&mesh, &roots, &guide_roots, want_k);
+            assert_eq!(words.len(), 3 * chosen.len());
+            let mut blended = 0;
+            for (strand, (record, choice)) in words.chunks_exact(3).zip(&chosen).enumerate() {
+                let on_gpu = decode_record(&[record[0], record[1], record[2]], want_k);
+                assert_eq!(
+                    &on_gpu, choice,
+                    "strand {strand} ({guides} guides, k = {k})"
+                );
+                blended += usize::from(choice.weights[..want_k as usize].iter().all(|&w| w > 0.0));
+            }
+            // Most strands blend all k guides (the weights are no degenerate 1, 0, 0, ...).
+            assert!(blended * 2 > chosen.len(), "{blended} of {}", chosen.len());
+            // A second build of the same inputs writes the same records.
+            let again = build().expect("guide strands");
+            let words_again = read_buffer(&gpu, &again.records).expect("read the records");
+            assert_eq!(bytemuck::cast_slice::<u8, u32>(&words_again), words);
+        }
     }
 
     #[test]

@@ -40,10 +40,10 @@ mod skin;
 
 pub use groom::GroomStrands;
 pub use grow::{
-    GrowStrands, GrowUniforms, MESH, RegionShape, STRAND_ROOTS, STRAND_VERTICES, StrandBuffers,
-    StrandPass, StrandStage, StrandStyle,
+    GrowStrands, MESH, STRAND_ROOTS, STRAND_VERTICES, StrandBuffers, StrandPass, StrandStage,
+    StrandStyle,
 };
-pub use guides::{GUIDE_VERTICES, GuideMemory, GuideRecord, GuideStrands, GuideUniforms};
+pub use guides::{GUIDE_VERTICES, GuideMemory, GuideStrands};
 pub use lod::{
     FrameOrderError, LodLevel, PreparedFrame, StrandFrame, StrandLayout, bend_error,
     bend_per_segment, fewest_segments, reduced_segments,
@@ -53,9 +53,7 @@ pub use roots::{
     StrandRoot, hash_to_unit, pcg_hash, root_region, root_tint, sample_roots, strand_brightness,
 };
 pub use sdf::{BODY_SDF, BodySdf, SDF_LABEL, SdfUniforms, flood_steps};
-pub use simulate::{
-    ColliderUniform, SIMULATE_LABEL, SIMULATION_STATE, STATE_HEADER, SimUniforms, SimulateStrands,
-};
+pub use simulate::{SIMULATE_LABEL, SIMULATION_STATE, SimulateStrands};
 pub use skin::{MeshSkin, SKIN_LABEL, SKIN_NON_FINITE, SkinUniforms};
 
 use pelage_gpu::{GpuError, ShaderSources};

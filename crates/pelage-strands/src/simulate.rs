@@ -20,7 +20,7 @@ use pelage_gpu::PassInfo;
 
 /// `vec4`s of simulation state per strand before its vertices (`STATE_HEADER` in WGSL):
 /// the root's position (w = 1 once posed), normal and tangent in the last frame.
-pub const STATE_HEADER: u32 = 3;
+pub(crate) const STATE_HEADER: u32 = 3;
 
 /// The frame resource of a simulation's state (positions and velocities of the last
 /// substep, the held-strand count), kept from frame to frame.
@@ -65,7 +65,7 @@ fn collider_uniform(collider: &Collider) -> ColliderUniform {
 
 /// A capsule from `a` to `b` (a sphere when equal), as `simulate.wgsl` reads it.
 #[derive(Clone, Copy, Debug, Default, PartialEq, ShaderType)]
-pub struct ColliderUniform {
+pub(crate) struct ColliderUniform {
     /// One end of the axis.
     pub a: Vec3,
     /// Radius.
@@ -77,9 +77,10 @@ pub struct ColliderUniform {
 }
 
 /// The per-frame uniforms of `simulate.wgsl` (`SimUniforms` there), beside the
-/// [`GrowUniforms`](crate::GrowUniforms) that carry the wind and the level of detail.
+/// [`GrowUniforms`](crate::grow::GrowUniforms) that carry the wind and the level of
+/// detail. Internal: the CPU mirror works them out from the parameters on its own.
 #[derive(Clone, Copy, Debug, PartialEq, ShaderType)]
-pub struct SimUniforms {
+pub(crate) struct SimUniforms {
     /// Gravity, scene units per second squared.
     pub gravity: Vec3,
     /// Acceleration per unit of wind force.
@@ -217,9 +218,10 @@ impl SimUniforms {
 /// normal holds its strand at its last pose and is counted
 /// ([`SimulateStrands::held_strands`]).
 ///
-/// **State.** One storage buffer ([`SimulateStrands::state`]): per strand
-/// [`STATE_HEADER`] `vec4`s of root pose, then its rest shape, positions and previous
-/// positions, `segments + 1` `vec4` each. The pass binds 8 storage buffers (WebGPU's
+/// **State.** One storage buffer ([`SimulateStrands::state`]): per strand three `vec4`s
+/// of root pose (the root's position, w = 1 once posed, normal and tangent in the last
+/// frame), then its rest shape, positions and previous positions, `segments + 1` `vec4`
+/// each. The pass binds 8 storage buffers (WebGPU's
 /// default limit): the mesh's three, the roots, the state, the held counter, the
 /// vertices and the drawn roots.
 ///
@@ -239,7 +241,6 @@ pub struct SimulateStrands {
     colliders: Vec<Collider>,
     /// The time of the last frame prepared (`None`: the next one resets).
     last_time: Option<f32>,
-    last_uniforms: SimUniforms,
     /// The hash draw the strands' brightness comes from (see [`crate::strand_brightness`]).
     brightness_draw: u32,
     /// How far from the origin the strands reach (the largest coordinate of the reach
@@ -386,8 +387,11 @@ impl SimulateStrands {
         pelage_gpu::audit::name_buffer(&state, SIMULATION_STATE);
         pelage_gpu::audit::name_buffer(&held, SIMULATION_STATE);
         pelage_gpu::audit::constant(&[&rest_roots]);
-        let last_uniforms = SimUniforms::new(dynamics, &[], 0.0, None);
-        let sim = UniformBuffer::new(gpu, "pelage simulation uniforms", &last_uniforms)?;
+        let sim = UniformBuffer::new(
+            gpu,
+            "pelage simulation uniforms",
+            &SimUniforms::new(dynamics, &[], 0.0, None),
+        )?;
         // A strand reaches at most its length from its root point (which sits its rest
         // offset from the surface), anywhere the mesh goes.
         let max_width = roots.iter().map(|r| r.width).fold(0.0f32, f32::max);
@@ -447,7 +451,6 @@ impl SimulateStrands {
             dynamics: dynamics.clone(),
             colliders: dynamics.colliders.clone(),
             last_time: None,
-            last_uniforms,
             brightness_draw,
             scale,
             wind: params.wind.clone(),
@@ -583,11 +586,6 @@ impl SimulateStrands {
         &self.rest_local
     }
 
-    /// The simulation uniforms the last `prepare` wrote.
-    pub fn sim_uniforms(&self) -> &SimUniforms {
-        &self.last_uniforms
-    }
-
     /// The strands held at their last pose in the last frame run because the mesh under
     /// their root was not finite. Reads back from the GPU (waits for it): call it outside
     /// the frame loop.
@@ -626,9 +624,8 @@ impl StrandStage for SimulateStrands {
             uniforms = uniforms.with_sdf(sdf.grid(), self.sdf_from_world);
         }
         self.sim.write(queue, &uniforms)?;
-        self.last_uniforms = uniforms;
         self.last_time = Some(time);
-        let grow = self.uniforms_at(time);
+        let grow = self.pass.uniforms_at(time);
         self.pass.begin_frame(queue, &grow)
     }
 

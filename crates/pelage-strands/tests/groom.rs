@@ -4,14 +4,14 @@
 
 use glam::Vec3;
 use pelage_gpu::read_buffer;
-use pelage_reference::strands::{deform_groom, drawn_width};
+use pelage_reference::strands::{Level, deform_groom, drawn_width};
 use pelage_scene::{Groom, HairParams, Resampled, Transition, WindParams};
 use pelage_strands::{
     GroomStrands, LodLevel, StrandRoot, StrandStage, StrandsError, bend_error, bend_per_segment,
 };
 
 mod common;
-use common::{gpu, grow_on_gpu};
+use common::{gpu, grow_on_gpu, mirror_roots};
 
 /// A head of `count` strands: roots on the upper half of a unit sphere, each strand a
 /// helix of its own radius and pitch hanging down and out, with 6 to 40 points.
@@ -107,10 +107,13 @@ fn in_wind_the_gpu_matches_the_cpu_mirror_and_no_segment_stretches() {
     let reach = GroomStrands::reach_of(&resampled, &hair).unwrap();
     let rest = strands.rest_points().to_vec();
     let rest = rest.as_slice();
+    let roots = mirror_roots(strands.roots());
+    // The parameters the groom's strands amount to (segments, strand count), and the wind.
+    let params = strands.params().clone();
     let mut moved = 0.0f32;
     for t in [0.0, 0.37, 5.0, 1234.5] {
         let gpu_vertices = grow_on_gpu(&gpu, &mut strands, t);
-        let cpu = deform_groom(rest, strands.roots(), &strands.uniforms_at(t));
+        let cpu = deform_groom(rest, &roots, &params, t, Level::full(&params));
         assert_eq!(gpu_vertices.len(), cpu.len());
         let worst = gpu_vertices
             .iter()
@@ -171,8 +174,12 @@ fn level_of_detail_draws_a_prefix_with_seed_002_widths_within_the_segment_bound(
         };
         strands.set_lod(level).unwrap();
         let reduced = grow_on_gpu(&gpu, &mut strands, 0.8);
-        let u = strands.uniforms_at(0.8);
-        let cpu = deform_groom(strands.rest_points(), strands.roots(), &u);
+        let roots = mirror_roots(strands.roots());
+        let mirror_level = Level {
+            strands: level.strands,
+            segments,
+        };
+        let cpu = deform_groom(strands.rest_points(), &roots, &params, 0.8, mirror_level);
         assert_eq!(cpu.len() as u64, strands.frame().unwrap().layout.vertices());
         let worst = cpu
             .iter()
@@ -217,11 +224,11 @@ fn level_of_detail_draws_a_prefix_with_seed_002_widths_within_the_segment_bound(
         let drawn: Vec<StrandRoot> = encase::StorageBuffer::new(&bytes[..])
             .create()
             .expect("roots decode");
-        for (i, (root, gpu_root)) in strands.roots().iter().zip(drawn).enumerate() {
+        for (i, (root, gpu_root)) in roots.iter().zip(drawn).enumerate() {
             if i as u32 >= level.strands {
                 break;
             }
-            let want = drawn_width(root, i as u32, &u);
+            let want = drawn_width(root, i as u32, params.roots.count, &zone);
             assert!((gpu_root.width - want).abs() <= 1e-6 * want.max(1.0));
         }
     }

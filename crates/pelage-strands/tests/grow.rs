@@ -2,14 +2,14 @@
 
 use glam::{Vec3, Vec4};
 use pelage_gpu::Gpu;
-use pelage_reference::strands::{eval_surface, grow_strands};
+use pelage_reference::strands::{Level, eval_surface, grow_strands};
 use pelage_scene::{
     HairParams, HairType, MAX_FORCE, Mesh, RootParams, SurfaceInterpolation, WindParams,
 };
 use pelage_strands::{GrowStrands, MeshBuffers, StrandStage};
 
 mod common;
-use common::{gpu, grow_on_gpu, read_vertices};
+use common::{gpu, grow_on_gpu, mirror_roots, read_vertices};
 
 fn scene_size(mesh: &Mesh) -> f32 {
     let (lo, hi) = mesh.bounds();
@@ -47,14 +47,10 @@ fn gpu_matches_cpu_mirror_for_every_hair_type_and_time() {
         for surface in [SurfaceInterpolation::Flat, SurfaceInterpolation::PnTriangle] {
             let p = params(300, hair_type, surface);
             let mut strands = GrowStrands::new(&gpu, &mesh, &buffers, &p).unwrap();
+            let roots = mirror_roots(strands.roots());
             for t in [0.0, 0.37, 5.0, 1234.5] {
                 let gpu_vertices = grow_on_gpu(&gpu, &mut strands, t);
-                let cpu_vertices = grow_strands(
-                    &mesh,
-                    strands.roots(),
-                    &strands.uniforms_at(t),
-                    strands.region_shapes(),
-                );
+                let cpu_vertices = grow_strands(&mesh, &roots, &p, t, Level::full(&p));
                 assert_eq!(gpu_vertices.len(), cpu_vertices.len());
                 let worst = gpu_vertices
                     .iter()

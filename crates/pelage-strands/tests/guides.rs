@@ -8,9 +8,9 @@
 
 use glam::{Quat, Vec3, Vec4};
 use pelage_gpu::{Gpu, read_buffer, wgpu};
-use pelage_reference::guides::{decode_record, interpolate};
-use pelage_reference::simulate::simulate_frame;
-use pelage_reference::strands::{deform_groom, drawn_width};
+use pelage_reference::guides::{Choice, choose_guides, guide_count, interpolate};
+use pelage_reference::simulate::{Step, simulate_frame};
+use pelage_reference::strands::{Level, deform_groom, drawn_width};
 use pelage_scene::{
     DynamicsParams, Groom, GuideParams, HairParams, Mesh, ParamError, Resampled, Transition,
     WindParams,
@@ -21,7 +21,7 @@ use pelage_strands::{
 };
 
 mod common;
-use common::{gpu, grow_on_gpu, read_vertices};
+use common::{gpu, grow_on_gpu, mirror_roots, read_vertices};
 
 /// The head every test grows on: a sphere of radius 0.5 at the origin.
 fn head(subdivisions: u32) -> Mesh {
@@ -89,18 +89,63 @@ fn worst(a: &[Vec4], b: &[Vec4]) -> f32 {
         .fold(0.0f32, f32::max)
 }
 
-/// The CPU mirror of a frame at `t`: the guides bent by `deform_groom`, then interpolated.
-fn mirror(strands: &GuideStrands, mesh: &Mesh, t: f32) -> Vec<Vec4> {
+/// The guides' root points, in buffer order (the first rest point of each).
+fn guide_roots(guides: &GroomStrands) -> Vec<Vec3> {
+    let per_guide = guides.params().growth.segments as usize + 1;
+    guides
+        .rest_points()
+        .iter()
+        .step_by(per_guide)
+        .copied()
+        .collect()
+}
+
+/// Each render strand's guides and weights as the mirror chooses them on the rest `mesh`
+/// (the one the strands were built on) for `params`.
+fn choices(
+    strands: &GuideStrands,
+    guides: &GroomStrands,
+    mesh: &Mesh,
+    params: &GuideParams,
+) -> Vec<Choice> {
+    let guide_roots = guide_roots(guides);
+    let k = guide_count(params, guide_roots.len());
+    choose_guides(mesh, &mirror_roots(strands.roots()), &guide_roots, k)
+}
+
+/// The CPU mirror of a frame at `t` and `level` of render strands built on `mesh` with
+/// `params`: the guides bent by `deform_groom`, then interpolated from the guides the
+/// mirror chooses.
+fn mirror_at(
+    strands: &GuideStrands,
+    mesh: &Mesh,
+    params: &GuideParams,
+    t: f32,
+    level: Level,
+) -> Vec<Vec4> {
     let g = strands.guides().expect("the guides are bent");
-    let bent = deform_groom(g.rest_points(), g.roots(), &g.uniforms_at(t));
+    let guide_params = g.params();
+    let bent = deform_groom(
+        g.rest_points(),
+        &mirror_roots(g.roots()),
+        guide_params,
+        t,
+        Level::full(guide_params),
+    );
     interpolate(
         mesh,
-        strands.roots(),
-        strands.records(),
+        &mirror_roots(strands.roots()),
+        &choices(strands, g, mesh, params),
         &bent,
-        &strands.uniforms_at(t),
-        &strands.constants(),
+        strands.params(),
+        params,
+        level,
     )
+}
+
+/// [`mirror_at`] every strand and segment.
+fn mirror(strands: &GuideStrands, mesh: &Mesh, params: &GuideParams, t: f32) -> Vec<Vec4> {
+    mirror_at(strands, mesh, params, t, Level::full(strands.params()))
 }
 
 struct Built {
@@ -144,7 +189,7 @@ fn interpolated_strands_equal_the_cpu_mirror_in_wind_and_at_a_lower_level_of_det
     let mut frames = Vec::new();
     for t in [0.0, 0.37, 5.0, 1234.5] {
         let out = grow_on_gpu(&gpu, &mut strands, t);
-        let cpu = mirror(&strands, &built.mesh, t);
+        let cpu = mirror(&strands, &built.mesh, &params, t);
         let err = worst(&out, &cpu);
         println!("guides t={t}: max |GPU - CPU| = {err:.2e} (tolerance {tolerance:.1e})");
         assert!(err <= tolerance, "t={t}: {err} > {tolerance}");
@@ -184,7 +229,11 @@ fn interpolated_strands_equal_the_cpu_mirror_in_wind_and_at_a_lower_level_of_det
     };
     strands.set_lod(level).unwrap();
     let out = grow_on_gpu(&gpu, &mut strands, 0.8);
-    let cpu = mirror(&strands, &built.mesh, 0.8);
+    let mirror_level = Level {
+        strands: level.strands,
+        segments: 4,
+    };
+    let cpu = mirror_at(&strands, &built.mesh, &params, 0.8, mirror_level);
     assert_eq!(cpu.len() as u64, strands.frame().unwrap().layout.vertices());
     let err = worst(&out[..cpu.len()], &cpu);
     println!(
@@ -192,16 +241,16 @@ fn interpolated_strands_equal_the_cpu_mirror_in_wind_and_at_a_lower_level_of_det
         level.strands
     );
     assert!(err <= tolerance, "{err}");
-    let u = strands.uniforms_at(0.8);
     let bytes = read_buffer(&gpu, &strands.buffers().roots).unwrap();
     let drawn: Vec<StrandRoot> = encase::StorageBuffer::new(&bytes[..])
         .create()
         .expect("roots decode");
-    for (i, (root, gpu_root)) in strands.roots().iter().zip(drawn).enumerate() {
+    let roots = mirror_roots(strands.roots());
+    for (i, (root, gpu_root)) in roots.iter().zip(drawn).enumerate() {
         if i as u32 >= level.strands {
             break;
         }
-        let want = drawn_width(root, i as u32, &u);
+        let want = drawn_width(root, i as u32, p.roots.count, &zone);
         assert!((gpu_root.width - want).abs() <= 1e-6 * want.max(1.0));
     }
 }
@@ -226,9 +275,8 @@ fn every_k_with_and_without_noise_and_clumping_equals_the_cpu_mirror() {
                 ..GuideParams::default()
             };
             let mut strands = built.strands(&gpu, &hair, &params);
-            assert_eq!(strands.constants().k, k);
             let out = grow_on_gpu(&gpu, &mut strands, 0.7);
-            let cpu = mirror(&strands, &built.mesh, 0.7);
+            let cpu = mirror(&strands, &built.mesh, &params, 0.7);
             let err = worst(&out, &cpu);
             println!("k={k} clump={clump} noise={noise}: max |GPU - CPU| = {err:.2e}");
             assert!(
@@ -253,7 +301,6 @@ fn one_guide_without_clump_or_noise_is_copied_to_every_root() {
         ..GuideParams::default()
     };
     let mut strands = built.strands(&gpu, &calm(), &params);
-    assert_eq!(strands.constants().k, 1, "k is capped by the guide count");
     let out = grow_on_gpu(&gpu, &mut strands, 2.0);
     let guide = &built.guides.points;
     let mut err = 0.0f32;
@@ -284,12 +331,13 @@ fn with_full_clumping_the_tips_meet_the_nearest_guide() {
     let mut strands = built.strands(&gpu, &windy(), &params);
     let out = grow_on_gpu(&gpu, &mut strands, 1.3);
     let bent = read_vertices(&gpu, &strands.guides().unwrap().buffers().vertices);
-    let k = strands.constants().k;
+    // Each strand's nearest guide, as the mirror chooses it (the GPU's records are
+    // checked against that choice in pelage-strands' unit tests).
+    let choices = choices(&strands, strands.guides().unwrap(), &built.mesh, &params);
     let mut err = 0.0f32;
     let mut spread = 0.0f32;
-    for (strand, record) in out.chunks(9).zip(strands.records()) {
-        let (nearest, _) = decode_record(record, k);
-        let guide = &bent[nearest[0] as usize * 9..][..9];
+    for (strand, choice) in out.chunks(9).zip(&choices) {
+        let guide = &bent[choice.guides[0] as usize * 9..][..9];
         err = err.max((strand[8] - guide[8]).abs().max_element());
         // Halfway, the strand is only halfway there.
         spread = spread.max(strand[4].truncate().distance(guide[4].truncate()));
@@ -314,7 +362,6 @@ fn the_same_inputs_give_the_same_strands() {
     };
     let mut a = built.strands(&gpu, &windy(), &params);
     let mut b = built.strands(&gpu, &windy(), &params);
-    assert_eq!(a.records(), b.records());
     assert_eq!(a.roots(), b.roots());
     let first = grow_on_gpu(&gpu, &mut a, 0.9);
     let _ = grow_on_gpu(&gpu, &mut a, 4.0);
@@ -451,7 +498,7 @@ fn a_device_with_default_limits_runs_both_passes() {
     };
     let mut strands = built.strands(&gpu, &windy(), &params);
     let out = grow_on_gpu(&gpu, &mut strands, 0.5);
-    let err = worst(&out, &mirror(&strands, &built.mesh, 0.5));
+    let err = worst(&out, &mirror(&strands, &built.mesh, &params, 0.5));
     assert!(err <= 1e-5 * size(&built.guides), "{err}");
     gpu.check().unwrap();
 }
@@ -568,21 +615,36 @@ fn simulated_guides_drive_the_render_strands_as_the_two_mirrors_composed() {
     built.buffers.update(&gpu.queue, &mesh).unwrap();
     let out = grow_on_gpu(&gpu, &mut strands, h);
     let sim = strands.simulation().unwrap();
+    // The guides' parameters (those the groom amounts to), simulated one step of h from
+    // frame 0 at t = 0 with the dynamics' colliders (none).
+    let guide_params = sim.params();
     let (bent, held) = simulate_frame(
         &mesh,
-        sim.roots(),
+        &mirror_roots(sim.roots()),
         &mut state,
-        &sim.uniforms_at(h),
-        sim.sim_uniforms(),
+        &Step {
+            hair: guide_params,
+            dynamics: &dynamics,
+            colliders: &dynamics.colliders,
+            time: h,
+            dt: Some(h),
+            level: Level::full(guide_params),
+        },
     );
     assert_eq!(held, 0);
+    // The guides chosen on the rest head, whose rest roots the bend pass holds in the
+    // simulation's order.
+    let chosen = choices(&strands, &bend_order, &built.mesh, &params);
+    let render_roots = mirror_roots(strands.roots());
+    let full = Level::full(strands.params());
     let cpu = interpolate(
         &mesh,
-        strands.roots(),
-        strands.records(),
+        &render_roots,
+        &chosen,
         &bent,
-        &strands.uniforms_at(h),
-        &strands.constants(),
+        strands.params(),
+        &params,
+        full,
     );
     let err = worst(&out, &cpu);
     println!(
@@ -606,11 +668,12 @@ fn simulated_guides_drive_the_render_strands_as_the_two_mirrors_composed() {
         let guides = read_vertices(&gpu, &strands.simulation().unwrap().buffers().vertices);
         let cpu = interpolate(
             &mesh,
-            strands.roots(),
-            strands.records(),
+            &render_roots,
+            &chosen,
             &guides,
-            &strands.uniforms_at(t),
-            &strands.constants(),
+            strands.params(),
+            &params,
+            full,
         );
         err = err.max(worst(&out, &cpu));
     }
@@ -655,7 +718,8 @@ fn render_strands_take_the_weighted_blend_of_their_guides_colours() {
     };
     let mut strands = built.strands(&gpu, &hair, &params);
     let guide_colors = strands.guides().unwrap().file_colors().unwrap().to_vec();
-    let k = strands.constants().k;
+    let k = guide_count(&params, count as usize);
+    let choices = choices(&strands, strands.guides().unwrap(), &built.mesh, &params);
     // The blend of each render strand's guides' colours with its record's weights, and
     // the colour the GPU's drawn roots hold, per strand.
     let colours = |strands: &mut GuideStrands| {
@@ -664,11 +728,10 @@ fn render_strands_take_the_weighted_blend_of_their_guides_colours() {
         let drawn: Vec<StrandRoot> = encase::StorageBuffer::new(&bytes[..])
             .create()
             .expect("roots decode");
-        (strands.records().iter().zip(drawn))
-            .map(|(record, gpu_root)| {
-                let (index, weight) = decode_record(record, k);
+        (choices.iter().zip(drawn))
+            .map(|(choice, gpu_root)| {
                 let blend: Vec3 = (0..k as usize)
-                    .map(|n| guide_colors[index[n] as usize] * weight[n])
+                    .map(|n| guide_colors[choice.guides[n] as usize] * choice.weights[n])
                     .sum();
                 (blend, gpu_root.color)
             })

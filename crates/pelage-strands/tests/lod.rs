@@ -4,12 +4,12 @@
 
 use glam::Vec3;
 use pelage_gpu::read_buffer;
-use pelage_reference::strands::{drawn_width, grow_strands};
+use pelage_reference::strands::{Level, drawn_width, grow_strands};
 use pelage_scene::{Camera, HairParams, HairType, Mesh, Transition};
 use pelage_strands::{GrowStrands, LodLevel, MeshBuffers, StrandLayout, StrandRoot, StrandStage};
 
 mod common;
-use common::{gpu, grow_on_gpu};
+use common::{gpu, grow_on_gpu, mirror_roots};
 
 fn hair(count: u32, hair_type: HairType) -> HairParams {
     let mut p = HairParams::default();
@@ -28,6 +28,7 @@ fn simplified_strands_match_the_cpu_mirror_and_seed_002_widths() {
     let buffers = MeshBuffers::upload(&gpu, &mesh).unwrap();
     let params = hair(3000, HairType::Straight);
     let mut strands = GrowStrands::new(&gpu, &mesh, &buffers, &params).unwrap();
+    let roots = mirror_roots(strands.roots());
     for (lambda, segments) in [(1.0, 12), (0.6, 6), (0.25, 4), (0.1, 3), (0.93, 12)] {
         let zone = Transition::new(lambda, params.lod.transition);
         let level = LodLevel {
@@ -40,8 +41,11 @@ fn simplified_strands_match_the_cpu_mirror_and_seed_002_widths() {
         };
         strands.set_lod(level).unwrap();
         let gpu_vertices = grow_on_gpu(&gpu, &mut strands, 0.7);
-        let u = strands.uniforms_at(0.7);
-        let cpu = grow_strands(&mesh, strands.roots(), &u, strands.region_shapes());
+        let mirror_level = Level {
+            strands: level.strands,
+            segments,
+        };
+        let cpu = grow_strands(&mesh, &roots, &params, 0.7, mirror_level);
         let layout = strands.frame().unwrap().layout;
         assert_eq!(
             layout,
@@ -67,11 +71,11 @@ fn simplified_strands_match_the_cpu_mirror_and_seed_002_widths() {
             .create()
             .expect("roots decode");
         let mut area = 0.0f64;
-        for (i, (root, gpu_root)) in strands.roots().iter().zip(drawn).enumerate() {
+        for (i, (root, gpu_root)) in roots.iter().zip(drawn).enumerate() {
             if i as u32 >= level.strands {
                 break;
             }
-            let want = drawn_width(root, i as u32, &u);
+            let want = drawn_width(root, i as u32, params.roots.count, &zone);
             assert!(
                 (gpu_root.width - want).abs() <= 1e-6 * want.max(1.0),
                 "strand {i}"

@@ -4,12 +4,12 @@
 use std::path::Path;
 
 use glam::{Vec2, Vec3};
-use pelage_reference::strands::grow_strands;
+use pelage_reference::strands::{Level, grow_strands};
 use pelage_scene::{HairParams, HairType, MapImage, Mesh, RegionParams, SceneFile, TextureMap};
-use pelage_strands::{GrowStrands, MeshBuffers, RegionShape, StrandStage, sample_roots};
+use pelage_strands::{GrowStrands, MeshBuffers, StrandStage, sample_roots};
 
 mod common;
-use common::{gpu, grow_on_gpu};
+use common::{gpu, grow_on_gpu, mirror_roots};
 
 /// A region texture of three vertical bands over u: region 0, 1 and 2.
 fn bands() -> TextureMap {
@@ -56,21 +56,13 @@ fn gpu_matches_cpu_mirror_with_three_regions_of_different_hair_types() {
     let tolerance = 1e-5 * (hi - lo).length();
     let params = three_regions(600);
     let mut strands = GrowStrands::new(&gpu, &mesh, &buffers, &params).unwrap();
-    let shapes = strands.region_shapes().to_vec();
-    assert_eq!(
-        shapes,
-        vec![
-            RegionShape::of(HairType::Straight),
-            RegionShape::of(HairType::Wavy {
-                amplitude: 0.03,
-                frequency: 5.0
-            }),
-            RegionShape::of(HairType::Curly {
-                radius: 0.02,
-                pitch: 0.06
-            }),
-        ]
-    );
+    let roots = mirror_roots(strands.roots());
+    // The same fur with every region straight (the roots keep their regions' lengths,
+    // widths and colours): what the mirror grows when the regions' shapes are lost.
+    let mut one_shape = params.clone();
+    for region in &mut one_shape.growth.regions {
+        region.hair_type = Some(HairType::Straight);
+    }
     let per_region: Vec<usize> = (0..3)
         .map(|k| strands.roots().iter().filter(|r| r.region == k).count())
         .collect();
@@ -78,7 +70,7 @@ fn gpu_matches_cpu_mirror_with_three_regions_of_different_hair_types() {
     assert!(per_region.iter().all(|&n| n > 50), "{per_region:?}");
     for t in [0.0, 0.37, 5.0] {
         let gpu_vertices = grow_on_gpu(&gpu, &mut strands, t);
-        let cpu = grow_strands(&mesh, strands.roots(), &strands.uniforms_at(t), &shapes);
+        let cpu = grow_strands(&mesh, &roots, &params, t, Level::full(&params));
         assert_eq!(gpu_vertices.len(), cpu.len());
         let worst = gpu_vertices
             .iter()
@@ -88,12 +80,7 @@ fn gpu_matches_cpu_mirror_with_three_regions_of_different_hair_types() {
         println!("three regions t={t}: max |GPU - CPU| = {worst:.2e} (tolerance {tolerance:.2e})");
         assert!(worst <= tolerance, "t={t}: GPU and CPU differ by {worst}");
         // The mirror with every strand in region 0 is another fur: the regions matter.
-        let straight = grow_strands(
-            &mesh,
-            strands.roots(),
-            &strands.uniforms_at(t),
-            &shapes[..1],
-        );
+        let straight = grow_strands(&mesh, &roots, &one_shape, t, Level::full(&one_shape));
         let moved = straight
             .iter()
             .zip(&cpu)

@@ -7,12 +7,13 @@ use std::time::Instant;
 
 use glam::{Quat, Vec3, Vec4};
 use pelage_gpu::{Gpu, read_buffer};
-use pelage_reference::simulate::simulate_frame;
+use pelage_reference::simulate::{Step, simulate_frame};
+use pelage_reference::strands::Level;
 use pelage_scene::{Collider, DynamicsParams, HairParams, MAX_FORCE, Mesh, WindParams};
 use pelage_strands::{MeshBuffers, SimulateStrands, StrandStage};
 
 mod common;
-use common::{gpu, grow_on_gpu};
+use common::{gpu, grow_on_gpu, mirror_roots};
 
 const SEGMENTS: u32 = 16;
 /// The collider inside the head (an icosphere of radius 1, whose flat faces come within
@@ -149,6 +150,18 @@ fn gpu_matches_the_cpu_mirror_after_one_substep_and_stays_close_for_100_frames()
     let mut sim = simulation(&gpu, &rest_mesh, &buffers, 200, windy());
     let size = 2.0 * (1.0 + 1.5);
     let h = DynamicsParams::default().max_substep;
+    // The mirror's inputs: the parameters the simulation was made with, its colliders, and
+    // the roots it sampled.
+    let (params, dynamics, colliders) = (hair(200, windy()), DynamicsParams::default(), [body()]);
+    let roots = mirror_roots(sim.roots());
+    let frame = |time: f32, dt: f32| Step {
+        hair: &params,
+        dynamics: &dynamics,
+        colliders: &colliders,
+        time,
+        dt: Some(dt),
+        level: Level::full(&params),
+    };
 
     // Frame 0 puts the strands at rest; frame 1 is one substep.
     grow_on_gpu(&gpu, &mut sim, 0.0);
@@ -156,14 +169,8 @@ fn gpu_matches_the_cpu_mirror_after_one_substep_and_stays_close_for_100_frames()
     let mut mesh = posed(&rest_mesh, head_pose(h), Vec3::ZERO);
     buffers.update(&gpu.queue, &mesh).unwrap();
     let gpu_vertices = grow_on_gpu(&gpu, &mut sim, h);
-    assert_eq!(sim.sim_uniforms().substeps, 1);
-    let (cpu_vertices, held) = simulate_frame(
-        &mesh,
-        sim.roots(),
-        &mut cpu_state,
-        &sim.uniforms_at(h),
-        sim.sim_uniforms(),
-    );
+    // One step of h from frame 0 at t = 0.
+    let (cpu_vertices, held) = simulate_frame(&mesh, &roots, &mut cpu_state, &frame(h, h));
     assert_eq!(held, 0);
     let one = max_diff(&gpu_vertices, &cpu_vertices);
     println!("1 substep: max |GPU - CPU| = {one:.2e} (scene size {size})");
@@ -179,26 +186,15 @@ fn gpu_matches_the_cpu_mirror_after_one_substep_and_stays_close_for_100_frames()
     let mut per_frame = 0.0f32;
     let mut t = h;
     for _ in 0..100 {
+        let last = t;
         t += 1.0 / 60.0;
         mesh = posed(&rest_mesh, head_pose(t), Vec3::ZERO);
         buffers.update(&gpu.queue, &mesh).unwrap();
         let mut gpu_state = read_state(&gpu, &sim);
         let g = grow_on_gpu(&gpu, &mut sim, t);
-        let (from_gpu, _) = simulate_frame(
-            &mesh,
-            sim.roots(),
-            &mut gpu_state,
-            &sim.uniforms_at(t),
-            sim.sim_uniforms(),
-        );
+        let (from_gpu, _) = simulate_frame(&mesh, &roots, &mut gpu_state, &frame(t, t - last));
         per_frame = per_frame.max(max_diff(&g, &from_gpu));
-        let (c, _) = simulate_frame(
-            &mesh,
-            sim.roots(),
-            &mut cpu_state,
-            &sim.uniforms_at(t),
-            sim.sim_uniforms(),
-        );
+        let (c, _) = simulate_frame(&mesh, &roots, &mut cpu_state, &frame(t, t - last));
         drift = drift.max(max_diff(&g, &c));
     }
     println!(
@@ -209,6 +205,35 @@ fn gpu_matches_the_cpu_mirror_after_one_substep_and_stays_close_for_100_frames()
     );
     assert!(per_frame <= 1e-5 * size, "{per_frame}");
     assert!(drift <= 1e-2 * size, "{drift}");
+
+    // Frames whose substeps are not the stiffness interval (1/120 s), where the
+    // stiffnesses per substep differ from those given: 1/50 s (3 substeps of 1/150 s),
+    // 1/24 s (5 of 1/120 s, rounded), a 0.3 s hitch (cut to max_frame, 12 substeps) and
+    // 1/144 s (1 substep), each from the GPU's state.
+    let mut odd = 0.0f32;
+    for dt in [
+        1.0 / 50.0,
+        1.0 / 50.0,
+        1.0 / 24.0,
+        0.3,
+        1.0 / 144.0,
+        1.0 / 50.0,
+    ] {
+        let last = t;
+        t += dt;
+        mesh = posed(&rest_mesh, head_pose(t), Vec3::ZERO);
+        buffers.update(&gpu.queue, &mesh).unwrap();
+        let mut gpu_state = read_state(&gpu, &sim);
+        let g = grow_on_gpu(&gpu, &mut sim, t);
+        let (from_gpu, _) = simulate_frame(&mesh, &roots, &mut gpu_state, &frame(t, t - last));
+        odd = odd.max(max_diff(&g, &from_gpu));
+    }
+    println!(
+        "frames of 1/50, 1/24, 0.3 and 1/144 s: each from the GPU's state, max |GPU - CPU| = \
+         {odd:.2e} ({:.2e} of the scene size)",
+        odd / size
+    );
+    assert!(odd <= 1e-5 * size, "{odd}");
 }
 
 #[test]

@@ -5,14 +5,14 @@
 use glam::{Mat4, Quat, Vec3};
 use pelage_gpu::{Gpu, read_buffer};
 use pelage_reference::skin::{mesh_size, skin_mesh};
-use pelage_reference::strands::{eval_surface, grow_strands};
+use pelage_reference::strands::{Level, eval_surface, grow_strands};
 use pelage_scene::{DynamicsParams, HairParams, Mesh, Skin, SkinBend, SurfaceInterpolation};
 use pelage_strands::{
     GrowStrands, MeshBuffers, MeshSkin, SimulateStrands, StrandStage, StrandsError,
 };
 
 mod common;
-use common::{gpu, grow_on_gpu};
+use common::{gpu, grow_on_gpu, mirror_roots};
 
 /// The f32 x3 values of `buffer`.
 fn read_vec3(gpu: &Gpu, buffer: &pelage_gpu::wgpu::Buffer) -> Vec<Vec3> {
@@ -143,9 +143,10 @@ fn grown_roots_ride_the_skinned_surface_over_an_animation() {
         }
         let expected = grow_strands(
             &skinned,
-            grow.roots(),
-            &grow.uniforms_at(t),
-            grow.region_shapes(),
+            &mirror_roots(grow.roots()),
+            &hair,
+            t,
+            Level::full(&hair),
         );
         for (a, b) in gpu_vertices.iter().zip(&expected) {
             worst_vertex = worst_vertex.max(a.truncate().distance(b.truncate()));
