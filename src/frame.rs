@@ -183,7 +183,10 @@ pub struct Frame {
     /// The skinning pass writing the mesh buffers before stage 1, and the scene's rig
     /// that sets its joint matrices every prepare (`None`: the caller sets them).
     skin: Option<(MeshSkin, Option<SkinBend>)>,
-    /// The passes a frame records, checked at construction.
+    /// The steps a frame records, in order: what [`Frame::record`] walks and what the
+    /// plan is built from.
+    steps: Vec<Step>,
+    /// The passes of those steps, checked at construction.
     plan: FramePlan,
     /// The frame stage 1 last prepared, which every stage records.
     prepared: Option<StrandFrame>,
@@ -392,35 +395,15 @@ impl Frame {
             target.width,
             target.height,
         )?;
-        let plan = frame_plan(strands.as_ref(), &shadows, hair.as_ref());
-        let plan = match &bridge {
-            Some(bridge) => {
-                let key_lookup = shadows
-                    .first()
-                    .map(|(shadow, _)| rename_lookup(shadow.as_ref(), "shadow0"))
-                    .unwrap_or_default();
-                let shade = hair.passes(&key_lookup).len();
-                let all = plan.passes();
-                let (before, after) = all.split_at(all.len() - shade.min(all.len()));
-                let mut bridged = FramePlan::new(plan.inputs().iter().cloned());
-                bridged.push(before.iter().cloned());
-                bridged.push(bridge.passes_before());
-                bridged.push(after.iter().cloned());
-                bridged.push(bridge.passes_after());
-                bridged
-            }
-            None => plan,
-        };
-        // The skinning pass writes the mesh before stage 1 reads it.
-        let plan = match &skin {
-            Some((skin, _)) => {
-                let mut skinned = FramePlan::new(plan.inputs().iter().cloned());
-                skinned.push([skin.pass()]);
-                skinned.push(plan.passes().iter().cloned());
-                skinned
-            }
-            None => plan,
-        };
+        let steps = Step::order(skin.is_some(), shadows.len(), bridge.is_some());
+        let plan = Stages {
+            skin: skin.as_ref().map(|(skin, _)| skin),
+            strands: strands.as_ref(),
+            shadows: &shadows,
+            hair: hair.as_ref(),
+            bridge: bridge.as_ref(),
+        }
+        .plan(&steps, []);
         plan.validate()?;
         // A point light at the centre the shadows are fitted around has no direction.
         let shadow_target = (reach.0 + reach.1) * 0.5;
@@ -440,6 +423,7 @@ impl Frame {
             shadow_target,
             reach,
             target: *target,
+            steps,
             plan,
             prepared: None,
             bridge,
@@ -577,10 +561,18 @@ impl Frame {
         mut timer: Option<&mut GpuTimer>,
     ) -> crate::Result<()> {
         let frame = self.prepared()?;
-        if let Some((skin, _)) = &self.skin {
-            skin.encode(encoder, timer.as_deref_mut());
+        for step in self.steps_of(Part::Strands) {
+            match step {
+                Step::Skin => {
+                    if let Some((skin, _)) = &self.skin {
+                        skin.encode(encoder, timer.as_deref_mut());
+                    }
+                }
+                Step::Strands => self.strands.encode(encoder, &frame, timer.as_deref_mut())?,
+                _ => {}
+            }
         }
-        Ok(self.strands.encode(encoder, &frame, timer)?)
+        Ok(())
     }
 
     /// Each light's shadow and hand-over (the second part of [`Frame::record`]): a
@@ -591,19 +583,31 @@ impl Frame {
         mut timer: Option<&mut GpuTimer>,
     ) -> crate::Result<()> {
         let frame = self.prepared()?;
-        for (shadow, hand_over) in &self.shadows {
-            shadow.encode(encoder, &frame, timer.as_deref_mut())?;
-            hand_over.encode(encoder, &frame, timer.as_deref_mut())?;
+        for step in self.steps_of(Part::Shadows) {
+            match step {
+                Step::Shadow(i) => {
+                    if let Some((shadow, _)) = self.shadows.get(i) {
+                        shadow.encode(encoder, &frame, timer.as_deref_mut())?;
+                    }
+                }
+                Step::HandOver(i) => {
+                    if let Some((_, hand_over)) = self.shadows.get(i) {
+                        hand_over.encode(encoder, &frame, timer.as_deref_mut())?;
+                    }
+                }
+                _ => {}
+            }
         }
         Ok(())
     }
 
-    /// The hair pass into `views` (the last part of [`Frame::record`]).
+    /// The hair pass into `views` (the last part of [`Frame::record`]), with the target
+    /// bridge's passes around it when the hair pass draws the bridge's targets.
     pub fn record_shade(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         views: &TargetViews<'_>,
-        timer: Option<&mut GpuTimer>,
+        mut timer: Option<&mut GpuTimer>,
     ) -> crate::Result<()> {
         for view in [Some(views.color), views.resolve].into_iter().flatten() {
             audit::name_view(view, pelage_shade::TARGET_COLOR);
@@ -615,18 +619,46 @@ impl Frame {
             audit::name_view(view, pelage_shade::TARGET_DEPTH);
         }
         let frame = self.prepared()?;
-        let Some(bridge) = &self.bridge else {
-            return Ok(self.hair.encode(encoder, &frame, views, timer)?);
-        };
-        let mut timer = timer;
-        let inner = bridge.views(views);
-        audit::name_view(inner.color, pelage_shade::TARGET_COLOR);
-        audit::name_view(inner.depth, pelage_shade::TARGET_DEPTH);
-        bridge.encode_before(encoder, views, timer.as_deref_mut())?;
-        self.hair
-            .encode(encoder, &frame, &inner, timer.as_deref_mut())?;
-        bridge.encode_after(encoder, views, timer);
+        // The views the hair pass draws: the bridge's when there is one.
+        let inner = self.bridge.as_ref().map(|bridge| bridge.views(views));
+        if let Some(inner) = &inner {
+            audit::name_view(inner.color, pelage_shade::TARGET_COLOR);
+            audit::name_view(inner.depth, pelage_shade::TARGET_DEPTH);
+        }
+        for step in self.steps_of(Part::Shade) {
+            match (step, &self.bridge) {
+                (Step::BridgeBefore, Some(bridge)) => {
+                    bridge.encode_before(encoder, views, timer.as_deref_mut())?;
+                }
+                (Step::Hair, _) => self.hair.encode(
+                    encoder,
+                    &frame,
+                    inner.as_ref().unwrap_or(views),
+                    timer.as_deref_mut(),
+                )?,
+                (Step::BridgeAfter, Some(bridge)) => {
+                    bridge.encode_after(encoder, views, timer.as_deref_mut());
+                }
+                _ => {}
+            }
+        }
         Ok(())
+    }
+
+    /// The frame's steps that `part` records, in order.
+    fn steps_of(&self, part: Part) -> impl Iterator<Item = Step> + '_ {
+        self.steps.iter().copied().filter(move |s| s.part() == part)
+    }
+
+    /// The stages, as [`Stages::plan`] reads them.
+    fn stages(&self) -> Stages<'_> {
+        Stages {
+            skin: self.skin.as_ref().map(|(skin, _)| skin),
+            strands: self.strands.as_ref(),
+            shadows: &self.shadows,
+            hair: self.hair.as_ref(),
+            bridge: self.bridge.as_ref(),
+        }
     }
 
     /// The one step after the caller submitted a recorded frame: takes the readbacks of
@@ -650,15 +682,7 @@ impl Frame {
         &self,
         passes: impl IntoIterator<Item = PassInfo>,
     ) -> crate::Result<FramePlan> {
-        let bridge =
-            (self.bridge.as_ref()).map_or(0, |b| b.passes_before().len() + b.passes_after().len());
-        let shade = self.hair.passes(&self.key_lookup()).len() + bridge;
-        let all = self.plan.passes();
-        let (before, after) = all.split_at(all.len() - shade.min(all.len()));
-        let mut plan = FramePlan::new(self.plan.inputs().iter().cloned());
-        plan.push(before.iter().cloned());
-        plan.push(passes);
-        plan.push(after.iter().cloned());
+        let plan = self.stages().plan(&self.steps, passes);
         plan.validate()?;
         Ok(plan)
     }
@@ -804,35 +828,158 @@ fn rename_lookup(shadow: &dyn ShadowMethod, name: &str) -> Vec<String> {
 }
 
 /// The plan of a frame of `strands`, one shadow and hand-over per light (light `i`'s
-/// resources renamed `shadow{i}.*`), and `hair`, over the mesh and the targets.
+/// resources renamed `shadow{i}.*`), and `hair`, over the mesh and the targets (no
+/// skinning, no target bridge): what a [`Frame`] of those stages records.
 pub fn frame_plan(
     strands: &dyn StrandStage,
     shadows: &[(Box<dyn ShadowMethod>, LightVisibility)],
     hair: &dyn HairPass,
 ) -> FramePlan {
-    let mut plan = FramePlan::new([
-        pelage_strands::MESH,
-        pelage_shade::TARGET_COLOR,
-        pelage_shade::TARGET_DEPTH,
-    ]);
-    plan.push(strands.passes());
-    let mut key_lookup = Vec::new();
-    for (index, (shadow, hand_over)) in shadows.iter().enumerate() {
-        let name = format!("shadow{index}");
-        plan.push(
-            shadow
-                .passes()
-                .into_iter()
-                .map(|p| p.renamed("shadow", &name)),
-        );
-        let lookup = rename_lookup(shadow.as_ref(), &name);
-        plan.push(hand_over.passes(&lookup));
-        if index == 0 {
-            key_lookup = lookup;
+    let steps = Step::order(false, shadows.len(), false);
+    Stages {
+        skin: None,
+        strands,
+        shadows,
+        hair,
+        bridge: None,
+    }
+    .plan(&steps, [])
+}
+
+/// One step of a frame. A [`Frame`] keeps its steps in recording order: its plan is
+/// built by walking them ([`Stages::plan`]) and its recording walks the same list
+/// ([`Frame::record_strands`], [`Frame::record_shadows`], [`Frame::record_shade`]), so
+/// the plan is the order and the membership of what runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Step {
+    /// The skinning pass writing the mesh buffers stage 1 reads.
+    Skin,
+    /// Stage 1.
+    Strands,
+    /// Light `i`'s shadow.
+    Shadow(usize),
+    /// Light `i`'s hand-over to the hair (its per-vertex visibility).
+    HandOver(usize),
+    /// The target bridge's passes before the hair pass.
+    BridgeBefore,
+    /// Stage 3.
+    Hair,
+    /// The target bridge's passes after it.
+    BridgeAfter,
+}
+
+/// Which of the three recording calls records a step.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Part {
+    Strands,
+    Shadows,
+    Shade,
+}
+
+impl Step {
+    /// The steps of a frame with or without a skinning pass, with `lights` shadows and
+    /// with or without a target bridge, in recording order.
+    fn order(skin: bool, lights: usize, bridge: bool) -> Vec<Step> {
+        let mut steps = Vec::with_capacity(2 * lights + 5);
+        if skin {
+            steps.push(Step::Skin);
+        }
+        steps.push(Step::Strands);
+        for i in 0..lights {
+            steps.push(Step::Shadow(i));
+            steps.push(Step::HandOver(i));
+        }
+        if bridge {
+            steps.push(Step::BridgeBefore);
+        }
+        steps.push(Step::Hair);
+        if bridge {
+            steps.push(Step::BridgeAfter);
+        }
+        steps
+    }
+
+    fn part(self) -> Part {
+        match self {
+            Step::Skin | Step::Strands => Part::Strands,
+            Step::Shadow(_) | Step::HandOver(_) => Part::Shadows,
+            Step::BridgeBefore | Step::Hair | Step::BridgeAfter => Part::Shade,
         }
     }
-    plan.push(hair.passes(&key_lookup));
-    plan
+}
+
+/// The stages a plan is built from (a [`Frame`]'s, or those [`frame_plan`] is given).
+struct Stages<'a> {
+    skin: Option<&'a MeshSkin>,
+    strands: &'a dyn StrandStage,
+    shadows: &'a [(Box<dyn ShadowMethod>, LightVisibility)],
+    hair: &'a dyn HairPass,
+    bridge: Option<&'a TargetBridge>,
+}
+
+impl Stages<'_> {
+    /// The passes of `steps`, in order, over the mesh and the targets, with `before_shade`
+    /// (a caller's own passes) between the shadows and the first shade step.
+    fn plan(&self, steps: &[Step], before_shade: impl IntoIterator<Item = PassInfo>) -> FramePlan {
+        let mut plan = FramePlan::new([
+            pelage_strands::MESH,
+            pelage_shade::TARGET_COLOR,
+            pelage_shade::TARGET_DEPTH,
+        ]);
+        let key_lookup = self
+            .shadows
+            .first()
+            .map(|(shadow, _)| rename_lookup(shadow.as_ref(), "shadow0"))
+            .unwrap_or_default();
+        let mut before_shade = Some(before_shade);
+        for &step in steps {
+            if step.part() == Part::Shade
+                && let Some(passes) = before_shade.take()
+            {
+                plan.push(passes);
+            }
+            match step {
+                Step::Skin => plan.push(self.skin.map(MeshSkin::pass)),
+                Step::Strands => plan.push(self.strands.passes()),
+                Step::Shadow(i) => {
+                    if let Some((shadow, _)) = self.shadows.get(i) {
+                        let name = format!("shadow{i}");
+                        plan.push(
+                            shadow
+                                .passes()
+                                .into_iter()
+                                .map(|p| p.renamed("shadow", &name)),
+                        );
+                    }
+                }
+                Step::HandOver(i) => {
+                    if let Some((shadow, hand_over)) = self.shadows.get(i) {
+                        let lookup = rename_lookup(shadow.as_ref(), &format!("shadow{i}"));
+                        plan.push(hand_over.passes(&lookup));
+                    }
+                }
+                Step::BridgeBefore => {
+                    plan.push(
+                        self.bridge
+                            .map(TargetBridge::passes_before)
+                            .unwrap_or_default(),
+                    );
+                }
+                Step::Hair => plan.push(self.hair.passes(&key_lookup)),
+                Step::BridgeAfter => {
+                    plan.push(
+                        self.bridge
+                            .map(TargetBridge::passes_after)
+                            .unwrap_or_default(),
+                    );
+                }
+            }
+        }
+        if let Some(passes) = before_shade {
+            plan.push(passes);
+        }
+        plan
+    }
 }
 
 /// The mesh buffers of a groom-only scene: no triangles (so stage 2's mesh shadow map
