@@ -1110,6 +1110,29 @@ fn skinning_section(
             sdf_ms / grow_ms
         ));
         sdf_times.push((r, sdf_ms, grow_ms, nodes, sdf.bytes()));
+        // The same build, each stage in a pass of its own: where its time goes.
+        let times = time_frames(&gpu, frames, |encoder, mut timer, frame| {
+            let t = frame as f32 / 24.0;
+            skin.set_joint_matrices(&gpu.queue, &rig.joint_matrices(t))?;
+            let frame = grow.prepare(&gpu.queue, t)?;
+            skin.encode(encoder, timer.as_deref_mut());
+            sdf.encode_stages(encoder, timer.as_deref_mut());
+            grow.encode(encoder, &frame, timer)?;
+            Ok(())
+        })?;
+        let grow_ms = get(&times, "strands: grow");
+        let stages: Vec<String> = BodySdf::STAGES
+            .iter()
+            .map(|stage| {
+                let ms = get(&times, &format!("{SDF_LABEL} / {stage}"));
+                format!("{stage} {ms:.3} ms ({:.3}x)", ms / grow_ms)
+            })
+            .collect();
+        bar.println(format!(
+            "  {SKIN_STRANDS:>7} strands  {} by stage, each in a pass of its own: {}; the growth pass {grow_ms:.3} ms",
+            sdf_label(r),
+            stages.join(", ")
+        ));
     }
     let times = time_frames(&gpu, frames, |encoder, mut timer, frame| {
         let t = frame as f32 / 24.0;
