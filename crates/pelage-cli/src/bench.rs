@@ -1088,7 +1088,7 @@ fn skinning_section(
     // simulation on a skinned body does; a rigid body builds the same pass once).
     let sdfs = SDF_RESOLUTIONS
         .iter()
-        .map(|&r| BodySdf::new(&gpu, &mesh, mesh.bounds, r))
+        .map(|&r| BodySdf::of_body(&gpu, &mesh, &s.mesh, mesh.bounds, r))
         .collect::<Result<Vec<_>, _>>()?;
     let sdf_label = |r: u32| format!("{SDF_LABEL} {r}");
     let mut sdf_times = Vec::new();

@@ -7,7 +7,7 @@ use pelage_gpu::{
     BindLayout, Gpu, GpuTimer, PassInfo, UniformBuffer, compute_pipeline_with_layouts,
     dispatch_size, read_buffer, wgpu, zeroed_storage,
 };
-use pelage_scene::{ParamError, SDF_BAND_CELLS, SdfGrid};
+use pelage_scene::{Mesh, ParamError, SDF_BAND_CELLS, SdfGrid};
 
 use crate::{MESH, MeshBuffers};
 
@@ -79,6 +79,121 @@ pub fn flood_steps(longest: u32) -> Vec<u32> {
     }
     steps.push(1);
     steps
+}
+
+/// Vertex-triangle pairs past which [`body_triangles`] does not look for buried
+/// triangles (keeps them all).
+pub const MAX_BURIED_CHECK: u64 = 200_000_000;
+
+/// The triangles of `mesh` that bound the body (indices into its triangle list), for
+/// [`BodySdf::of_body`]: all but those buried inside another of its parts. A part is a
+/// set of triangles connected by shared vertex indices; a triangle is buried when each of
+/// its corners is inside another part (that part's winding number at it at least ½,
+/// Jacobson et al. 2013). A mesh of overlapping closed parts (the built-in creature)
+/// has such surfaces running on inside the body, facing outward: a field that took them
+/// as surface would say "outside" next to them, deep in the body. Triangles that cross
+/// another part's surface are kept. One part, or more than [`MAX_BURIED_CHECK`] pairs of
+/// a vertex and a triangle of another part whose box holds it: every triangle.
+/// Corners that are not finite are never inside.
+pub fn body_triangles(mesh: &Mesh) -> Vec<u32> {
+    let triangles = mesh.indices.len() / 3;
+    let all = || (0..triangles as u32).collect();
+    let vertices = mesh.positions.len();
+    // Parts: union-find over the vertices, joined along each triangle.
+    let mut parent: Vec<usize> = (0..vertices).collect();
+    fn root(parent: &mut [usize], mut v: usize) -> usize {
+        while parent[v] != v {
+            parent[v] = parent[parent[v]];
+            v = parent[v];
+        }
+        v
+    }
+    for tri in mesh.indices.chunks_exact(3) {
+        let [a, b, c] = [0, 1, 2].map(|k| tri[k] as usize);
+        if a >= vertices || b >= vertices || c >= vertices {
+            return all();
+        }
+        for (x, y) in [(a, b), (b, c)] {
+            let (rx, ry) = (root(&mut parent, x), root(&mut parent, y));
+            parent[rx] = ry;
+        }
+    }
+    let mut part_of_root = vec![usize::MAX; vertices];
+    let mut parts: Vec<(Vec<usize>, Vec3, Vec3)> = Vec::new();
+    let mut triangle_part = Vec::with_capacity(triangles);
+    for (t, tri) in mesh.indices.chunks_exact(3).enumerate() {
+        let r = root(&mut parent, tri[0] as usize);
+        if part_of_root[r] == usize::MAX {
+            part_of_root[r] = parts.len();
+            parts.push((Vec::new(), Vec3::INFINITY, Vec3::NEG_INFINITY));
+        }
+        let part = &mut parts[part_of_root[r]];
+        part.0.push(t);
+        for &i in tri {
+            let p = mesh.positions[i as usize];
+            part.1 = part.1.min(p);
+            part.2 = part.2.max(p);
+        }
+        triangle_part.push(part_of_root[r]);
+    }
+    if parts.len() < 2 {
+        return all();
+    }
+    let holds =
+        |(_, lo, hi): &(Vec<usize>, Vec3, Vec3), p: Vec3| p.cmpge(*lo).all() && p.cmple(*hi).all();
+    let mut vertex_part = vec![usize::MAX; vertices];
+    for (tri, &part) in mesh.indices.chunks_exact(3).zip(&triangle_part) {
+        for &i in tri {
+            vertex_part[i as usize] = part;
+        }
+    }
+    let work: u64 = (0..vertices)
+        .filter(|&v| vertex_part[v] != usize::MAX)
+        .map(|v| {
+            let p = mesh.positions[v];
+            (parts.iter().enumerate())
+                .filter(|&(k, part)| k != vertex_part[v] && holds(part, p))
+                .map(|(_, part)| part.0.len() as u64)
+                .sum::<u64>()
+        })
+        .sum();
+    if work > MAX_BURIED_CHECK {
+        return all();
+    }
+    let inside_other: Vec<bool> = (0..vertices)
+        .map(|v| {
+            let p = mesh.positions[v];
+            vertex_part[v] != usize::MAX
+                && p.is_finite()
+                && (parts.iter().enumerate()).any(|(k, part)| {
+                    k != vertex_part[v] && holds(part, p) && winding(mesh, &part.0, p) >= 0.5
+                })
+        })
+        .collect();
+    (0..triangles as u32)
+        .filter(|&t| {
+            let tri = &mesh.indices[3 * t as usize..3 * t as usize + 3];
+            !tri.iter().all(|&i| inside_other[i as usize])
+        })
+        .collect()
+}
+
+/// The winding number at `p` of the triangles `triangles` of `mesh` (the solid angles
+/// they subtend over 4π, Van Oosterom and Strackee's formula).
+fn winding(mesh: &Mesh, triangles: &[usize], p: Vec3) -> f64 {
+    let p = p.as_dvec3();
+    let mut total = 0.0;
+    for &t in triangles {
+        let tri = &mesh.indices[3 * t..3 * t + 3];
+        let [a, b, c] = [0, 1, 2].map(|k| mesh.positions[tri[k] as usize].as_dvec3() - p);
+        let (la, lb, lc) = (a.length(), b.length(), c.length());
+        let det = a.dot(b.cross(c));
+        let div = la * lb * lc + a.dot(b) * lc + a.dot(c) * lb + b.dot(c) * la;
+        if det.is_finite() && div.is_finite() {
+            total += 2.0 * det.atan2(div);
+        }
+    }
+    total / (4.0 * std::f64::consts::PI)
 }
 
 /// A signed distance field of a mesh on a grid ([`SdfGrid`]: the mesh's box plus a
@@ -154,6 +269,65 @@ impl BodySdf {
         bounds: (Vec3, Vec3),
         resolution: u32,
     ) -> crate::Result<Self> {
+        Self::with_triangles(gpu, mesh, None, bounds, resolution)
+    }
+
+    /// The field of the body `mesh` (the mesh `buffers` hold; refused, naming `mesh`,
+    /// when they do not match): as [`BodySdf::new`] over [`body_triangles`] only, the
+    /// surfaces buried inside another of its parts left out, so that next to them deep
+    /// in the body the field says "inside". Which triangles are buried is decided once,
+    /// in the pose `mesh` is in (a skinned mesh's bind pose): a part the rig later
+    /// pushes into another keeps its triangles.
+    pub fn of_body(
+        gpu: &Gpu,
+        buffers: &MeshBuffers,
+        mesh: &Mesh,
+        bounds: (Vec3, Vec3),
+        resolution: u32,
+    ) -> crate::Result<Self> {
+        buffers.check_matches(mesh)?;
+        let kept = body_triangles(mesh);
+        if kept.len() == mesh.indices.len() / 3 {
+            return Self::new(gpu, buffers, bounds, resolution);
+        }
+        let indices: Vec<u32> = kept
+            .iter()
+            .flat_map(|&t| {
+                mesh.indices[3 * t as usize..3 * t as usize + 3]
+                    .iter()
+                    .copied()
+            })
+            .collect();
+        let buffer = pelage_gpu::create_buffer_init(
+            &gpu.device,
+            &wgpu::util::BufferInitDescriptor {
+                label: Some("pelage sdf body triangles"),
+                contents: bytemuck::cast_slice(&indices),
+                usage: wgpu::BufferUsages::STORAGE,
+            },
+        );
+        Self::with_triangles(
+            gpu,
+            buffers,
+            Some((buffer, kept.len() as u32)),
+            bounds,
+            resolution,
+        )
+    }
+
+    /// [`BodySdf::new`] over `triangles` (its own triangle list and count) instead of
+    /// the mesh's when given.
+    fn with_triangles(
+        gpu: &Gpu,
+        mesh: &MeshBuffers,
+        triangles: Option<(wgpu::Buffer, u32)>,
+        bounds: (Vec3, Vec3),
+        resolution: u32,
+    ) -> crate::Result<Self> {
+        let (indices, triangle_count) = match triangles {
+            Some((buffer, count)) => (buffer, count),
+            None => (mesh.indices.clone(), mesh.triangle_count),
+        };
         let device_max = gpu.limits().max_texture_dimension_3d;
         if resolution > device_max {
             return Err(ParamError::new(
@@ -163,7 +337,7 @@ impl BodySdf {
             )
             .into());
         }
-        if mesh.triangle_count == 0 {
+        if triangle_count == 0 {
             return Err(ParamError::new(
                 "mesh.indices",
                 0,
@@ -219,7 +393,7 @@ impl BodySdf {
             origin: g.origin,
             cell: g.cell,
             dims: g.dims,
-            triangle_count: mesh.triangle_count,
+            triangle_count,
             band,
             far: 2.0 * diagonal,
             coarse: factor,
@@ -312,7 +486,7 @@ impl BodySdf {
                             buffer(0, uniforms),
                             buffer(1, &mesh.positions),
                             buffer(2, &mesh.normals),
-                            buffer(3, &mesh.indices),
+                            buffer(3, &indices),
                             buffer(4, bits),
                             buffer(5, read),
                             buffer(6, write),
@@ -386,7 +560,7 @@ impl BodySdf {
             finish,
             groups,
             steps,
-            triangle_count: mesh.triangle_count,
+            triangle_count,
             limits: gpu.limits().clone(),
         })
     }
