@@ -17,7 +17,8 @@
 //     and the mesh's normal at it (packed);
 //  5. flood (per coarse node, once per step, steps halving from the largest power of two
 //     below the coarse grid's longest axis to 1, then 1 again: "JFA+1"): the nearest of
-//     the surface points the node and its 26 neighbours `step` nodes away hold;
+//     the surface points the node and its 26 neighbours `step` nodes away hold (a node
+//     whose point is within the coarse band keeps it: its seed is exact);
 //  6. finish (per fine node): within the band (the splat's minimum at most `band` cells)
 //     the splat's exact distance, negative where the winner says inside; beyond, the
 //     nearest of the splat's triangle and the 8 surface points the coarse nodes around
@@ -355,6 +356,13 @@ fn flood(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
     var best_d = 3.4e38;
     if best.w != 0u {
         best_d = distance(p, bitcast<vec3<f32>>(best.xyz));
+    }
+    // Within the coarse splat's band the seed is the nearest point already: kept.
+    if best.w != 0u && best_d <= f32(g.band) * g.cell {
+        for (var k = 0u; k < 4u; k++) {
+            atomicStore(&near_out[4u * i + k], best[k]);
+        }
+        return;
     }
     let step = i32(jfa.step);
     let dims = vec3<i32>(g.dims);
