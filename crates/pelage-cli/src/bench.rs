@@ -1089,7 +1089,7 @@ fn skinning_section(
     // simulation on a skinned body does; a rigid body builds the same pass once).
     let sdfs = SDF_RESOLUTIONS
         .iter()
-        .map(|&r| BodySdf::new(&gpu, &mesh, mesh.bounds, r))
+        .map(|&r| BodySdf::of_body(&gpu, &mesh, &s.mesh, mesh.bounds, r))
         .collect::<Result<Vec<_>, _>>()?;
     let sdf_label = |r: u32| format!("{SDF_LABEL} {r}");
     let mut sdf_times = Vec::new();
@@ -1111,6 +1111,29 @@ fn skinning_section(
             sdf_ms / grow_ms
         ));
         sdf_times.push((r, sdf_ms, grow_ms, nodes, sdf.bytes()));
+        // The same build, each stage in a pass of its own: where its time goes.
+        let times = time_frames(&gpu, frames, |encoder, mut timer, frame| {
+            let t = frame as f32 / 24.0;
+            skin.set_joint_matrices(&gpu.queue, &rig.joint_matrices(t))?;
+            let frame = grow.prepare(&gpu.queue, t)?;
+            skin.encode(encoder, timer.as_deref_mut());
+            sdf.encode_stages(encoder, timer.as_deref_mut());
+            grow.encode(encoder, &frame, timer)?;
+            Ok(())
+        })?;
+        let grow_ms = get(&times, "strands: grow");
+        let stages: Vec<String> = BodySdf::STAGES
+            .iter()
+            .map(|stage| {
+                let ms = get(&times, &format!("{SDF_LABEL} / {stage}"));
+                format!("{stage} {ms:.3} ms ({:.3}x)", ms / grow_ms)
+            })
+            .collect();
+        bar.println(format!(
+            "  {SKIN_STRANDS:>7} strands  {} by stage, each in a pass of its own: {}; the growth pass {grow_ms:.3} ms",
+            sdf_label(r),
+            stages.join(", ")
+        ));
     }
     let times = time_frames(&gpu, frames, |encoder, mut timer, frame| {
         let t = frame as f32 / 24.0;

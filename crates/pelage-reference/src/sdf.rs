@@ -121,6 +121,36 @@ pub fn winding_number(mesh: &Mesh, p: Vec3) -> f64 {
     total / (4.0 * std::f64::consts::PI)
 }
 
+/// Which triangles of `mesh` are buried inside another of its parts (mirror of
+/// `pelage_strands::body_triangles`, by another road): every corner's winding number
+/// over the whole mesh at least 1 (its own closed part gives about ½ on its surface,
+/// another closed part holding it 1 more).
+pub fn buried_triangles(mesh: &Mesh) -> Vec<bool> {
+    let inside: Vec<bool> = mesh
+        .positions
+        .par_iter()
+        .map(|&p| p.is_finite() && winding_number(mesh, p) >= 1.0)
+        .collect();
+    mesh.indices
+        .chunks_exact(3)
+        .map(|tri| tri.iter().all(|&i| inside[i as usize]))
+        .collect()
+}
+
+/// `mesh` without its [`buried_triangles`]: the surface `BodySdf::of_body` builds from.
+pub fn body_surface(mesh: &Mesh) -> Mesh {
+    let buried = buried_triangles(mesh);
+    let mut out = mesh.clone();
+    out.indices = mesh
+        .indices
+        .chunks_exact(3)
+        .zip(&buried)
+        .filter(|(_, b)| !**b)
+        .flat_map(|(tri, _)| tri.iter().copied())
+        .collect();
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

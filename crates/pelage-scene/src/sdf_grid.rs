@@ -18,9 +18,10 @@ pub const MAX_SDF_RESOLUTION: u32 = 512;
 /// both sides of the surface.
 pub const SDF_MARGIN_CELLS: u32 = 2;
 
-/// Cells, around each triangle's box, in which the field's distance is exact (the narrow
-/// band each triangle writes itself; farther nodes take the nearest triangle jump
-/// flooding finds).
+/// Cells around the surface within which the field's distance is exact (the narrow band
+/// each triangle writes itself: the nodes of its box grown by this many cells that lie
+/// this near its plane; farther nodes take the nearest surface point that jump flooding
+/// on a coarser grid finds, an approximation: `pelage_strands::BodySdf`).
 pub const SDF_BAND_CELLS: u32 = 2;
 
 /// Where the nodes of a body's signed distance field are: `dims` nodes per axis, node

@@ -7,7 +7,7 @@ use pelage_gpu::{
     BindLayout, Gpu, GpuTimer, PassInfo, UniformBuffer, compute_pipeline_with_layouts,
     dispatch_size, read_buffer, wgpu, zeroed_storage,
 };
-use pelage_scene::{ParamError, SDF_BAND_CELLS, SdfGrid};
+use pelage_scene::{Mesh, ParamError, SDF_BAND_CELLS, SdfGrid};
 
 use crate::{MESH, MeshBuffers};
 
@@ -35,6 +35,28 @@ pub struct SdfUniforms {
     pub band: u32,
     /// The distance written where no triangle reached (every triangle non-finite).
     pub far: f32,
+    /// Fine nodes per coarse cell along each axis at the fine level
+    /// ([`COARSE_FACTOR`]); 1 at the coarse level.
+    pub coarse: u32,
+    /// Texels per row of the buffer the finish writes the field to (a multiple of 64:
+    /// 256-byte rows for the copy to the texture).
+    pub pitch: u32,
+}
+
+/// Fine cells per cell of the coarse grid on which jump flooding runs.
+pub const COARSE_FACTOR: u32 = 4;
+
+/// The coarse grid of `grid`: the same origin, [`COARSE_FACTOR`] times the cell, and
+/// enough nodes to cover every fine node (coarse node `k` is fine node
+/// `COARSE_FACTOR · k`).
+pub fn coarse_grid(grid: &SdfGrid) -> SdfGrid {
+    let dims =
+        (grid.dims - UVec3::ONE + UVec3::splat(COARSE_FACTOR - 1)) / COARSE_FACTOR + UVec3::ONE;
+    SdfGrid {
+        origin: grid.origin,
+        cell: grid.cell * COARSE_FACTOR as f32,
+        dims,
+    }
 }
 
 /// One jump-flooding step's distance in nodes (`JfaStep` in `sdf.wgsl`).
@@ -59,32 +81,166 @@ pub fn flood_steps(longest: u32) -> Vec<u32> {
     steps
 }
 
+/// Vertex-triangle pairs past which [`body_triangles`] does not look for buried
+/// triangles (keeps them all).
+pub const MAX_BURIED_CHECK: u64 = 200_000_000;
+
+/// The triangles of `mesh` that bound the body (indices into its triangle list), for
+/// [`BodySdf::of_body`]: all but those buried inside another of its parts. A part is a
+/// set of triangles connected by shared vertex indices; a triangle is buried when each of
+/// its corners is inside another part (that part's winding number at it at least ½,
+/// Jacobson et al. 2013). A mesh of overlapping closed parts (the built-in creature)
+/// has such surfaces running on inside the body, facing outward: a field that took them
+/// as surface would say "outside" next to them, deep in the body. Triangles that cross
+/// another part's surface are kept. One part, or more than [`MAX_BURIED_CHECK`] pairs of
+/// a vertex and a triangle of another part whose box holds it: every triangle.
+/// Corners that are not finite are never inside.
+pub fn body_triangles(mesh: &Mesh) -> Vec<u32> {
+    let triangles = mesh.indices.len() / 3;
+    let all = || (0..triangles as u32).collect();
+    let vertices = mesh.positions.len();
+    // Parts: union-find over the vertices, joined along each triangle.
+    let mut parent: Vec<usize> = (0..vertices).collect();
+    fn root(parent: &mut [usize], mut v: usize) -> usize {
+        while parent[v] != v {
+            parent[v] = parent[parent[v]];
+            v = parent[v];
+        }
+        v
+    }
+    for tri in mesh.indices.chunks_exact(3) {
+        let [a, b, c] = [0, 1, 2].map(|k| tri[k] as usize);
+        if a >= vertices || b >= vertices || c >= vertices {
+            return all();
+        }
+        for (x, y) in [(a, b), (b, c)] {
+            let (rx, ry) = (root(&mut parent, x), root(&mut parent, y));
+            parent[rx] = ry;
+        }
+    }
+    let mut part_of_root = vec![usize::MAX; vertices];
+    let mut parts: Vec<(Vec<usize>, Vec3, Vec3)> = Vec::new();
+    let mut triangle_part = Vec::with_capacity(triangles);
+    for (t, tri) in mesh.indices.chunks_exact(3).enumerate() {
+        let r = root(&mut parent, tri[0] as usize);
+        if part_of_root[r] == usize::MAX {
+            part_of_root[r] = parts.len();
+            parts.push((Vec::new(), Vec3::INFINITY, Vec3::NEG_INFINITY));
+        }
+        let part = &mut parts[part_of_root[r]];
+        part.0.push(t);
+        for &i in tri {
+            let p = mesh.positions[i as usize];
+            part.1 = part.1.min(p);
+            part.2 = part.2.max(p);
+        }
+        triangle_part.push(part_of_root[r]);
+    }
+    if parts.len() < 2 {
+        return all();
+    }
+    let holds =
+        |(_, lo, hi): &(Vec<usize>, Vec3, Vec3), p: Vec3| p.cmpge(*lo).all() && p.cmple(*hi).all();
+    let mut vertex_part = vec![usize::MAX; vertices];
+    for (tri, &part) in mesh.indices.chunks_exact(3).zip(&triangle_part) {
+        for &i in tri {
+            vertex_part[i as usize] = part;
+        }
+    }
+    let work: u64 = (0..vertices)
+        .filter(|&v| vertex_part[v] != usize::MAX)
+        .map(|v| {
+            let p = mesh.positions[v];
+            (parts.iter().enumerate())
+                .filter(|&(k, part)| k != vertex_part[v] && holds(part, p))
+                .map(|(_, part)| part.0.len() as u64)
+                .sum::<u64>()
+        })
+        .sum();
+    if work > MAX_BURIED_CHECK {
+        return all();
+    }
+    let inside_other: Vec<bool> = (0..vertices)
+        .map(|v| {
+            let p = mesh.positions[v];
+            vertex_part[v] != usize::MAX
+                && p.is_finite()
+                && (parts.iter().enumerate()).any(|(k, part)| {
+                    k != vertex_part[v] && holds(part, p) && winding(mesh, &part.0, p) >= 0.5
+                })
+        })
+        .collect();
+    (0..triangles as u32)
+        .filter(|&t| {
+            let tri = &mesh.indices[3 * t as usize..3 * t as usize + 3];
+            !tri.iter().all(|&i| inside_other[i as usize])
+        })
+        .collect()
+}
+
+/// The winding number at `p` of the triangles `triangles` of `mesh` (the solid angles
+/// they subtend over 4π, Van Oosterom and Strackee's formula).
+fn winding(mesh: &Mesh, triangles: &[usize], p: Vec3) -> f64 {
+    let p = p.as_dvec3();
+    let mut total = 0.0;
+    for &t in triangles {
+        let tri = &mesh.indices[3 * t..3 * t + 3];
+        let [a, b, c] = [0, 1, 2].map(|k| mesh.positions[tri[k] as usize].as_dvec3() - p);
+        let (la, lb, lc) = (a.length(), b.length(), c.length());
+        let det = a.dot(b.cross(c));
+        let div = la * lb * lc + a.dot(b) * lc + a.dot(c) * lb + b.dot(c) * la;
+        if det.is_finite() && div.is_finite() {
+            total += 2.0 * det.atan2(div);
+        }
+    }
+    total / (4.0 * std::f64::consts::PI)
+}
+
 /// A signed distance field of a mesh on a grid ([`SdfGrid`]: the mesh's box plus a
 /// margin, `resolution` nodes along its longest axis), negative inside, built on the GPU
-/// from [`MeshBuffers`] in one compute pass ([`SDF_LABEL`]) and held in a 3D `r32float`
-/// texture ([`BodySdf::view`]) that the simulation reads with `textureLoad` and
-/// trilinear interpolation (`r32float` is not filterable without a device feature,
-/// `r16float` cannot be written as a storage texture on WebGPU, and the simulation's
-/// pass already binds WebGPU's 8 storage buffers, so a texture it is).
+/// from [`MeshBuffers`] in one compute pass ([`SDF_LABEL`]) and a copy, and held in a 3D
+/// `r32float` texture ([`BodySdf::view`]) that the simulation reads with `textureLoad`
+/// and trilinear interpolation (`r32float` is not filterable without a device feature,
+/// and the simulation's pass already binds WebGPU's 8 storage buffers, so a texture it
+/// is).
 ///
 /// **Build.** Each triangle writes its exact distance into the nodes of its box grown by
-/// [`SDF_BAND_CELLS`] cells (an `atomicMin` on the distance's bits, then the triangle
-/// index where its distance is the minimum), then jump flooding
-/// ([`flood_steps`]: about `log2(resolution) + 1` passes over the nodes, each looking at
-/// 26 neighbours) carries the nearest triangle to the far nodes, and a last pass writes
-/// the exact distance to the triangle each node holds, signed by the mesh's normal at the
-/// nearest point (the vertex normals interpolated there). Nodes within the band are exact
-/// (to float rounding); farther ones may hold a triangle slightly farther than the
-/// nearest (jump flooding's known error), measured against the CPU mirror
-/// (`pelage_reference::sdf`).
+/// [`SDF_BAND_CELLS`] cells that lie within that band of its plane (an `atomicMin` on the
+/// distance's bits, then, where its distance is the minimum, an `atomicMax` on its index
+/// with the side of the mesh's normal the node is on). The same on a coarse grid
+/// ([`coarse_grid`]: every [`COARSE_FACTOR`]-th node, one coarse cell around each
+/// triangle) seeds each coarse node near the surface with its nearest surface point, and
+/// jump flooding over the coarse nodes ([`flood_steps`] of the coarse grid's longest
+/// axis, 26 neighbours each) carries the points to the rest. A last pass, one invocation
+/// per coarse cell, writes each fine node's signed distance to a buffer, which is copied
+/// into the texture (on lavapipe, storing a 3D texture node by node cost more than the
+/// rest of the build).
+///
+/// **What the field holds.** Every node within the band ([`SdfGrid::band`]) of the
+/// surface holds its exact signed distance (to float rounding): what the collision step
+/// reads near the surface, where a vertex's cell has all its corners in the band. A
+/// farther node holds the distance to the nearest of the surface points that the 8
+/// coarse nodes around it hold, signed by the side of that point's normal: never nearer
+/// than the surface is (each is a point of it), farther by up to about 2 cells (measured
+/// against the CPU mirror `pelage_reference::sdf`: 1.2 cells on a sphere, 1.5 on the
+/// creature), and of the right sign outside the body; inside a mesh of overlapping
+/// closed parts, where a buried part's surface faces outward, a node about as far from
+/// it as from the body's surface may take either side (as with the exact nearest-normal
+/// sign itself).
 ///
 /// **Holes, NaN.** The sign is the side of the nearest surface point's normal: an open
-/// mesh is "inside" only behind its surface near a node, never flooded from a hole.
-/// Triangles with a non-finite corner are skipped; if none is left, every node reads
-/// far outside (no collision) rather than a wrong inside.
+/// mesh is "inside" only behind its surface near a node, never flooded from a hole, and
+/// a hole's rim is a surface like any other. Triangles with a non-finite corner are
+/// skipped; if none is left, every node reads far outside (no collision) rather than a
+/// wrong inside.
 #[derive(Debug)]
 pub struct BodySdf {
     grid: SdfGrid,
+    coarse: SdfGrid,
+    /// The finish's output, rows of `pitch` texels, copied into `texture`.
+    field: wgpu::Buffer,
+    pitch: u32,
+    seed: wgpu::ComputePipeline,
     texture: wgpu::Texture,
     view: wgpu::TextureView,
     clear: wgpu::ComputePipeline,
@@ -92,7 +248,8 @@ pub struct BodySdf {
     splat_nearest: wgpu::ComputePipeline,
     flood: wgpu::ComputePipeline,
     finish: wgpu::ComputePipeline,
-    /// Clear and splats (writing buffer A); then one per flood step; then the finish.
+    /// The fine level's clear and splats; the coarse level's; the seed; one per flood
+    /// step (on the coarse level); the finish.
     groups: Vec<wgpu::BindGroup>,
     steps: Vec<u32>,
     triangle_count: u32,
@@ -112,6 +269,65 @@ impl BodySdf {
         bounds: (Vec3, Vec3),
         resolution: u32,
     ) -> crate::Result<Self> {
+        Self::with_triangles(gpu, mesh, None, bounds, resolution)
+    }
+
+    /// The field of the body `mesh` (the mesh `buffers` hold; refused, naming `mesh`,
+    /// when they do not match): as [`BodySdf::new`] over [`body_triangles`] only, the
+    /// surfaces buried inside another of its parts left out, so that next to them deep
+    /// in the body the field says "inside". Which triangles are buried is decided once,
+    /// in the pose `mesh` is in (a skinned mesh's bind pose): a part the rig later
+    /// pushes into another keeps its triangles.
+    pub fn of_body(
+        gpu: &Gpu,
+        buffers: &MeshBuffers,
+        mesh: &Mesh,
+        bounds: (Vec3, Vec3),
+        resolution: u32,
+    ) -> crate::Result<Self> {
+        buffers.check_matches(mesh)?;
+        let kept = body_triangles(mesh);
+        if kept.len() == mesh.indices.len() / 3 {
+            return Self::new(gpu, buffers, bounds, resolution);
+        }
+        let indices: Vec<u32> = kept
+            .iter()
+            .flat_map(|&t| {
+                mesh.indices[3 * t as usize..3 * t as usize + 3]
+                    .iter()
+                    .copied()
+            })
+            .collect();
+        let buffer = pelage_gpu::create_buffer_init(
+            &gpu.device,
+            &wgpu::util::BufferInitDescriptor {
+                label: Some("pelage sdf body triangles"),
+                contents: bytemuck::cast_slice(&indices),
+                usage: wgpu::BufferUsages::STORAGE,
+            },
+        );
+        Self::with_triangles(
+            gpu,
+            buffers,
+            Some((buffer, kept.len() as u32)),
+            bounds,
+            resolution,
+        )
+    }
+
+    /// [`BodySdf::new`] over `triangles` (its own triangle list and count) instead of
+    /// the mesh's when given.
+    fn with_triangles(
+        gpu: &Gpu,
+        mesh: &MeshBuffers,
+        triangles: Option<(wgpu::Buffer, u32)>,
+        bounds: (Vec3, Vec3),
+        resolution: u32,
+    ) -> crate::Result<Self> {
+        let (indices, triangle_count) = match triangles {
+            Some((buffer, count)) => (buffer, count),
+            None => (mesh.indices.clone(), mesh.triangle_count),
+        };
         let device_max = gpu.limits().max_texture_dimension_3d;
         if resolution > device_max {
             return Err(ParamError::new(
@@ -121,7 +337,7 @@ impl BodySdf {
             )
             .into());
         }
-        if mesh.triangle_count == 0 {
+        if triangle_count == 0 {
             return Err(ParamError::new(
                 "mesh.indices",
                 0,
@@ -130,29 +346,68 @@ impl BodySdf {
             .into());
         }
         let grid = SdfGrid::new(bounds, resolution)?;
+        let coarse = coarse_grid(&grid);
         let nodes = grid.nodes() as u64;
+        let coarse_nodes = coarse.nodes() as u64;
+        // Rows of 256 bytes for the copy into the texture.
+        let pitch = grid.dims.x.next_multiple_of(64);
+        let field_bytes = u64::from(pitch) * u64::from(grid.dims.y) * u64::from(grid.dims.z) * 4;
         let storage = wgpu::BufferUsages::STORAGE;
         let bits = zeroed_storage(gpu, "pelage sdf distance bits", nodes * 4, storage)?;
-        let near_a = zeroed_storage(gpu, "pelage sdf nearest A", nodes * 4, storage)?;
-        let near_b = zeroed_storage(gpu, "pelage sdf nearest B", nodes * 4, storage)?;
+        let near = zeroed_storage(gpu, "pelage sdf nearest", nodes * 4, storage)?;
+        let field = zeroed_storage(
+            gpu,
+            "pelage sdf field",
+            field_bytes,
+            storage | wgpu::BufferUsages::COPY_SRC,
+        )?;
+        let coarse_bits = zeroed_storage(gpu, "pelage sdf coarse bits", coarse_nodes * 4, storage)?;
+        let coarse_near =
+            zeroed_storage(gpu, "pelage sdf coarse nearest", coarse_nodes * 4, storage)?;
+        let points_a = zeroed_storage(
+            gpu,
+            "pelage sdf coarse points A",
+            coarse_nodes * 16,
+            storage,
+        )?;
+        let points_b = zeroed_storage(
+            gpu,
+            "pelage sdf coarse points B",
+            coarse_nodes * 16,
+            storage,
+        )?;
         // Scratch of the build: written and read inside its one pass.
-        for b in [&bits, &near_a, &near_b] {
+        for b in [
+            &bits,
+            &near,
+            &field,
+            &coarse_bits,
+            &coarse_near,
+            &points_a,
+            &points_b,
+        ] {
             pelage_gpu::audit::name_buffer(b, BODY_SDF);
         }
         let diagonal = (grid.dims - UVec3::ONE).as_vec3().length() * grid.cell;
-        let uniforms = UniformBuffer::new(
+        let level = |g: &SdfGrid, band: u32, factor: u32| SdfUniforms {
+            origin: g.origin,
+            cell: g.cell,
+            dims: g.dims,
+            triangle_count,
+            band,
+            far: 2.0 * diagonal,
+            coarse: factor,
+            pitch,
+        };
+        let fine_uniforms = UniformBuffer::new(
             gpu,
             "pelage sdf uniforms",
-            &SdfUniforms {
-                origin: grid.origin,
-                cell: grid.cell,
-                dims: grid.dims,
-                triangle_count: mesh.triangle_count,
-                band: SDF_BAND_CELLS,
-                far: 2.0 * diagonal,
-            },
+            &level(&grid, SDF_BAND_CELLS, COARSE_FACTOR),
         )?;
-        let steps = flood_steps(grid.dims.max_element());
+        // The coarse level's splats reach every node within one coarse cell of a triangle.
+        let coarse_uniforms =
+            UniformBuffer::new(gpu, "pelage sdf coarse uniforms", &level(&coarse, 1, 1))?;
+        let steps = flood_steps(coarse.dims.max_element());
         let step_buffers = std::iter::once(0)
             .chain(steps.iter().copied())
             .map(|step| {
@@ -178,7 +433,7 @@ impl BodySdf {
                 sample_count: 1,
                 dimension: wgpu::TextureDimension::D3,
                 format: wgpu::TextureFormat::R32Float,
-                usage: wgpu::TextureUsages::STORAGE_BINDING
+                usage: wgpu::TextureUsages::COPY_DST
                     | wgpu::TextureUsages::TEXTURE_BINDING
                     | wgpu::TextureUsages::COPY_SRC,
                 view_formats: &[],
@@ -193,15 +448,9 @@ impl BodySdf {
                 .storage_rw(4)
                 .storage(5)
                 .storage_rw(6)
-                .entry(
-                    7,
-                    wgpu::BindingType::StorageTexture {
-                        access: wgpu::StorageTextureAccess::WriteOnly,
-                        format: wgpu::TextureFormat::R32Float,
-                        view_dimension: wgpu::TextureViewDimension::D3,
-                    },
-                )
                 .uniform(8)
+                .uniform(9)
+                .storage(10)
                 .build(device);
             let pipeline = |entry: &str| {
                 compute_pipeline_with_layouts(device, SDF_LABEL, &module, entry, &[Some(&layout)])
@@ -210,6 +459,7 @@ impl BodySdf {
                 pipeline("clear"),
                 pipeline("splat_distance"),
                 pipeline("splat_nearest"),
+                pipeline("seed"),
                 pipeline("flood"),
                 pipeline("finish"),
             ];
@@ -219,55 +469,88 @@ impl BodySdf {
                     resource: b.as_entire_binding(),
                 }
             }
-            let group = |near_in: &wgpu::Buffer, near_out: &wgpu::Buffer, step: &wgpu::Buffer| {
+            // A level's uniforms and distance bits, the array read and the one written,
+            // the flood step, and the coarse points read.
+            let group = |uniforms: &wgpu::Buffer,
+                         bits: &wgpu::Buffer,
+                         read: &wgpu::Buffer,
+                         write: &wgpu::Buffer,
+                         step: &wgpu::Buffer,
+                         points: &wgpu::Buffer| {
                 pelage_gpu::create_bind_group(
                     device,
                     &wgpu::BindGroupDescriptor {
                         label: Some(SDF_LABEL),
                         layout: &layout,
                         entries: &[
-                            buffer(0, &uniforms.buffer),
+                            buffer(0, uniforms),
                             buffer(1, &mesh.positions),
                             buffer(2, &mesh.normals),
-                            buffer(3, &mesh.indices),
-                            buffer(4, &bits),
-                            buffer(5, near_in),
-                            buffer(6, near_out),
-                            wgpu::BindGroupEntry {
-                                binding: 7,
-                                resource: wgpu::BindingResource::TextureView(&view),
-                            },
+                            buffer(3, &indices),
+                            buffer(4, bits),
+                            buffer(5, read),
+                            buffer(6, write),
                             buffer(8, step),
+                            buffer(9, &coarse_uniforms.buffer),
+                            buffer(10, points),
                         ],
                     },
                 )
             };
-            // Splats write A; flood step k reads A and writes B when k is even.
-            let mut groups = vec![group(&near_b, &near_a, &step_buffers[0].buffer)];
+            let (fine_u, coarse_u, step0) = (
+                &fine_uniforms.buffer,
+                &coarse_uniforms.buffer,
+                &step_buffers[0].buffer,
+            );
+            // Unused bindings hold buffers the dispatch does not write.
+            let mut groups = vec![
+                // The fine splats write `near`.
+                group(fine_u, &bits, &coarse_near, &near, step0, &points_a),
+                // The coarse splats write `coarse_near`.
+                group(
+                    coarse_u,
+                    &coarse_bits,
+                    &near,
+                    &coarse_near,
+                    step0,
+                    &points_a,
+                ),
+                // The seed reads it and writes points A.
+                group(
+                    coarse_u,
+                    &coarse_bits,
+                    &coarse_near,
+                    &points_a,
+                    step0,
+                    &points_b,
+                ),
+            ];
+            // Flood step k reads A (as the coarse points) and writes B when k is even.
             for (k, step) in step_buffers[1..].iter().enumerate() {
                 let (from, to) = if k % 2 == 0 {
-                    (&near_a, &near_b)
+                    (&points_a, &points_b)
                 } else {
-                    (&near_b, &near_a)
+                    (&points_b, &points_a)
                 };
-                groups.push(group(from, to, &step.buffer));
+                groups.push(group(coarse_u, &coarse_bits, &near, to, &step.buffer, from));
             }
             let last = if steps.len() % 2 == 1 {
-                &near_b
+                &points_b
             } else {
-                &near_a
+                &points_a
             };
-            let other = if steps.len() % 2 == 1 {
-                &near_a
-            } else {
-                &near_b
-            };
-            groups.push(group(last, other, &step_buffers[0].buffer));
+            // The finish reads `near` and the last points, and writes the field.
+            groups.push(group(fine_u, &bits, &near, &field, step0, last));
             (texture, view, pipelines, groups)
         })?;
-        let (texture, view, [clear, splat_distance, splat_nearest, flood, finish], groups) = built;
+        let (texture, view, [clear, splat_distance, splat_nearest, seed, flood, finish], groups) =
+            built;
         Ok(Self {
             grid,
+            coarse,
+            field,
+            pitch,
+            seed,
             texture,
             view,
             clear,
@@ -277,7 +560,7 @@ impl BodySdf {
             finish,
             groups,
             steps,
-            triangle_count: mesh.triangle_count,
+            triangle_count,
             limits: gpu.limits().clone(),
         })
     }
@@ -290,28 +573,96 @@ impl BodySdf {
             label: Some(SDF_LABEL),
             timestamp_writes,
         });
-        let nodes = dispatch_size(&self.limits, self.grid.nodes() as u64, WORKGROUP);
-        let triangles = dispatch_size(&self.limits, u64::from(self.triangle_count), WORKGROUP);
-        let first = &self.groups[0];
-        pelage_gpu::set_bind_group(&mut pass, 0, first);
-        for (pipeline, size) in [
-            (&self.clear, nodes),
-            (&self.splat_distance, triangles),
-            (&self.splat_nearest, triangles),
-        ] {
-            pass.set_pipeline(pipeline);
-            pass.dispatch_workgroups(size.0, size.1, 1);
+        for (_, dispatches) in self.stages() {
+            record(&mut pass, &dispatches);
         }
-        pass.set_pipeline(&self.flood);
-        for group in &self.groups[1..=self.steps.len()] {
-            pelage_gpu::set_bind_group(&mut pass, 0, group);
-            pass.dispatch_workgroups(nodes.0, nodes.1, 1);
+        drop(pass);
+        self.copy_field(encoder);
+    }
+
+    /// Copies the finish's output into the texture.
+    fn copy_field(&self, encoder: &mut wgpu::CommandEncoder) {
+        let dims = self.grid.dims;
+        encoder.copy_buffer_to_texture(
+            wgpu::TexelCopyBufferInfo {
+                buffer: &self.field,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(self.pitch * 4),
+                    rows_per_image: Some(dims.y),
+                },
+            },
+            wgpu::TexelCopyTextureInfo {
+                texture: &self.texture,
+                mip_level: 0,
+                origin: wgpu::Origin3d::ZERO,
+                aspect: wgpu::TextureAspect::All,
+            },
+            wgpu::Extent3d {
+                width: dims.x,
+                height: dims.y,
+                depth_or_array_layers: dims.z,
+            },
+        );
+    }
+
+    /// Records the same build as [`BodySdf::encode`], each stage in a compute pass of
+    /// its own labelled `"{SDF_LABEL} / {stage}"` ([`BodySdf::STAGES`]), so a timer
+    /// gives each stage's GPU time (the bench's breakdown; slightly slower than
+    /// [`BodySdf::encode`] by the passes' own cost).
+    pub fn encode_stages(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        mut timer: Option<&mut GpuTimer>,
+    ) {
+        for (stage, dispatches) in self.stages() {
+            let label = format!("{SDF_LABEL} / {stage}");
+            let timestamp_writes = timer.as_deref_mut().and_then(|t| t.compute_pass(&label));
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some(&label),
+                timestamp_writes,
+            });
+            record(&mut pass, &dispatches);
         }
-        pass.set_pipeline(&self.finish);
-        if let Some(last) = self.groups.last() {
-            pelage_gpu::set_bind_group(&mut pass, 0, last);
-        }
-        pass.dispatch_workgroups(nodes.0, nodes.1, 1);
+        self.copy_field(encoder);
+    }
+
+    /// The names of the build's stages, in order ([`BodySdf::encode_stages`]).
+    pub const STAGES: [&str; 4] = ["splat", "coarse", "flood", "finish"];
+
+    /// The build's dispatches, by stage.
+    fn stages(&self) -> Vec<(&'static str, Vec<Dispatch<'_>>)> {
+        let size = |n: u64| dispatch_size(&self.limits, n, WORKGROUP);
+        let nodes = size(self.grid.nodes() as u64);
+        let coarse_nodes = size(self.coarse.nodes() as u64);
+        let triangles = size(u64::from(self.triangle_count));
+        let [fine, coarse, seed] = [0, 1, 2].map(|k| &self.groups[k]);
+        let flood = self.groups[3..3 + self.steps.len()]
+            .iter()
+            .map(|group| (&self.flood, group, coarse_nodes))
+            .collect();
+        let last = &self.groups[self.groups.len() - 1];
+        vec![
+            (
+                "splat",
+                vec![
+                    (&self.clear, fine, nodes),
+                    (&self.splat_distance, fine, triangles),
+                    (&self.splat_nearest, fine, triangles),
+                ],
+            ),
+            (
+                "coarse",
+                vec![
+                    (&self.clear, coarse, coarse_nodes),
+                    (&self.splat_distance, coarse, triangles),
+                    (&self.splat_nearest, coarse, triangles),
+                    (&self.seed, seed, coarse_nodes),
+                ],
+            ),
+            ("flood", flood),
+            ("finish", vec![(&self.finish, last, coarse_nodes)]),
+        ]
     }
 
     /// Records the build and submits it (a field built once: a still or rigid mesh).
@@ -336,7 +687,7 @@ impl BodySdf {
         &self.grid
     }
 
-    /// The jump-flooding steps the build runs.
+    /// The jump-flooding steps the build runs (on the coarse grid).
     pub fn flood_steps(&self) -> &[u32] {
         &self.steps
     }
@@ -348,7 +699,12 @@ impl BodySdf {
 
     /// Bytes the field and its build buffers take on the GPU.
     pub fn bytes(&self) -> u64 {
-        self.grid.nodes() as u64 * 16
+        self.grid.nodes() as u64 * 12 + self.field.size() + self.coarse.nodes() as u64 * 40
+    }
+
+    /// The coarse grid jump flooding runs on ([`coarse_grid`]).
+    pub fn coarse_grid(&self) -> &SdfGrid {
+        &self.coarse
     }
 
     /// Reads the field back, one value per node in [`SdfGrid::index`] order. Waits for
@@ -406,6 +762,18 @@ impl BodySdf {
             );
         }
         Ok(out)
+    }
+}
+
+/// One dispatch of the build: its pipeline, bind group and workgroup counts.
+type Dispatch<'a> = (&'a wgpu::ComputePipeline, &'a wgpu::BindGroup, (u32, u32));
+
+/// Records `dispatches` into `pass`.
+fn record(pass: &mut wgpu::ComputePass<'_>, dispatches: &[Dispatch<'_>]) {
+    for (pipeline, group, size) in dispatches {
+        pass.set_pipeline(pipeline);
+        pelage_gpu::set_bind_group(pass, 0, group);
+        pass.dispatch_workgroups(size.0, size.1, 1);
     }
 }
 

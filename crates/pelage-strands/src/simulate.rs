@@ -294,7 +294,7 @@ impl SimulateStrands {
         params.growth.gravity = Vec3::ZERO;
         Self::build(
             gpu,
-            mesh_buffers,
+            (mesh, mesh_buffers),
             params,
             dynamics,
             roots,
@@ -349,7 +349,7 @@ impl SimulateStrands {
         }
         Self::build(
             gpu,
-            mesh_buffers,
+            (mesh, mesh_buffers),
             params,
             dynamics,
             roots,
@@ -358,9 +358,11 @@ impl SimulateStrands {
         )
     }
 
+    /// `meshes`: the mesh (its pose now: the body's field is of its surface) and the
+    /// buffers that hold it.
     fn build(
         gpu: &Gpu,
-        mesh_buffers: &MeshBuffers,
+        (mesh, mesh_buffers): (&Mesh, &MeshBuffers),
         params: HairParams,
         dynamics: &DynamicsParams,
         roots: Vec<StrandRoot>,
@@ -411,7 +413,8 @@ impl SimulateStrands {
         let (sdf, sdf_view) = match dynamics.sdf_resolution {
             0 => (None, no_sdf(gpu)?),
             resolution => {
-                let sdf = BodySdf::new(gpu, mesh_buffers, mesh_buffers.bounds, resolution)?;
+                let sdf =
+                    BodySdf::of_body(gpu, mesh_buffers, mesh, mesh_buffers.bounds, resolution)?;
                 sdf.build(gpu)?;
                 let view = sdf.view().clone();
                 (Some(sdf), view)

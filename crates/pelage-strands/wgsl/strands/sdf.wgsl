@@ -1,28 +1,43 @@
 // A signed distance field of the mesh on a grid of nodes (BodySdf, pelage-strands/src/sdf.rs),
-// rebuilt from the mesh buffers by five entry points recorded in one compute pass:
-//  1. clear (per node): distance bits to FAR_BITS, nearest triangle to none (0);
-//  2. splat_distance (per triangle): the exact distance from the triangle to every node of
-//     its box grown by `band` cells, atomicMin on the distance's bits (non-negative floats
-//     order as their bit patterns do);
-//  3. splat_nearest (per triangle): the same nodes again; where this triangle's distance is
-//     the minimum (within NEAREST_ULPS), atomicMax on its index + 1, so ties go to the
-//     highest index and the field is the same run after run;
-//  4. jfa (per node, once per step, steps halving from the largest power of two below the
-//     longest axis to 1, then 1 again: "JFA+1"): the nearest of the triangles the node and
-//     its 26 neighbours `step` nodes away hold, by exact distance;
-//  5. finish (per node): the exact distance to the triangle found, negative inside: inside
-//     where (node - nearest point) points against the mesh's normal at the nearest point
-//     (the vertex normals interpolated there: the face's side in its interior, the
-//     smoothed normal at edges and corners). A node no triangle reached (every triangle
-//     non-finite) is written +far: outside.
-// Every node within `band` cells of the surface is exact (its nearest triangle's grown box
-// holds it); farther nodes carry jump flooding's error (a nearer triangle missed).
+// rebuilt from the mesh buffers in one compute pass, on two levels: the fine grid (the
+// field's nodes) and a coarse one (every COARSE_FACTOR-th node along each axis) on which
+// jump flooding carries the surface to the nodes far from it.
+//  1. clear (per node of a level): distance bits to FAR_BITS, nearest to none (0);
+//  2. splat_distance (per triangle): the exact distance from the triangle to every node
+//     of its box grown by `band` cells that lies within `band` cells of its plane,
+//     atomicMin on the distance's bits (non-negative floats order as their bits do);
+//  3. splat_nearest (per triangle): the same nodes again; where this triangle's distance
+//     is the minimum (within NEAREST_ULPS), atomicMax on (index + 1) << 1 | inside, inside
+//     being the side of the mesh's normal at the nearest point (the vertex normals
+//     interpolated there) the node is on: ties go to the highest index, and the winner's
+//     side comes with it, so the field is the same run after run;
+//     (1-3 run on the fine level with `band` = SDF_BAND_CELLS, then on the coarse level
+//     with one coarse cell;)
+//  4. seed (per coarse node): the nearest point of the triangle the splats left there
+//     and the mesh's normal at it (packed);
+//  5. flood (per coarse node, once per step, steps halving from the largest power of two
+//     below the coarse grid's longest axis to 1, then 1 again: "JFA+1"): the nearest of
+//     the surface points the node and its 26 neighbours `step` nodes away hold (a node
+//     whose point is within the coarse band keeps it: its seed is exact);
+//  6. finish (per fine node): within the band (the splat's minimum at most `band` cells)
+//     the splat's exact distance, negative where the winner says inside; beyond, the
+//     nearest of the splat's triangle and the 8 surface points the coarse nodes around
+//     the node hold, signed by the side of that point's normal the node is on; +far
+//     where nothing reached (every triangle non-finite). Written to a buffer with the
+//     rows of the field's texture (a copy moves it there: writing a 3D storage texture
+//     node by node costs more than the rest of the build on some devices).
+// The field: every node within `band` cells of the surface holds its exact signed
+// distance (its nearest triangle's grown box and slab hold it). A farther node holds the
+// distance to a point of the surface (so never less than the exact distance), the
+// nearest one jump flooding brought to the coarse nodes around it: an approximation
+// whose error the tests measure against the CPU mirror (pelage-reference/src/sdf.rs).
 // A mesh with holes: the sign is the nearest surface point's normal side, so the field
 // says "inside" only behind the surface near a node, and a hole's rim is a surface like
 // any other (no flood fill, no winding number: an open mesh is not inside-out).
-// Bindings: the uniforms, the mesh (positions and normals f32 x3, u32 triangle list), the
-// distance bits, the nearest triangle read and written (ping-pong), the field, the step.
-// The CPU mirror (exact distances by brute force) is pelage-reference/src/sdf.rs.
+// Bindings: the level's uniforms, the mesh (positions and normals f32 x3, u32 triangle
+// list), the distance bits, a u32 array read and one written (the nearest triangles; the
+// coarse points, 4 u32 per node; the field), the flood step, the coarse level's uniforms
+// and its points.
 
 #import shared/math.wgsl
 
@@ -37,10 +52,14 @@ struct SdfUniforms {
     cell: f32,
     dims: vec3<u32>,
     triangle_count: u32,
-    // Cells around a triangle's box that it splats (the exact band).
+    // Cells around a triangle's box and plane that it splats (the exact band).
     band: u32,
     // Distance written where no triangle reached.
     far: f32,
+    // Fine nodes per coarse cell (the fine level; 1 at the coarse level).
+    coarse: u32,
+    // Texels per row of the field's buffer (the fine level).
+    pitch: u32,
 }
 
 struct JfaStep {
@@ -57,8 +76,9 @@ struct JfaStep {
 @group(0) @binding(4) var<storage, read_write> dist_bits: array<atomic<u32>>;
 @group(0) @binding(5) var<storage, read> near_in: array<u32>;
 @group(0) @binding(6) var<storage, read_write> near_out: array<atomic<u32>>;
-@group(0) @binding(7) var field: texture_storage_3d<r32float, write>;
 @group(0) @binding(8) var<uniform> jfa: JfaStep;
+@group(0) @binding(9) var<uniform> coarse_g: SdfUniforms;
+@group(0) @binding(10) var<storage, read> coarse_points: array<vec4<u32>>;
 
 fn load_position(i: u32) -> vec3<f32> {
     return vec3<f32>(positions[3u * i], positions[3u * i + 1u], positions[3u * i + 2u]);
@@ -191,6 +211,37 @@ fn box_misses(tri: Triangle) -> bool {
     return any(hi < vec3<f32>(0.0)) || any(lo > top);
 }
 
+// A triangle's plane (unit normal, offset) for the splats' cull: a node farther than the
+// band from the plane is farther than the band from the triangle. A degenerate
+// triangle's normal is 0 (nothing culled).
+struct Slab {
+    n: vec3<f32>,
+    offset: f32,
+    half_width: f32,
+}
+
+fn splat_slab(tri: Triangle) -> Slab {
+    let n = cross(tri.b - tri.a, tri.c - tri.a);
+    let len = length(n);
+    var unit = vec3<f32>(0.0);
+    if len > 0.0 && len < 3.4e38 {
+        unit = n / len;
+    }
+    // A hundredth of a cell more than the band: rounding never culls a node at the band.
+    return Slab(unit, dot(unit, tri.a), (f32(g.band) + 0.01) * g.cell);
+}
+
+fn outside_slab(slab: Slab, p: vec3<f32>) -> bool {
+    return abs(dot(slab.n, p) - slab.offset) > slab.half_width;
+}
+
+// The mesh's normal at barycentrics `bary` of triangle `t` (its vertex normals).
+fn triangle_normal(t: u32, bary: vec3<f32>) -> vec3<f32> {
+    return load_normal(indices[3u * t]) * bary.x
+        + load_normal(indices[3u * t + 1u]) * bary.y
+        + load_normal(indices[3u * t + 2u]) * bary.z;
+}
+
 @compute @workgroup_size(64)
 fn clear(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let i = flat_id(gid, groups);
@@ -212,11 +263,16 @@ fn splat_distance(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wo
         return;
     }
     let bx = splat_box(tri);
+    let slab = splat_slab(tri);
     for (var z = bx.lo.z; z <= bx.hi.z; z++) {
         for (var y = bx.lo.y; y <= bx.hi.y; y++) {
             for (var x = bx.lo.x; x <= bx.hi.x; x++) {
                 let n = vec3<u32>(x, y, z);
-                let d = triangle_distance(node_position(n), tri);
+                let p = node_position(n);
+                if outside_slab(slab, p) {
+                    continue;
+                }
+                let d = triangle_distance(p, tri);
                 atomicMin(&dist_bits[node_index(n)], bitcast<u32>(d));
             }
         }
@@ -234,18 +290,58 @@ fn splat_nearest(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wor
         return;
     }
     let bx = splat_box(tri);
+    let slab = splat_slab(tri);
+    let na = load_normal(indices[3u * t]);
+    let nb = load_normal(indices[3u * t + 1u]);
+    let nc = load_normal(indices[3u * t + 2u]);
     for (var z = bx.lo.z; z <= bx.hi.z; z++) {
         for (var y = bx.lo.y; y <= bx.hi.y; y++) {
             for (var x = bx.lo.x; x <= bx.hi.x; x++) {
                 let n = vec3<u32>(x, y, z);
-                let d = triangle_distance(node_position(n), tri);
+                let p = node_position(n);
+                if outside_slab(slab, p) {
+                    continue;
+                }
+                let bary = closest_bary(p, tri.a, tri.b, tri.c);
+                let q = tri.a * bary.x + tri.b * bary.y + tri.c * bary.z;
+                let d = distance(p, q);
                 let i = node_index(n);
                 if bitcast<u32>(d) <= atomicLoad(&dist_bits[i]) + NEAREST_ULPS {
-                    atomicMax(&near_out[i], t + 1u);
+                    let normal = na * bary.x + nb * bary.y + nc * bary.z;
+                    let inside = select(0u, 1u, dot(p - q, normal) < 0.0);
+                    atomicMax(&near_out[i], ((t + 1u) << 1u) | inside);
                 }
             }
         }
     }
+}
+
+// A coarse node's surface point: xyz the point's bits, w the mesh's normal there packed
+// (pack4x8snorm with w = 1: a point; all 0: none).
+@compute @workgroup_size(64)
+fn seed(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = flat_id(gid, groups);
+    if i >= node_count() {
+        return;
+    }
+    let packed = near_in[i];
+    var out = vec4<u32>(0u);
+    if packed != 0u {
+        let t = (packed >> 1u) - 1u;
+        let tri = load_triangle(t);
+        let bary = closest_bary(node_position(node_of(i)), tri.a, tri.b, tri.c);
+        let q = tri.a * bary.x + tri.b * bary.y + tri.c * bary.z;
+        let n = safe_normalize(triangle_normal(t, bary), vec3<f32>(0.0));
+        out = vec4<u32>(bitcast<vec3<u32>>(q), pack4x8snorm(vec4<f32>(n, 1.0)));
+    }
+    for (var k = 0u; k < 4u; k++) {
+        atomicStore(&near_out[4u * i + k], out[k]);
+    }
+}
+
+// The flood reads the points of the last step as `coarse_points`.
+fn point_in(i: u32) -> vec4<u32> {
+    return coarse_points[i];
 }
 
 @compute @workgroup_size(64)
@@ -256,10 +352,17 @@ fn flood(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
     }
     let node = node_of(i);
     let p = node_position(node);
-    var best = near_in[i];
+    var best = point_in(i);
     var best_d = 3.4e38;
-    if best != 0u {
-        best_d = triangle_distance(p, load_triangle(best - 1u));
+    if best.w != 0u {
+        best_d = distance(p, bitcast<vec3<f32>>(best.xyz));
+    }
+    // Within the coarse splat's band the seed is the nearest point already: kept.
+    if best.w != 0u && best_d <= f32(g.band) * g.cell {
+        for (var k = 0u; k < 4u; k++) {
+            atomicStore(&near_out[4u * i + k], best[k]);
+        }
+        return;
     }
     let step = i32(jfa.step);
     let dims = vec3<i32>(g.dims);
@@ -270,42 +373,96 @@ fn flood(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
                 if any(q < vec3<i32>(0)) || any(q >= dims) {
                     continue;
                 }
-                let t = near_in[node_index(vec3<u32>(q))];
-                if t == 0u || t == best {
+                let c = point_in(node_index(vec3<u32>(q)));
+                if c.w == 0u {
                     continue;
                 }
-                let d = triangle_distance(p, load_triangle(t - 1u));
-                if d < best_d || (d == best_d && t > best) {
-                    best = t;
+                let d = distance(p, bitcast<vec3<f32>>(c.xyz));
+                // Ties: the larger bits, so the field is the same run after run.
+                if d < best_d || (d == best_d && (c.x > best.x || (c.x == best.x && c.y > best.y))) {
+                    best = c;
                     best_d = d;
                 }
             }
         }
     }
-    atomicStore(&near_out[i], best);
+    for (var k = 0u; k < 4u; k++) {
+        atomicStore(&near_out[4u * i + k], best[k]);
+    }
 }
 
+// A surface point of the coarse level (xyz) and the mesh's normal there (w = 1: a point;
+// 0: none).
+struct Candidate {
+    q: vec3<f32>,
+    n: vec4<f32>,
+}
+
+fn candidate(c: vec3<u32>) -> Candidate {
+    let point = coarse_points[(c.z * coarse_g.dims.y + c.y) * coarse_g.dims.x + c.x];
+    return Candidate(bitcast<vec3<f32>>(point.xyz), unpack4x8snorm(point.w));
+}
+
+// The signed distance so far, `best` (x: distance, y: < 0 inside), against candidate `c`.
+fn nearer(p: vec3<f32>, best: vec2<f32>, c: Candidate) -> vec2<f32> {
+    let d = distance(p, c.q);
+    if c.n.w > 0.5 && d < best.x {
+        return vec2<f32>(d, dot(p - c.q, c.n.xyz));
+    }
+    return best;
+}
+
+// One invocation per coarse node c: the fine nodes of the cell from COARSE_FACTOR c (those
+// in the grid), with the 8 coarse nodes around them read once.
 @compute @workgroup_size(64)
 fn finish(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let i = flat_id(gid, groups);
-    if i >= node_count() {
+    let cell = flat_id(gid, groups);
+    let cdims = coarse_g.dims;
+    if cell >= cdims.x * cdims.y * cdims.z {
         return;
     }
-    let node = node_of(i);
-    let t = near_in[i];
-    var value = g.far;
-    if t != 0u {
-        let p = node_position(node);
-        let tri = load_triangle(t - 1u);
-        let bary = closest_bary(p, tri.a, tri.b, tri.c);
-        let q = tri.a * bary.x + tri.b * bary.y + tri.c * bary.z;
-        let n = load_normal(indices[3u * (t - 1u)]) * bary.x
-            + load_normal(indices[3u * (t - 1u) + 1u]) * bary.y
-            + load_normal(indices[3u * (t - 1u) + 2u]) * bary.z;
-        value = distance(p, q);
-        if dot(p - q, n) < 0.0 {
-            value = -value;
+    let cnode = vec3<u32>(cell % cdims.x, cell / cdims.x % cdims.y, cell / (cdims.x * cdims.y));
+    let lo = min(cnode, cdims - vec3<u32>(2u));
+    let c0 = candidate(lo);
+    let c1 = candidate(lo + vec3<u32>(1u, 0u, 0u));
+    let c2 = candidate(lo + vec3<u32>(0u, 1u, 0u));
+    let c3 = candidate(lo + vec3<u32>(1u, 1u, 0u));
+    let c4 = candidate(lo + vec3<u32>(0u, 0u, 1u));
+    let c5 = candidate(lo + vec3<u32>(1u, 0u, 1u));
+    let c6 = candidate(lo + vec3<u32>(0u, 1u, 1u));
+    let c7 = candidate(lo + vec3<u32>(1u, 1u, 1u));
+    let first = cnode * g.coarse;
+    let last = min(first + vec3<u32>(g.coarse - 1u), g.dims - vec3<u32>(1u));
+    for (var z = first.z; z <= last.z; z++) {
+        for (var y = first.y; y <= last.y; y++) {
+            for (var x = first.x; x <= last.x; x++) {
+                let node = vec3<u32>(x, y, z);
+                let i = node_index(node);
+                let packed = near_in[i];
+                let splat_d = bitcast<f32>(atomicLoad(&dist_bits[i]));
+                // (distance, side): within the band the splat's exact distance and its
+                // winner's side.
+                var best = vec2<f32>(g.far, 1.0);
+                if packed != 0u {
+                    best = vec2<f32>(splat_d, select(1.0, -1.0, (packed & 1u) == 1u));
+                }
+                if packed == 0u || splat_d > f32(g.band) * g.cell {
+                    // Beyond the band: the nearest of the surface points the coarse nodes
+                    // around hold, on the side of its normal.
+                    let p = node_position(node);
+                    best = nearer(p, best, c0);
+                    best = nearer(p, best, c1);
+                    best = nearer(p, best, c2);
+                    best = nearer(p, best, c3);
+                    best = nearer(p, best, c4);
+                    best = nearer(p, best, c5);
+                    best = nearer(p, best, c6);
+                    best = nearer(p, best, c7);
+                }
+                let value = select(best.x, -best.x, best.y < 0.0);
+                let out = (z * g.dims.y + y) * g.pitch + x;
+                atomicStore(&near_out[out], bitcast<u32>(value));
+            }
         }
     }
-    textureStore(field, vec3<i32>(node), vec4<f32>(value, 0.0, 0.0, 0.0));
 }
