@@ -306,6 +306,8 @@ impl BodySdf {
                 usage: wgpu::BufferUsages::STORAGE,
             },
         );
+        // A subset of the mesh's triangle list: the frame plan's `mesh`.
+        pelage_gpu::audit::name_buffer(&buffer, MESH);
         Self::with_triangles(
             gpu,
             buffers,
