@@ -690,10 +690,7 @@ impl Frame {
     /// The resources the key light's shadow writes under the frame's names
     /// (`shadow0.*`): what a pass sampling [`Frame::shadow_binding`] reads.
     pub fn key_lookup(&self) -> Vec<String> {
-        self.shadows
-            .first()
-            .map(|(shadow, _)| rename_lookup(shadow.as_ref(), "shadow0"))
-            .unwrap_or_default()
+        self.stages().key_lookup()
     }
 
     /// The key light's shadow as the shadow contract's implementation, for a caller's own
@@ -918,6 +915,14 @@ struct Stages<'a> {
 }
 
 impl Stages<'_> {
+    /// The resources the key light's shadow writes under the frame's names (`shadow0.*`).
+    fn key_lookup(&self) -> Vec<String> {
+        self.shadows
+            .first()
+            .map(|(shadow, _)| rename_lookup(shadow.as_ref(), "shadow0"))
+            .unwrap_or_default()
+    }
+
     /// The passes of `steps`, in order, over the mesh and the targets, with `before_shade`
     /// (a caller's own passes) between the shadows and the first shade step.
     fn plan(&self, steps: &[Step], before_shade: impl IntoIterator<Item = PassInfo>) -> FramePlan {
@@ -926,11 +931,7 @@ impl Stages<'_> {
             pelage_shade::TARGET_COLOR,
             pelage_shade::TARGET_DEPTH,
         ]);
-        let key_lookup = self
-            .shadows
-            .first()
-            .map(|(shadow, _)| rename_lookup(shadow.as_ref(), "shadow0"))
-            .unwrap_or_default();
+        let key_lookup = self.key_lookup();
         let mut before_shade = Some(before_shade);
         for &step in steps {
             if step.part() == Part::Shade

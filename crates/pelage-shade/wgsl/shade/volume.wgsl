@@ -244,12 +244,11 @@ fn splat_mesh(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgr
 }
 
 fn surface_at(index: u32) -> vec3<f32> {
-    let at = VOLUME_ACCUM * index + VOLUME_SURFACE;
     return vec3<f32>(
-        f32(bitcast<i32>(atomicLoad(&accum[at]))),
-        f32(bitcast<i32>(atomicLoad(&accum[at + 1u]))),
-        f32(bitcast<i32>(atomicLoad(&accum[at + 2u]))),
-    ) * (u.inv_fixed_scale / VOLUME_TANGENT_SCALE);
+        surface_component(index, 0u),
+        surface_component(index, 1u),
+        surface_component(index, 2u),
+    );
 }
 
 // Component `axis` of `surface_at(index)`, one atomic load.
