@@ -21,8 +21,6 @@ use crate::chiang::{ChiangFibre, sigma_a_from_reflectance};
 const THETA_TEXELS: usize = 32;
 /// Samples of `|θ|` of the isotropic averages (`VOLUME_THETA_SAMPLES`).
 const THETA_SAMPLES: usize = 8;
-/// Mean chord of a cube in cell edges (`VOLUME_CHORD`).
-const CHORD: f64 = 2.0 / 3.0;
 /// Directions of the sky's injection (`VOLUME_SKY_DIRECTIONS`).
 pub const SKY_DIRECTIONS: usize = 15;
 
@@ -175,18 +173,51 @@ fn ratio(x: f64, y: f64) -> f64 {
     if y > 1e-8 { x / y } else { 0.0 }
 }
 
-/// `volume_scatter_direction`.
+/// One channel of `volume_scatter_flux`: the flux of light travelling with flux `p` after
+/// one scattering.
 fn scatter_direction(p: DVec3, t: DVec3, s: f64, g: f64, g_iso: f64) -> DVec3 {
     let along = t * t.dot(p);
     s * (along + g * (p - along)) + (1.0 - s) * ((1.0 + 2.0 * g_iso) / 3.0) * p
 }
 
-/// `face_share`.
-fn face_share(m: DVec3, d: DVec3) -> f64 {
-    let sixth = 1.0 / 6.0;
-    let w = |x: f64| (sixth + x / 3.0).max(0.0);
-    let total = w(m.x) + w(m.y) + w(m.z) + w(-m.x) + w(-m.y) + w(-m.z);
-    w(m.dot(d)) / total
+/// `volume_escape`: the share of light crossing a cell edge of optical depth `kappa`
+/// unscattered, averaged over where it starts, and the mean path (cell edges) before it
+/// scatters or leaves.
+fn escape(kappa: f64) -> (f64, f64) {
+    if kappa < 1e-4 {
+        return (
+            1.0 - kappa / 2.0 + kappa * kappa / 6.0,
+            0.5 - kappa / 6.0 + kappa * kappa / 24.0,
+        );
+    }
+    let p = -(-kappa).exp_m1() / kappa;
+    (p, (1.0 - p) / kappa)
+}
+
+/// One channel of `volume_born`: energy `e` and flux `f` born in a cell scatter there
+/// until they leave; returns what leaves and the fluence left in the cell per unit leaving.
+fn born(e: f64, f: DVec3, kappa: f64, albedo: f64) -> (f64, DVec3, f64) {
+    let (p, path) = escape(kappa);
+    let r = albedo.min(1.0) * (1.0 - p);
+    let bias = if e > 0.0 {
+        (f.length() / e).min(1.0)
+    } else {
+        0.0
+    };
+    (e * p / (1.0 - r), f * (p / (1.0 - r * bias)), path / p)
+}
+
+/// One channel of `volume_directions`: energy `e` and flux `f` as the light along the six
+/// directions of [`FACES`].
+fn directions(e: f64, f: DVec3) -> [f64; 6] {
+    let l1 = f.x.abs() + f.y.abs() + f.z.abs();
+    let c = if l1 > e { e / l1 } else { 1.0 };
+    let even = (e - c * l1).max(0.0) / 6.0;
+    let mut out = [even; 6];
+    for (k, d) in FACES.iter().enumerate() {
+        out[k] += (c * f.dot(d.as_dvec3())).max(0.0);
+    }
+    out
 }
 
 const FACES: [IVec3; 6] = [
@@ -330,10 +361,10 @@ pub fn volume_grid(input: &VolumeInput<'_>) -> VolumeGridCpu {
         keys.push(sigma_key(col));
     }
     let iso: Vec<Phase> = keys.iter().map(|k| tables[k].isotropic()).collect();
-    // Inject.
+    // Inject: per cell and channel the energy born there and its flux (`state` until the
+    // light born settles), and the sky's unscattered fluence.
     let mut state = vec![[DVec4::ZERO; 3]; cells];
-    let mut fluence = vec![[DVec4::ZERO; 3]; cells];
-    let half = 0.5 * CHORD;
+    let mut sky_fluence = vec![DVec4::ZERO; cells];
     // `volume_clear_toward`: exp(-τ) times the body's clear share from `pos` toward `l`,
     // one cell edge at a time (nearest cell) up to `reach` or the grid's border.
     let clear_toward = |pos: DVec3, l: DVec3, reach: f64| {
@@ -392,14 +423,10 @@ pub fn volume_grid(input: &VolumeInput<'_>) -> VolumeGridCpu {
                     state[c][ch] += DVec4::new(bounce[ch], f.x, f.y, f.z);
                 }
             }
-            if kappa > 1e-6 {
-                sky *= meet / kappa;
-            }
+            sky *= escape(kappa).0;
         }
+        sky_fluence[c] = sky;
         if meet <= 0.0 && lit_mesh <= 0.0 {
-            for ch in 0..3 {
-                fluence[c][ch] = half * state[c][ch] + sky;
-            }
             continue;
         }
         for light in input.lights.iter().take(pelage_scene::MAX_LIGHTS) {
@@ -440,66 +467,116 @@ pub fn volume_grid(input: &VolumeInput<'_>) -> VolumeGridCpu {
                 }
             }
         }
+    }
+    // The light born settles in its cell and leaves along the six directions.
+    let mut fluence = vec![[DVec4::ZERO; 3]; cells];
+    let mut leaving = vec![[[0.0f64; 6]; 3]; cells];
+    for c in 0..cells {
         for ch in 0..3 {
-            fluence[c][ch] = half * state[c][ch] + sky;
+            let b = state[c][ch];
+            let (e, f, path) = born(b.x, DVec3::new(b.y, b.z, b.w), depth[c], iso[c].albedo[ch]);
+            leaving[c][ch] = directions(e, f);
+            fluence[c][ch] = path * DVec4::new(e, f.x, f.y, f.z) + sky_fluence[c];
         }
     }
-    let energy = |st: &[[DVec4; 3]]| st.iter().map(|c| c[0].x + c[1].x + c[2].x).sum::<f64>();
+    let mut state = leaving;
+    let energy = |st: &[[[f64; 6]; 3]]| st.iter().flatten().flatten().sum::<f64>();
     let mut step_energy = vec![energy(&state)];
     let mut step_arrivals = Vec::new();
-    // Propagate.
+    // Propagate: light moves one cell per step along its direction.
     for _ in 0..p.volume_iterations {
-        let mut next = vec![[DVec4::ZERO; 3]; cells];
-        let mut arrived = 0.0;
+        let mut next = vec![[[0.0f64; 6]; 3]; cells];
+        let mut arrived_total = 0.0;
         for c in 0..cells {
             let xyz = IVec3::new((c % n) as i32, ((c / n) % n) as i32, (c / (n * n)) as i32);
-            let mut arrive = [DVec4::ZERO; 3];
-            for d in FACES {
-                let y = xyz - d;
+            // Per channel, what arrives along each direction from the neighbour behind.
+            let mut arrive = [[0.0f64; 6]; 3];
+            for (k, d) in FACES.iter().enumerate() {
+                let y = xyz - *d;
                 if y.min_element() < 0 || y.max_element() >= n as i32 {
                     continue;
                 }
                 let j = index(y);
-                let df = d.as_dvec3();
                 for ch in 0..3 {
-                    let st = state[j][ch];
-                    if st.x > 0.0 {
-                        let m = DVec3::new(st.y, st.z, st.w) / st.x;
-                        let moved = st.x * face_share(m, df);
-                        let f = moved * (2.0 / 3.0) * df;
-                        arrive[ch] += DVec4::new(moved, f.x, f.y, f.z);
-                    }
+                    arrive[ch][k] = state[j][ch][k];
                 }
             }
-            arrived += arrive[0].x + arrive[1].x + arrive[2].x;
-            let keep = (-CHORD * depth[c]).exp();
+            let kappa = depth[c];
+            let keep = (-kappa).exp();
+            let clear = 1.0 - solid[c];
             let (t, s) = (medium_t[c], medium_s[c]);
+            let (p_cross, _) = escape(kappa);
+            let flows: [DVec3; 3] = std::array::from_fn(|ch| {
+                FACES
+                    .iter()
+                    .zip(arrive[ch])
+                    .map(|(d, a)| a * d.as_dvec3())
+                    .sum()
+            });
+            // The body reflects toward its normal, or (inside it) back the way the light
+            // came, all channels together.
             let sl = surface[c].length();
+            let back: DVec3 = flows.iter().sum();
+            let normal = if sl > 0.0 {
+                surface[c] / sl
+            } else if back.length() > 0.0 {
+                -back / back.length()
+            } else {
+                DVec3::ZERO
+            };
             for ch in 0..3 {
-                let a = arrive[ch];
-                let free = (1.0 - solid[c]) * a;
-                let scatter = (1.0 - keep) * iso[c].albedo[ch];
-                let bounce = solid[c] * a.x * mesh_albedo[ch];
-                let flux = DVec3::new(free.y, free.z, free.w);
-                let arriving = DVec3::new(a.y, a.z, a.w);
-                let normal = if sl > 0.0 {
-                    surface[c] / sl
-                } else if arriving.length() > 0.0 {
-                    -arriving / arriving.length()
-                } else {
-                    DVec3::ZERO
-                };
-                let f = keep * flux
-                    + scatter * scatter_direction(flux, t, s, iso[c].g[ch], iso[c].g[ch])
-                    + bounce * (2.0 / 3.0) * normal;
-                let out = DVec4::new((keep + scatter) * free.x + bounce, f.x, f.y, f.z);
-                next[c][ch] = out;
-                fluence[c][ch] += half * (a + out);
+                let arrived: f64 = arrive[ch].iter().sum();
+                arrived_total += arrived;
+                let flow = flows[ch];
+                let scatter = (1.0 - keep) * clear * iso[c].albedo[ch];
+                let mut e = scatter * arrived;
+                let mut f = scatter * scatter_direction(flow, t, s, iso[c].g[ch], iso[c].g[ch]);
+                if solid[c] > 0.0 {
+                    let bounce = solid[c] * arrived * mesh_albedo[ch];
+                    e += bounce;
+                    f += bounce * (2.0 / 3.0) * normal;
+                }
+                let (e, f, path) = born(e, f, kappa, iso[c].albedo[ch]);
+                let out = directions(e, f);
+                for k in 0..6 {
+                    next[c][ch][k] = out[k] + keep * clear * arrive[ch][k];
+                }
+                fluence[c][ch] += p_cross * clear * DVec4::new(arrived, flow.x, flow.y, flow.z)
+                    + path * DVec4::new(e, f.x, f.y, f.z);
             }
         }
         state = next;
         step_energy.push(energy(&state));
-        step_arrivals.push(arrived);
+        step_arrivals.push(arrived_total);
+    }
+    // `settle`: the fluence over the clear share where the body fills part of a cell; a
+    // cell at least half solid takes its clear neighbours' (weighted by their shares).
+    let before = fluence.clone();
+    for c in 0..cells {
+        let s = solid[c];
+        if s >= 0.5 {
+            let xyz = IVec3::new((c % n) as i32, ((c / n) % n) as i32, (c / (n * n)) as i32);
+            let mut w = 0.0;
+            let mut sum = [DVec4::ZERO; 3];
+            for d in FACES {
+                let y = xyz + d;
+                if y.min_element() < 0 || y.max_element() >= n as i32 {
+                    continue;
+                }
+                let j = index(y);
+                let clear = 1.0 - solid[j];
+                if clear > 0.5 {
+                    w += clear;
+                    for ch in 0..3 {
+                        sum[ch] += before[j][ch];
+                    }
+                }
+            }
+            let k = if w > 0.0 { 1.0 / w } else { 0.0 };
+            fluence[c] = sum.map(|v| v * k);
+        } else if s > 0.0 {
+            fluence[c] = before[c].map(|v| v / (1.0 - s));
+        }
     }
     VolumeGridCpu {
         resolution: n as u32,

@@ -461,17 +461,19 @@ pub struct ChiangParams {
 
 /// Smallest `volume_grid`.
 pub const MIN_VOLUME_GRID: u32 = 4;
-/// Largest `volume_grid` (the grid holds 224 bytes per cell: 128³ is 470 MB).
+/// Largest `volume_grid` (the grid holds 336 bytes per cell: 128³ is 705 MB).
 pub const MAX_VOLUME_GRID: u32 = 128;
-/// Default `volume_grid` (0.92 MB of GPU memory): the bench measures the shade stage at
-/// 1.15x single scattering with 16³ cells and 2.24x with 32³ (`pelage bench --quick`), and
-/// the scattering lab 16³ within 1 to 6 points of 32³'s luminance.
+/// Default `volume_grid` (1.38 MB of GPU memory; see docs/src/shading.md for its cost in
+/// the shade stage, `pelage bench --quick`): the scattering lab measures 16³ within 1 to
+/// 2 points of 32³'s hair luminance.
 pub const DEFAULT_VOLUME_GRID: u32 = 16;
 /// Largest `volume_iterations`.
 pub const MAX_VOLUME_ITERATIONS: u32 = 256;
-/// Default `volume_iterations` (the scattering lab's choice: blond hair gains 10 to 18
-/// points of luminance from 16 steps to 64; see docs/src/path-tracer.md).
-pub const DEFAULT_VOLUME_ITERATIONS: u32 = 64;
+/// Default `volume_iterations`: light moves one cell per step along the axes, so a
+/// beam crosses the default grid in 16; the scattering lab measures 16 steps and 64 the
+/// same within 0.001 of hair luminance (see docs/src/path-tracer.md). A finer grid needs
+/// at least as many steps as cells per side.
+pub const DEFAULT_VOLUME_ITERATIONS: u32 = 16;
 
 /// How Chiang's fibres carry light scattered by other fibres (the orders the single
 /// scattering term leaves out). Names in [`crate::names`]: `none`, `dual`, `volume`.
@@ -517,7 +519,7 @@ impl<'de> Deserialize<'de> for MultipleScattering {
 
 impl Default for ChiangParams {
     /// pbrt-v3's defaults (β_m = β_n = 0.3, α = 2°, η = 1.55), absorption from the hair's
-    /// colour, volume scattering (16³ cells, 64 steps).
+    /// colour, volume scattering (16³ cells, 16 steps).
     fn default() -> Self {
         Self {
             beta_m: 0.3,

@@ -10,9 +10,10 @@
 //! from each light and from the sky (`shade.ambient`, radiance `ambient/π` from every
 //! direction, 15 directions), through the grid's own transmittance toward the light (so
 //! it works with every shadow method), and add the sky's unscattered light to the fluence
-//! (the hair's single scattering of the sky is read from the grid); propagate it `volume_iterations` cells, scattering with
-//! Chiang's energies at each cell; keep the fluence and flux per cell and channel (order-1
-//! spherical harmonics, 4 coefficients per channel).
+//! (the hair's single scattering of the sky is read from the grid); propagate it
+//! `volume_iterations` cells, straight along the six axis directions (discrete ordinates),
+//! scattering with Chiang's energies at each cell; keep the fluence and flux per cell and
+//! channel (order-1 spherical harmonics, 4 coefficients per channel).
 
 use encase::ShaderType;
 use pelage_gpu::{
@@ -62,8 +63,11 @@ pub struct VolumeUniforms {
 pub const VOLUME_FIXED_SCALE: f32 = 65_536.0;
 /// Invocations of the fit pass.
 const FIT_INVOCATIONS: u32 = 256 * 64;
-/// Bytes per cell of the largest buffer (3 vec4: per channel fluence and flux).
+/// Bytes per cell of the fluence and the medium (3 vec4: per channel fluence and flux).
 const CELL_BYTES: u64 = 48;
+/// Bytes per cell of a propagation state, the largest buffers (6 vec4: the light leaving
+/// along each axis direction, rgb and an unused w).
+const STATE_BYTES: u64 = 96;
 /// u32 per cell of the splat accumulator (`VOLUME_ACCUM`).
 const ACCUM_U32: u64 = 12;
 /// The frame resource of the grid's fluence (what the hair passes read).
@@ -89,7 +93,7 @@ impl VolumeField {
             .limits()
             .max_storage_buffer_binding_size
             .min(gpu.limits().max_buffer_size);
-        let cells = limit.saturating_sub(16) / CELL_BYTES;
+        let cells = limit / STATE_BYTES;
         let mut n = (cells as f64).cbrt().floor() as u32;
         while n > 0 && u64::from(n).pow(3) > cells {
             n -= 1;
@@ -109,7 +113,7 @@ impl VolumeField {
                 n,
                 &format!(
                     "must be in [{MIN_VOLUME_GRID}, {max}] on this device (its storage binding \
-                     limit holds {max}³ cells of {CELL_BYTES} bytes)"
+                     limit holds {max}³ cells of {STATE_BYTES} bytes)"
                 ),
             )
             .into());
@@ -188,6 +192,8 @@ pub struct VolumeGrid {
     describe: wgpu::ComputePipeline,
     inject: wgpu::ComputePipeline,
     propagate: wgpu::ComputePipeline,
+    /// The fluence over the clear share of cells the body partly fills (two passes).
+    settle: [wgpu::ComputePipeline; 2],
     fit_group: wgpu::BindGroup,
     splat_group: wgpu::BindGroup,
     inject_group: wgpu::BindGroup,
@@ -227,8 +233,8 @@ impl VolumeGrid {
         let accum = zeroed_storage(gpu, "pelage volume accum", n * ACCUM_U32 * 4, usage)?;
         let medium = zeroed_storage(gpu, "pelage volume medium", n * CELL_BYTES, usage)?;
         let states = [
-            zeroed_storage(gpu, "pelage volume state a", n * CELL_BYTES, usage)?,
-            zeroed_storage(gpu, "pelage volume state b", n * CELL_BYTES, usage)?,
+            zeroed_storage(gpu, "pelage volume state a", n * STATE_BYTES, usage)?,
+            zeroed_storage(gpu, "pelage volume state b", n * STATE_BYTES, usage)?,
         ];
         for buffer in [&bounds, &accum, &medium, &states[0], &states[1]] {
             pelage_gpu::audit::name_buffer(buffer, VOLUME_SCRATCH);
@@ -314,6 +320,14 @@ impl VolumeGrid {
                 "propagate",
                 &[Some(&propagate_layout)],
             );
+            let settle = [
+                pipe("pelage volume settle", "settle", &[Some(&propagate_layout)]),
+                pipe(
+                    "pelage volume settled",
+                    "settled",
+                    &[Some(&propagate_layout)],
+                ),
+            ];
             let u = field.uniform_buffer();
             let fl = field.fluence_buffer();
             let fit_group = bind_numbered(
@@ -400,6 +414,7 @@ impl VolumeGrid {
                 describe,
                 inject,
                 propagate,
+                settle,
                 fit_group,
                 splat_group,
                 inject_group,
@@ -446,7 +461,8 @@ impl VolumeGrid {
         Ok(())
     }
 
-    /// Records the passes: clears, fit, splat, inject, and the propagation steps.
+    /// Records the passes: clears, fit, splat, inject, the propagation steps and the
+    /// settling of the fluence where the body fills part of a cell.
     pub fn encode(
         &self,
         encoder: &mut wgpu::CommandEncoder,
@@ -489,10 +505,18 @@ impl VolumeGrid {
         pass.set_pipeline(&self.inject);
         pass.dispatch_workgroups(x, y, 1);
         pass.set_pipeline(&self.propagate);
-        for step in 0..v.iterations as usize {
+        let steps = v.iterations as usize;
+        for step in 0..steps {
             pelage_gpu::set_bind_group(&mut pass, 0, &self.propagate_groups[step % 2]);
             pass.dispatch_workgroups(x, y, 1);
         }
+        // `settle` writes the state the next step would, `settled` reads it back.
+        pelage_gpu::set_bind_group(&mut pass, 0, &self.propagate_groups[steps % 2]);
+        pass.set_pipeline(&self.settle[0]);
+        pass.dispatch_workgroups(x, y, 1);
+        pelage_gpu::set_bind_group(&mut pass, 0, &self.propagate_groups[(steps + 1) % 2]);
+        pass.set_pipeline(&self.settle[1]);
+        pass.dispatch_workgroups(x, y, 1);
     }
 
     /// The pass as the frame plan lists it: reads the strands and the mesh, writes the
@@ -516,11 +540,12 @@ impl VolumeGrid {
     }
 
     /// Bytes of GPU memory a grid of `resolution`³ cells holds (what
-    /// [`VolumeGrid::memory_bytes`] reports): 240 bytes per cell and 104 more.
+    /// [`VolumeGrid::memory_bytes`] reports): 336 bytes per cell and 104 more.
     pub fn bytes_for(resolution: u32) -> u64 {
         let n = cells(resolution);
         24 + n * ACCUM_U32 * 4
-            + 3 * n * CELL_BYTES
+            + n * CELL_BYTES
+            + 2 * n * STATE_BYTES
             + (16 + n * CELL_BYTES)
             + VolumeUniforms::min_size().get()
     }

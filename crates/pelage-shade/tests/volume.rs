@@ -384,12 +384,16 @@ fn volume_degenerate_hair_is_finite() {
 fn volume_bad_sizes_are_refused() {
     let gpu = gpu();
     let max = VolumeField::max_resolution(&gpu);
+    let default = pelage_scene::DEFAULT_VOLUME_GRID;
     println!(
-        "largest volume_grid on this device: {max}; the default 32³ grid holds {} bytes",
+        "largest volume_grid on this device: {max}; the default {default}³ grid holds {} \
+         bytes, 32³ {}",
+        VolumeGrid::bytes_for(default),
         VolumeGrid::bytes_for(32)
     );
-    assert!(VolumeGrid::bytes_for(32) <= 8_000_000);
-    assert!(max >= 32, "the default grid must fit: {max}");
+    // The issue's bound: at most 8 MB at the default size.
+    assert!(VolumeGrid::bytes_for(default) <= 8_000_000);
+    assert!(max >= 32, "a 32³ grid must fit: {max}");
     let params = volume_params(0, 4, Vec3::ONE);
     let e = HairModel::new(&gpu, &ShadingModel::Chiang(params)).unwrap_err();
     assert!(e.to_string().contains("shading.chiang.volume_grid"), "{e}");
@@ -463,19 +467,22 @@ fn volume_sky_injection_matches_cpu_mirror() {
 /// White fibres (σ_a = 0) in a cube under the sky alone, a white furnace: in a medium
 /// that absorbs nothing, under a uniform sky of radiance `ambient / π`, the light is the
 /// sky's everywhere (fluence `4 ambient`). The GPU is the mirror's. The grid is brighter
-/// than the sky (measured 1.55x at an optical depth of 0.6 per cell, 1.33x at 3.8; a
-/// uniform cube of straight fibres at 4.3 per cell, 256 steps, 1.03x in the mirror): its transport moves
-/// light one cell per step toward every face (order-1 harmonics), a random walk where
-/// light between fibres flies straight, so the light the fibres scatter stays in the grid
-/// longer than it does in the path tracer. The measured values are held (a few percent of
-/// margin) so that the error cannot grow unnoticed, and the lower bounds keep the sky in.
+/// than the sky: at an optical depth of 0.64 per cell 0.97x to 1.38x (mean 1.15x; the
+/// moment scheme before the six directions: 1.35x to 1.55x), at 3.8 per cell 1.25x to
+/// 1.51x (mean 1.39x; before: 1.12x to 1.33x). Its border cells are the brightest: the six
+/// directions carry light only along the axes, so a cell on a face receives what its
+/// face's rows send along them, where in a continuum most of that light would have left
+/// (the ray effect of discrete ordinates); in dense hair the fibres' forward cone keeps
+/// light in the grid longer than in the path tracer. The measured values are held (a few
+/// percent of margin) so that the error cannot grow unnoticed, and the lower bounds keep
+/// the sky in.
 #[test]
 fn volume_white_fibres_under_the_sky_are_the_sky() {
     let gpu = gpu();
     let sky = 4.0 * f64::from(AMBIENT);
     // (width, the brightest cell's bound, the least inner cell's bound), from the
     // measured values printed below with a margin of a few percent.
-    for (width, brightest_bound, inside_bound) in [(0.01, 1.60, 1.35), (0.06, 1.38, 1.12)] {
+    for (width, brightest_bound, inside_bound) in [(0.01, 1.42, 0.94), (0.06, 1.56, 1.21)] {
         let hair = wavy(800, 16, 1.0, width);
         let params = volume_params(12, 64, Vec3::ZERO);
         let (fluence, _) = run_gpu(&gpu, &hair, hair.strands(), &params, &dark(), AMBIENT, None);

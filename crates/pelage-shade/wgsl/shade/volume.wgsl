@@ -9,10 +9,9 @@
 // Writes: bounds (6 x atomic<u32>, cleared to 0 before `fit`), accum (VOLUME_ACCUM u32 per
 //         cell, cleared to 0 before `splat`), medium (3 vec4 per cell: mean tangent times
 //         alignment and optical depth; A_iso and the march's extinction; g_iso and the
-//         body's solid share: `describe`), state_in/state_out (3 vec4 per cell:
-//         per channel the energy E leaving the cell this step and its flux vector, both
-//         divided by the faces' normalisation: `sendable`),
-//         fluence (header + 3 vec4 per cell, see volume_common.wgsl).
+//         body's solid share: `describe`), state_in/state_out (6 vec4 per cell: the
+//         light leaving the cell this step along x+, x-, y+, y-, z+, z-, rgb and an
+//         unused w), fluence (header + 3 vec4 per cell, see volume_common.wgsl).
 // Dispatch, in order:
 //   `fit`: fit_invocations / 256 workgroups of 256 (grid-stride loop over the vertices);
 //   `finalize`: one workgroup of 1;
@@ -22,7 +21,8 @@
 //   `occupy`: one invocation per cell, flattened the same way;
 //   `describe`: one invocation per cell, workgroups of 64, flattened the same way;
 //   `inject`: one invocation per cell, workgroups of 64, flattened the same way;
-//   `propagate`: as `inject`, `iterations` times, state_in and state_out swapped each time.
+//   `propagate`: as `inject`, `iterations` times, state_in and state_out swapped each time;
+//   `settle` then `settled`: as `inject`, state_in and state_out swapped between them.
 //
 // Splat: a segment of length L and width w adds optical depth w L (pi/4) / cell^2 to the
 // cells along it (pi/4: the mean of its projected width over isotropic directions; every
@@ -45,12 +45,26 @@
 // injects its reflection (mean direction 2/3 of the normal), and in each step the
 // solid share of what arrives at a cell is reflected the same way (inside the mesh,
 // back the way it came).
-// Propagate: each cell gathers from its six neighbours the share of their energy that
-// leaves through the shared face, w_d = max(0, 1/6 + m.d/3) normalised over the six faces
-// (m = flux / energy; the cosine-weighted exitance of L(w) = (1 + 3 m.w)), arriving with
-// flux (2/3) d times its energy (cosine-weighted hemisphere around d); of it exp(-2/3 kappa)
-// passes and the rest scatters (energy A_iso, direction as volume_scatter_direction).
-// The fluence adds (2/3) (arriving + leaving) / 2 per step: the light's time in the cell.
+// Propagate (discrete ordinates along the six axis directions): light moves one cell per
+// step straight along its direction, so a beam crossing sparse hair leaves the grid in as
+// many steps as it has cells to cross (a moment scheme that spreads each step's light
+// over the six faces lets a beam wander: free-streaming light stayed 2.9x too long).
+// Each cell takes from the neighbour behind it, per direction, what that neighbour sent
+// along it; of the light arriving, the body's solid share reflects (Lambertian, toward
+// its normal; inside the body, back the way it came), exp(-kappa) of the rest crosses the
+// cell unscattered (a cell edge of optical depth kappa), the rest the fibres scatter
+// (energy A_iso, flux as volume_scatter_flux). Light born in a cell (scattered there,
+// reflected, or injected) is born along it uniformly and may scatter again before it
+// leaves: the share p = (1 - exp(-kappa)) / kappa leaves unscattered, the rest is born
+// again times the albedo, so a cell lets out e p / (1 - r), r = A_iso (1 - p), and keeps
+// p / (1 - r |f| / e) of the flux (each scattering in the cell keeps that share of its
+// direction). What leaves is split over the six directions by `volume_directions`. The
+// fluence adds the light's path in the cell: p per unit arriving, (1 - p) / kappa per
+// birth (1/2 as kappa -> 0). Checked against a Monte Carlo random walk in a homogeneous
+// cube (scripts/volume_transport.py: total path within 8% over optical depths 0.2 to 8
+// per cell and albedos 0.8 to 0.99; free streaming 0.82 of the continuum's: a beam off
+// the axes crosses more than a cell edge per step). Then `settle`: the fluence over the
+// clear share of cells the body partly fills (below).
 
 #import shared/math.wgsl
 #import shared/bounds.wgsl
@@ -386,10 +400,11 @@ fn inject(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups
     let surface = surface_at(i);
     let lit_mesh = length(surface);
     let p = origin + (vec3<f32>(c) + vec3<f32>(0.5)) * cell;
+    // The energy born in the cell and its flux (a column per channel).
     var e = vec3<f32>(0.0);
-    var flux_r = vec3<f32>(0.0);
-    var flux_g = vec3<f32>(0.0);
-    var flux_b = vec3<f32>(0.0);
+    var f = mat3x3<f32>(vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0));
+    // The body's reflection leaves along 2/3 of its normal.
+    let lambert = select(vec3<f32>(0.0), (2.0 / 3.0) * surface / lit_mesh, lit_mesh > 0.0);
     if meet > 0.0 || lit_mesh > 0.0 {
         for (var li = 0u; li < min(frame.light_count, MAX_LIGHTS); li += 1u) {
             let light = frame.lights[li];
@@ -407,20 +422,15 @@ fn inject(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups
             let aligned = volume_fibre_at(theta, x);
             let albedo = s * aligned.albedo + (1.0 - s) * iso.albedo;
             let scattered = irradiance * (seen * meet) * albedo;
-            let dir = -l;
+            let travel = mat3x3<f32>(-l * scattered.x, -l * scattered.y, -l * scattered.z);
             e += scattered;
-            flux_r += scattered.x * volume_scatter_direction(dir, t, s, aligned.g.x, iso.g.x);
-            flux_g += scattered.y * volume_scatter_direction(dir, t, s, aligned.g.y, iso.g.y);
-            flux_b += scattered.z * volume_scatter_direction(dir, t, s, aligned.g.z, iso.g.z);
+            f += volume_scatter_flux(travel, t, s, aligned.g, iso.g);
             if lit_mesh > 0.0 {
                 // The mesh's lit area in the cell, under the cell's own fibres, reflected
                 // as a Lambertian (mean direction 2/3 of its normal).
                 let bounce = irradiance * (seen * exp(-kappa) * max(0.0, dot(surface, l))) * u.mesh_albedo;
                 e += bounce;
-                let d = (2.0 / 3.0) * surface / lit_mesh;
-                flux_r += bounce.x * d;
-                flux_g += bounce.y * d;
-                flux_b += bounce.z * d;
+                f += mat3x3<f32>(lambert * bounce.x, lambert * bounce.y, lambert * bounce.z);
             }
         }
     }
@@ -443,32 +453,24 @@ fn inject(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups
             sky += vec4<f32>(seen, -seen * l);
             lit += seen * max(0.0, dot(surface, l));
         }
-        let scattered = sky.x * meet * iso.albedo;
-        e += scattered;
-        flux_r += meet * iso.albedo.x * volume_scatter_direction(sky.yzw, t, s, iso.g.x, iso.g.x);
-        flux_g += meet * iso.albedo.y * volume_scatter_direction(sky.yzw, t, s, iso.g.y, iso.g.y);
-        flux_b += meet * iso.albedo.z * volume_scatter_direction(sky.yzw, t, s, iso.g.z, iso.g.z);
+        let scattered = meet * iso.albedo;
+        e += sky.x * scattered;
+        let travel = mat3x3<f32>(sky.yzw, sky.yzw, sky.yzw);
+        f += volume_columns(volume_scatter_flux(travel, t, s, iso.g, iso.g), scattered);
         if lit_mesh > 0.0 {
             let bounce = lit * exp(-kappa) * u.mesh_albedo;
             e += bounce;
-            let d = (2.0 / 3.0) * surface / lit_mesh;
-            flux_r += bounce.x * d;
-            flux_g += bounce.y * d;
-            flux_b += bounce.z * d;
+            f += mat3x3<f32>(lambert * bounce.x, lambert * bounce.y, lambert * bounce.z);
         }
         // The mean over the cell of its own fibres' transmittance along a cell edge.
-        sky *= select(1.0, meet / kappa, kappa > 1e-6);
+        sky *= volume_escape(kappa).x;
     }
-    let r = vec4<f32>(e.x, flux_r);
-    let g = vec4<f32>(e.y, flux_g);
-    let b = vec4<f32>(e.z, flux_b);
-    state_out[3u * i] = sendable(r);
-    state_out[3u * i + 1u] = sendable(g);
-    state_out[3u * i + 2u] = sendable(b);
-    let w = 0.5 * VOLUME_CHORD;
-    fluence[1u + 3u * i] = w * r + sky;
-    fluence[2u + 3u * i] = w * g + sky;
-    fluence[3u + 3u * i] = w * b + sky;
+    let born = volume_born(e, f, kappa, iso.albedo);
+    let none = vec3<f32>(0.0);
+    write_state(i, born.e, born.f, 0.0, VolumeDirections(none, none, none, none, none, none));
+    fluence[1u + 3u * i] = born.path * vec4<f32>(born.e.x, born.f[0]) + sky;
+    fluence[2u + 3u * i] = born.path * vec4<f32>(born.e.y, born.f[1]) + sky;
+    fluence[3u + 3u * i] = born.path * vec4<f32>(born.e.z, born.f[2]) + sky;
 }
 
 // The k-th of VOLUME_SKY_DIRECTIONS directions spread evenly over the sphere (a
@@ -498,100 +500,99 @@ fn volume_clear_toward(p: vec3<f32>, l: vec3<f32>, origin: vec3<f32>, cell: f32,
     return exp(-tau);
 }
 
-// A channel's state `st` (energy E leaving the cell, its flux vector) as the state
-// buffers hold it for the next step's gather: divided by the sum over the six faces of
-// max(0, 1/6 + m.d/3) (m = flux / E; the sum is 1 unless a component of m passes 1/2), so
-// that the share leaving through the face toward d is max(0, E'/6 + flux'.d/3) for the
-// stored E', flux' (`moved_across`): the normalisation once per cell and channel instead
-// of once per face in every neighbour. Zero where no energy leaves.
-fn sendable(st: vec4<f32>) -> vec4<f32> {
-    if st.x <= 0.0 {
-        return vec4<f32>(0.0);
+// The share of light crossing a cell edge of optical depth kappa unscattered, averaged
+// over where along the edge it starts, p = (1 - exp(-kappa)) / kappa, and the mean path
+// before it scatters or leaves, (1 - p) / kappa, in cell edges (a series below 1e-2,
+// where f32 would cancel).
+fn volume_escape(kappa: f32) -> vec2<f32> {
+    if kappa < 1e-2 {
+        return vec2<f32>(1.0 - kappa * (0.5 - kappa / 6.0), 0.5 - kappa * (1.0 / 6.0 - kappa / 24.0));
     }
-    let m = st.yzw / st.x;
-    let w = max(vec3<f32>(0.0), vec3<f32>(1.0 / 6.0) + m / 3.0);
-    let v = max(vec3<f32>(0.0), vec3<f32>(1.0 / 6.0) - m / 3.0);
-    return st / (w.x + w.y + w.z + v.x + v.y + v.z);
+    let p = (1.0 - exp(-kappa)) / kappa;
+    return vec2<f32>(p, (1.0 - p) / kappa);
 }
 
-// What a neighbour whose stored state (`sendable`) has energy `e` and flux component
-// `f` along `d` (the axis direction from the neighbour to this cell) sends across the
-// face toward `d`: its energy's share through that face, arriving with flux (2/3) d
-// times that energy.
-fn moved_across(e: f32, f: f32, df: vec3<f32>) -> vec4<f32> {
-    let moved = max(0.0, e / 6.0 + f / 3.0);
-    return vec4<f32>(moved, moved * (2.0 / 3.0) * df);
+// Light born in a cell, after its scatterings there: what leaves (energy and flux per
+// channel) and `path`, the fluence it leaves in the cell per unit leaving.
+struct VolumeBorn {
+    e: vec3<f32>,
+    f: mat3x3<f32>,
+    path: f32,
 }
 
-// The light arriving at a cell, per channel.
-struct VolumeArrivals {
-    r: vec4<f32>,
-    g: vec4<f32>,
-    b: vec4<f32>,
+// Energy `e` and flux `f` (a column per channel) born in a cell of optical depth `kappa`
+// and fibre albedo `albedo` (the header's scheme: leaving e p / (1 - r), r = albedo
+// (1 - p), flux p / (1 - r |f| / e); the albedo capped at 1 so that 1 - r >= p > 0).
+fn volume_born(e: vec3<f32>, f: mat3x3<f32>, kappa: f32, albedo: vec3<f32>) -> VolumeBorn {
+    let esc = volume_escape(kappa);
+    let r = min(albedo, vec3<f32>(1.0)) * (1.0 - esc.x);
+    let spread = vec3<f32>(length(f[0]), length(f[1]), length(f[2]));
+    let bias = select(vec3<f32>(0.0), min(spread / e, vec3<f32>(1.0)), e > vec3<f32>(0.0));
+    let ke = esc.x / (vec3<f32>(1.0) - r);
+    let kf = esc.x / (vec3<f32>(1.0) - r * bias);
+    return VolumeBorn(e * ke, volume_columns(f, kf), esc.y / esc.x);
 }
 
-// `acc` plus what the neighbour at `c - d` sends to cell `c` (nothing from outside the
-// grid). Called once per face with a constant `d`, so that no loop indexes a private
-// array (lavapipe keeps the arrivals in registers).
-fn arrive_across(c: vec3<i32>, d: vec3<i32>, acc: VolumeArrivals) -> VolumeArrivals {
+// Light along the six axis directions, rgb each: what arrives at a cell, or what leaves.
+struct VolumeDirections {
+    xp: vec3<f32>,
+    xn: vec3<f32>,
+    yp: vec3<f32>,
+    yn: vec3<f32>,
+    zp: vec3<f32>,
+    zn: vec3<f32>,
+}
+
+// Energy `e` and flux `f` (a column per channel) as light along the six directions: per
+// channel and axis the flux's component goes along its sign, and what the flux's L1 norm
+// leaves of the energy is spread evenly over the six. A flux longer (L1) than the energy
+// is shortened to it: six directions hold no beam narrower than their own off the axes.
+fn volume_directions(e: vec3<f32>, f: mat3x3<f32>) -> VolumeDirections {
+    let axes = transpose(f);
+    let l1 = abs(axes[0]) + abs(axes[1]) + abs(axes[2]);
+    let c = select(vec3<f32>(1.0), e / l1, l1 > e);
+    let even = max(vec3<f32>(0.0), e - c * l1) / 6.0;
+    let x = c * axes[0];
+    let y = c * axes[1];
+    let z = c * axes[2];
+    let zero = vec3<f32>(0.0);
+    return VolumeDirections(
+        max(x, zero) + even,
+        max(-x, zero) + even,
+        max(y, zero) + even,
+        max(-y, zero) + even,
+        max(z, zero) + even,
+        max(-z, zero) + even,
+    );
+}
+
+// Writes cell `i`'s six states: the light born there leaving (`e`, `f`) plus `kept` times
+// the light that arrived along each direction and crossed unscattered.
+fn write_state(i: u32, e: vec3<f32>, f: mat3x3<f32>, kept: f32, a: VolumeDirections) {
+    let out = volume_directions(e, f);
+    let j = 6u * i;
+    state_out[j] = vec4<f32>(out.xp + kept * a.xp, 0.0);
+    state_out[j + 1u] = vec4<f32>(out.xn + kept * a.xn, 0.0);
+    state_out[j + 2u] = vec4<f32>(out.yp + kept * a.yp, 0.0);
+    state_out[j + 3u] = vec4<f32>(out.yn + kept * a.yn, 0.0);
+    state_out[j + 4u] = vec4<f32>(out.zp + kept * a.zp, 0.0);
+    state_out[j + 5u] = vec4<f32>(out.zn + kept * a.zn, 0.0);
+}
+
+// What the neighbour at `c - d` sent along direction `k` (the k-th of x+, x-, y+, y-, z+,
+// z-, which is d) in the last step: the light arriving at cell `c` along d (none from
+// outside the grid).
+fn arrival(c: vec3<i32>, d: vec3<i32>, k: u32) -> vec3<f32> {
     let y = c - d;
     if any(y < vec3<i32>(0)) || any(y >= vec3<i32>(i32(u.resolution))) {
-        return acc;
+        return vec3<f32>(0.0);
     }
-    let j = 3u * cell_index(y);
-    let df = vec3<f32>(d);
-    // Two scalars per channel (the energy and the flux along the face's axis), not the
-    // vec4: these loads are most of a step's time on lavapipe.
-    let axis = select(select(3u, 2u, d.y != 0), 1u, d.x != 0);
-    let sign = f32(d.x + d.y + d.z);
-    return VolumeArrivals(
-        acc.r + moved_across(state_in[j].x, sign * state_in[j][axis], df),
-        acc.g + moved_across(state_in[j + 1u].x, sign * state_in[j + 1u][axis], df),
-        acc.b + moved_across(state_in[j + 2u].x, sign * state_in[j + 2u][axis], df),
-    );
+    return state_in[6u * cell_index(y) + k].xyz;
 }
 
-// The medium of a cell as a propagation step reads it.
-struct VolumeCell {
-    index: u32,
-    // Unit mean fibre direction, its alignment, the light a step keeps unscattered.
-    t: vec3<f32>,
-    s: f32,
-    keep: f32,
-    albedo: vec3<f32>,
-    g: vec3<f32>,
-    // The mesh's solid share and the unit normal of its surface (zero for none).
-    solid: f32,
-    normal: vec3<f32>,
-}
-
-// Channel `ch`'s step at the cell: what arrived, `a`, partly reflected by the mesh's
-// solid share, the rest kept or scattered by the fibres; written to the next state, and
-// the step's mean added to the fluence.
-fn step_channel(cell: VolumeCell, ch: u32, a: vec4<f32>) {
-    let free = (1.0 - cell.solid) * a;
-    let scatter = (1.0 - cell.keep) * cell.albedo[ch];
-    let bounce = cell.solid * a.x * u.mesh_albedo[ch];
-    var normal = cell.normal;
-    let al = length(a.yzw);
-    if all(normal == vec3<f32>(0.0)) && al > 0.0 {
-        normal = -a.yzw / al;
-    }
-    let out = vec4<f32>(
-        (cell.keep + scatter) * free.x + bounce,
-        cell.keep * free.yzw
-            + scatter * volume_scatter_direction(free.yzw, cell.t, cell.s, cell.g[ch], cell.g[ch])
-            + bounce * (2.0 / 3.0) * normal,
-    );
-    state_out[3u * cell.index + ch] = sendable(out);
-    fluence[1u + 3u * cell.index + ch] += 0.5 * VOLUME_CHORD * (a + out);
-}
-
-// One propagation step: every cell takes what its six neighbours send through the
-// shared faces (x+, x-, y+, y-, z+, z-, in that order), then the mesh reflects its solid
-// share (Lambertian, toward its normal; inside the mesh, back the way it came) and the
-// fibres keep or scatter the rest. Faces and channels are written out (no loop over a
-// private array).
+// One propagation step (the header's scheme): every cell takes the light arriving along
+// the six directions; the body's solid share reflects it, the fibres keep or scatter
+// the rest; the light born in the cell leaves after its scatterings there.
 @compute @workgroup_size(64)
 fn propagate(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let n = u.resolution;
@@ -600,35 +601,118 @@ fn propagate(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
         return;
     }
     let c = vec3<i32>(i32(i % n), i32((i / n) % n), i32(i / (n * n)));
-    var acc = VolumeArrivals(vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0));
-    acc = arrive_across(c, vec3<i32>(1, 0, 0), acc);
-    acc = arrive_across(c, vec3<i32>(-1, 0, 0), acc);
-    acc = arrive_across(c, vec3<i32>(0, 1, 0), acc);
-    acc = arrive_across(c, vec3<i32>(0, -1, 0), acc);
-    acc = arrive_across(c, vec3<i32>(0, 0, 1), acc);
-    acc = arrive_across(c, vec3<i32>(0, 0, -1), acc);
+    let a = VolumeDirections(
+        arrival(c, vec3<i32>(1, 0, 0), 0u),
+        arrival(c, vec3<i32>(-1, 0, 0), 1u),
+        arrival(c, vec3<i32>(0, 1, 0), 2u),
+        arrival(c, vec3<i32>(0, -1, 0), 3u),
+        arrival(c, vec3<i32>(0, 0, 1), 4u),
+        arrival(c, vec3<i32>(0, 0, -1), 5u),
+    );
+    let arrived = a.xp + a.xn + a.yp + a.yn + a.zp + a.zn;
+    // The arriving flux, a column per channel.
+    let flow = transpose(mat3x3<f32>(a.xp - a.xn, a.yp - a.yn, a.zp - a.zn));
     let med = medium[3u * i];
     let s = length(med.xyz);
+    let t = select(vec3<f32>(0.0, 1.0, 0.0), med.xyz / s, s > 0.0);
+    let kappa = med.w;
+    let albedo = medium[3u * i + 1u].xyz;
     let phase = medium[3u * i + 2u];
     let solid = phase.w;
-    // The body's normal matters only where it reflects (a solid share).
-    var normal = vec3<f32>(0.0);
+    let clear = 1.0 - solid;
+    let keep = exp(-kappa);
+    // Scattered by the fibres.
+    let scatter = (1.0 - keep) * clear * albedo;
+    var e = scatter * arrived;
+    var f = volume_columns(volume_scatter_flux(flow, t, s, phase.xyz, phase.xyz), scatter);
+    // Reflected by the body (only where it has a solid share).
     if solid > 0.0 {
         let surface = surface_at(i);
         let sl = length(surface);
-        normal = select(vec3<f32>(0.0), surface / sl, sl > 0.0);
+        var normal = surface / sl;
+        if !(sl > 0.0) {
+            let back = flow * vec3<f32>(1.0);
+            let bl = length(back);
+            normal = select(vec3<f32>(0.0), -back / bl, bl > 0.0);
+        }
+        let bounce = solid * arrived * u.mesh_albedo;
+        e += bounce;
+        f += mat3x3<f32>(normal * bounce.x, normal * bounce.y, normal * bounce.z) * (2.0 / 3.0);
     }
-    let cell = VolumeCell(
-        i,
-        select(vec3<f32>(0.0, 1.0, 0.0), med.xyz / s, s > 0.0),
-        s,
-        exp(-VOLUME_CHORD * med.w),
-        medium[3u * i + 1u].xyz,
-        phase.xyz,
-        solid,
-        normal,
-    );
-    step_channel(cell, 0u, acc.r);
-    step_channel(cell, 1u, acc.g);
-    step_channel(cell, 2u, acc.b);
+    let born = volume_born(e, f, kappa, albedo);
+    write_state(i, born.e, born.f, keep * clear, a);
+    let p = volume_escape(kappa).x * clear;
+    let bp = born.path;
+    fluence[1u + 3u * i] += p * vec4<f32>(arrived.x, flow[0]) + bp * vec4<f32>(born.e.x, born.f[0]);
+    fluence[2u + 3u * i] += p * vec4<f32>(arrived.y, flow[1]) + bp * vec4<f32>(born.e.y, born.f[1]);
+    fluence[3u + 3u * i] += p * vec4<f32>(arrived.z, flow[2]) + bp * vec4<f32>(born.e.z, born.f[2]);
+}
+
+// After the last step: the fluence of the hair in cells the body partly fills. The grid's
+// fluence is the mean over a whole cell, and light does not enter the body: where a cell
+// is partly solid its hair (all in the clear share) sees the fluence divided by the clear
+// share; a cell at least half solid takes instead its clear neighbours' fluence (weighted
+// by their clear shares), so that hair just above the skin is not read half from inside
+// the body. Written to `state_out` (free after the propagation), copied back by `settled`.
+@compute @workgroup_size(64)
+fn settle(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let n = u.resolution;
+    let i = flat_cell(gid, groups);
+    if i >= n * n * n {
+        return;
+    }
+    let solid = medium[3u * i + 2u].w;
+    var r = fluence[1u + 3u * i];
+    var g = fluence[2u + 3u * i];
+    var b = fluence[3u + 3u * i];
+    if solid >= 0.5 {
+        let c = vec3<i32>(i32(i % n), i32((i / n) % n), i32(i / (n * n)));
+        var w = 0.0;
+        r = vec4<f32>(0.0);
+        g = vec4<f32>(0.0);
+        b = vec4<f32>(0.0);
+        for (var k = 0u; k < 6u; k += 1u) {
+            let axis = k / 2u;
+            var d = vec3<i32>(0);
+            d[axis] = select(1, -1, (k & 1u) == 1u);
+            let y = c + d;
+            if any(y < vec3<i32>(0)) || any(y >= vec3<i32>(i32(n))) {
+                continue;
+            }
+            let j = cell_index(y);
+            let clear = 1.0 - medium[3u * j + 2u].w;
+            if clear > 0.5 {
+                // The neighbour's fluence over its clear share, weighted by that share.
+                w += clear;
+                r += fluence[1u + 3u * j];
+                g += fluence[2u + 3u * j];
+                b += fluence[3u + 3u * j];
+            }
+        }
+        let k = select(0.0, 1.0 / w, w > 0.0);
+        r *= k;
+        g *= k;
+        b *= k;
+    } else if solid > 0.0 {
+        let k = 1.0 / (1.0 - solid);
+        r *= k;
+        g *= k;
+        b *= k;
+    }
+    state_out[6u * i] = r;
+    state_out[6u * i + 1u] = g;
+    state_out[6u * i + 2u] = b;
+}
+
+// Copies `settle`'s fluence back.
+@compute @workgroup_size(64)
+fn settled(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let n = u.resolution;
+    let i = flat_cell(gid, groups);
+    if i >= n * n * n {
+        return;
+    }
+    fluence[1u + 3u * i] = state_in[6u * i];
+    fluence[2u + 3u * i] = state_in[6u * i + 1u];
+    fluence[3u + 3u * i] = state_in[6u * i + 2u];
 }

@@ -62,9 +62,6 @@ const VOLUME_SURFACE: u32 = 8u;
 const VOLUME_SOLID: u32 = 11u;
 // The tangent sum is kept at a quarter of fixed_scale (it must fit an i32).
 const VOLUME_TANGENT_SCALE: f32 = 0.25;
-// Mean chord of a cube under isotropic light (4 V / S = 2/3 of the edge): how far, in cell
-// edges, scattered light travels through a cell per step.
-const VOLUME_CHORD: f32 = 0.6666667;
 // Directions of the sky's injection (shade/volume.wgsl's volume_sky_direction). Odd, so
 // that no march from a cell centre lands exactly on a cell face along z (z = m / K with
 // m even: k z is never a half integer), where f32 and the mirror's f64 would pick
@@ -115,11 +112,26 @@ fn volume_fibre_isotropic(x: vec3<f32>) -> VolumeFibre {
     return VolumeFibre(albedo, select(vec3<f32>(0.0), ag / (w_sum * albedo), albedo > vec3<f32>(1e-8)));
 }
 
-// The mean direction of light travelling along p after one scattering by fibres of mean
-// tangent t with alignment s, channel bias g (aligned) and g_iso (unaligned).
-fn volume_scatter_direction(p: vec3<f32>, t: vec3<f32>, s: f32, g: f32, g_iso: f32) -> vec3<f32> {
-    let along = t * dot(t, p);
-    return s * (along + g * (p - along)) + (1.0 - s) * ((1.0 + 2.0 * g_iso) / 3.0) * p;
+// The flux of light of the three channels after one scattering by fibres of mean tangent
+// t with alignment s, channel bias g (aligned) and g_iso (unaligned): `f` and the result
+// hold one flux vector per channel (columns r, g, b); per channel
+//   s (t (t.p) + g (p - t (t.p))) + (1 - s) (1 + 2 g_iso) / 3 p.
+fn volume_scatter_flux(f: mat3x3<f32>, t: vec3<f32>, s: f32, g: vec3<f32>, g_iso: vec3<f32>) -> mat3x3<f32> {
+    let tp = t * f;
+    let iso = (1.0 - s) * (vec3<f32>(1.0) + 2.0 * g_iso) / 3.0;
+    let a0 = t * tp.x;
+    let a1 = t * tp.y;
+    let a2 = t * tp.z;
+    return mat3x3<f32>(
+        s * (a0 + g.x * (f[0] - a0)) + iso.x * f[0],
+        s * (a1 + g.y * (f[1] - a1)) + iso.y * f[1],
+        s * (a2 + g.z * (f[2] - a2)) + iso.z * f[2],
+    );
+}
+
+// Column c of `f` times k[c]: per channel scaling of a flux matrix.
+fn volume_columns(f: mat3x3<f32>, k: vec3<f32>) -> mat3x3<f32> {
+    return mat3x3<f32>(f[0] * k.x, f[1] * k.y, f[2] * k.z);
 }
 
 fn volume_sigma_coordinates(sigma: vec3<f32>) -> vec3<f32> {
