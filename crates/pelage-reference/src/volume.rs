@@ -86,7 +86,8 @@ pub struct VolumeGridCpu {
     /// The share of each cell inside the mesh.
     pub solid: Vec<f64>,
     /// Per cell and channel: fluence and flux vector `(φ, Φ)` of the lights' light
-    /// scattered at least once and of all the sky's (its unscattered light included).
+    /// scattered at least once and of all the sky's (its unscattered light included),
+    /// over the clear share where the body fills part of a cell (`settle`).
     pub fluence: Vec<[DVec4; 3]>,
     /// Total energy leaving the cells at each step (index 0: the injection), channels
     /// summed: the energy test watches it.

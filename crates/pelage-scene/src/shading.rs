@@ -464,8 +464,8 @@ pub const MIN_VOLUME_GRID: u32 = 4;
 /// Largest `volume_grid` (the grid holds 336 bytes per cell: 128³ is 705 MB).
 pub const MAX_VOLUME_GRID: u32 = 128;
 /// Default `volume_grid` (1.38 MB of GPU memory; see docs/src/shading.md for its cost in
-/// the shade stage, `pelage bench --quick`): the scattering lab measures 16³ within 1 to
-/// 2 points of 32³'s hair luminance.
+/// the shade stage, `pelage bench --quick`): the scattering lab measures 16³ within 1.1
+/// points of 32³'s hair luminance.
 pub const DEFAULT_VOLUME_GRID: u32 = 16;
 /// Largest `volume_iterations`.
 pub const MAX_VOLUME_ITERATIONS: u32 = 256;
