@@ -53,11 +53,11 @@ pub use roots::{
     StrandRoot, hash_to_unit, pcg_hash, root_region, root_tint, sample_roots, strand_brightness,
 };
 pub use sdf::{
-    BODY_SDF, BodySdf, COARSE_FACTOR, MAX_BURIED_CHECK, SDF_LABEL, SdfUniforms, body_triangles,
-    coarse_grid, flood_steps,
+    BODY_SDF, BodySdf, COARSE_FACTOR, MAX_BURIED_CHECK, SDF_LABEL, body_triangles, coarse_grid,
+    flood_steps,
 };
 pub use simulate::{SIMULATE_LABEL, SIMULATION_STATE, SimulateStrands};
-pub use skin::{MeshSkin, SKIN_LABEL, SKIN_NON_FINITE, SkinUniforms};
+pub use skin::{MeshSkin, SKIN_LABEL, SKIN_NON_FINITE};
 
 use pelage_gpu::{GpuError, ShaderSources};
 use pelage_scene::{MeshError, ParamError};

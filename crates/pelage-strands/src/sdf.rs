@@ -22,7 +22,7 @@ pub const BODY_SDF: &str = "strands.sdf";
 
 /// The uniforms of `sdf.wgsl` (`SdfUniforms` there).
 #[derive(Clone, Copy, Debug, PartialEq, ShaderType)]
-pub struct SdfUniforms {
+pub(crate) struct SdfUniforms {
     /// Position of node (0, 0, 0).
     pub origin: Vec3,
     /// Edge of a cell.

@@ -24,7 +24,7 @@ pub const SKIN_NON_FINITE: &str = "strands.skin_non_finite";
 
 /// The uniforms of `skin.wgsl` (`SkinUniforms` there).
 #[derive(Clone, Copy, Debug, PartialEq, ShaderType)]
-pub struct SkinUniforms {
+pub(crate) struct SkinUniforms {
     /// Vertices skinned.
     pub vertex_count: u32,
     /// Joint matrices in the joint-matrix buffer.

@@ -4,7 +4,9 @@
 // Reads:  `rest`, (segments + 1) vec4 per strand, one strand after the other (xyz = the
 //         rest position of the resampled groom, w unused), one StrandRoot per strand
 //         (width, colour, gust phase), and the frame's GrowUniforms (wind, time, level
-//         of detail; the shape, surface and gravity fields are not used).
+//         of detail; the shape and surface fields are not used, and gravity, which
+//         force() adds, is zero: groom.rs's params_for zeroes it, the groom's rest
+//         shape already hangs).
 // Writes: `vertices`, (segments / step + 1) vec4 per strand, one strand after the other:
 //         xyz = position, w = strand parameter in [0, 1] (0 at the root, 1 at the tip);
 //         and `drawn[strand].width`, the rest width times the level of detail's width
