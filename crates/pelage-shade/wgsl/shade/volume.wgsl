@@ -513,11 +513,13 @@ fn volume_escape(kappa: f32) -> vec2<f32> {
 }
 
 // Light born in a cell, after its scatterings there: what leaves (energy and flux per
-// channel) and `path`, the fluence it leaves in the cell per unit leaving.
+// channel), `path`, the fluence it leaves in the cell per unit leaving, and the cell's
+// `escape` p (volume_escape), which a step also needs for the light crossing it.
 struct VolumeBorn {
     e: vec3<f32>,
     f: mat3x3<f32>,
     path: f32,
+    escape: f32,
 }
 
 // Energy `e` and flux `f` (a column per channel) born in a cell of optical depth `kappa`
@@ -530,7 +532,7 @@ fn volume_born(e: vec3<f32>, f: mat3x3<f32>, kappa: f32, albedo: vec3<f32>) -> V
     let bias = select(vec3<f32>(0.0), min(spread / e, vec3<f32>(1.0)), e > vec3<f32>(0.0));
     let ke = esc.x / (vec3<f32>(1.0) - r);
     let kf = esc.x / (vec3<f32>(1.0) - r * bias);
-    return VolumeBorn(e * ke, volume_columns(f, kf), esc.y / esc.x);
+    return VolumeBorn(e * ke, volume_columns(f, kf), esc.y / esc.x, esc.x);
 }
 
 // Light along the six axis directions, rgb each: what arrives at a cell, or what leaves.
@@ -641,7 +643,7 @@ fn propagate(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
     }
     let born = volume_born(e, f, kappa, albedo);
     write_state(i, born.e, born.f, keep * clear, a);
-    let p = volume_escape(kappa).x * clear;
+    let p = born.escape * clear;
     let bp = born.path;
     fluence[1u + 3u * i] += p * vec4<f32>(arrived.x, flow[0]) + bp * vec4<f32>(born.e.x, born.f[0]);
     fluence[2u + 3u * i] += p * vec4<f32>(arrived.y, flow[1]) + bp * vec4<f32>(born.e.y, born.f[1]);
