@@ -221,6 +221,71 @@ fn directions(e: f64, f: DVec3) -> [f64; 6] {
     out
 }
 
+/// The propagation's spread and step path (`VOLUME_SPREAD`, `VOLUME_STEP_PATH`),
+/// integrated here: over the directions nearest +x, the face of the unit cube seen from
+/// its centre, r = (1, y, z) with y, z in [-1, 1] (solid angle dy dz / |r|³, flux along x
+/// 1 / |r|), the flux-weighted mean of |y| (the tangent toward y) halved and the
+/// flux-weighted mean secant.
+fn cone_moments() -> (f64, f64) {
+    let m = 512;
+    let (mut flux, mut aside, mut solid) = (0.0, 0.0, 0.0);
+    for i in 0..m {
+        for j in 0..m {
+            let y = -1.0 + 2.0 * (i as f64 + 0.5) / m as f64;
+            let z = -1.0 + 2.0 * (j as f64 + 0.5) / m as f64;
+            let r = (1.0 + y * y + z * z).sqrt();
+            let w = 1.0 / (r * r * r);
+            solid += w;
+            flux += w / r;
+            aside += w / r * y.abs();
+        }
+    }
+    (0.5 * aside / flux, solid / flux)
+}
+
+/// The cells a ray from `from` (in cell units) along unit `l` crosses, with the length of
+/// the ray in each (cell units), from where it leaves its first cell up to `limit` or the
+/// border of an `n`-cell grid: every crossing of a cell face found per axis, sorted, each
+/// stretch between two crossings in the cell holding its middle.
+fn ray_cells(from: DVec3, l: DVec3, limit: f64, n: usize) -> Vec<(IVec3, f64)> {
+    let mut cuts = Vec::new();
+    for a in 0..3 {
+        if l[a].abs() < 1e-20 {
+            continue;
+        }
+        let mut k = if l[a] > 0.0 {
+            from[a].floor() + 1.0
+        } else {
+            from[a].ceil() - 1.0
+        };
+        loop {
+            let t = (k - from[a]) / l[a];
+            if t >= limit || !(-1.0..=n as f64 + 1.0).contains(&k) {
+                break;
+            }
+            cuts.push(t);
+            k += l[a].signum();
+        }
+    }
+    cuts.push(limit);
+    cuts.sort_by(f64::total_cmp);
+    let mut out = Vec::new();
+    let start = cuts[0];
+    let mut t = start;
+    for &cut in &cuts[1..] {
+        let cut = cut.min(limit);
+        if cut > t {
+            let q = (from + l * (0.5 * (t + cut))).floor();
+            if q.min_element() < 0.0 || q.max_element() >= n as f64 {
+                break;
+            }
+            out.push((q.as_ivec3(), cut - t));
+            t = cut;
+        }
+    }
+    out
+}
+
 const FACES: [IVec3; 6] = [
     IVec3::new(1, 0, 0),
     IVec3::new(-1, 0, 0),
@@ -366,29 +431,30 @@ pub fn volume_grid(input: &VolumeInput<'_>) -> VolumeGridCpu {
     // light born settles), and the sky's unscattered fluence.
     let mut state = vec![[DVec4::ZERO; 3]; cells];
     let mut sky_fluence = vec![DVec4::ZERO; cells];
-    // `volume_clear_toward`: exp(-τ) times the body's clear share from `pos` toward `l`,
-    // one cell edge at a time (nearest cell) up to `reach` or the grid's border.
+    // `volume_clear_toward`: exp(-τ) times the body's clear share from where the ray
+    // from `pos` toward `l` leaves its cell up to `reach` or the grid's border, each cell
+    // crossed for the length of the ray in it (its clear share to that power).
     let clear_toward = |pos: DVec3, l: DVec3, reach: f64| {
         let mut tau = 0.0;
         let mut clear = 1.0;
-        for k in 1..4 * n {
-            if k as f64 * cell > reach {
-                break;
-            }
-            let q = (pos + l * (k as f64 * cell) - origin) / cell;
-            if q.min_element() < 0.0 || q.max_element() >= n as f64 {
-                break;
-            }
-            let j = index(q.floor().as_ivec3());
-            tau += depth[j];
-            clear *= 1.0 - solid[j];
+        for (c, length) in ray_cells((pos - origin) / cell, l, reach / cell, n) {
+            let j = index(c);
+            tau += depth[j] * length;
+            clear *= (1.0 - solid[j]).max(1e-30).powf(length);
         }
         (-tau).exp() * clear
+    };
+    // `volume_meet`: of light along `l` falling on a cell of optical depth `kappa`, the
+    // share its fibres meet per unit irradiance (over the projected area |l|₁ and the
+    // mean chord 1 / |l|₁: |l|₁ (1 - exp(-κ / |l|₁))) and the mean transmittance along
+    // that chord.
+    let meet_of = |kappa: f64, l: DVec3| {
+        let l1 = l.x.abs() + l.y.abs() + l.z.abs();
+        (-l1 * (-kappa / l1).exp_m1(), escape(kappa / l1).0)
     };
     let ambient = f64::from(input.ambient);
     for c in 0..cells {
         let kappa = depth[c];
-        let meet = 1.0 - (-kappa).exp();
         let lit_mesh = surface[c].length();
         let xyz = IVec3::new((c % n) as i32, ((c / n) % n) as i32, (c / (n * n)) as i32);
         let pos = origin + (xyz.as_dvec3() + 0.5) * cell;
@@ -396,25 +462,29 @@ pub fn volume_grid(input: &VolumeInput<'_>) -> VolumeGridCpu {
         let table = &tables[&keys[c]];
         // The sky (`inject`'s second half): SKY_DIRECTIONS directional lights of
         // irradiance 4 ambient / SKY_DIRECTIONS (radiance ambient / π over 4π / K sr
-        // each); what arrives unscattered the fibres scatter (A_iso, g_iso) and the body
-        // reflects, and, averaged over the cell's own fibres, it is the cell's fluence.
+        // each); what arrives unscattered the fibres meet and scatter (A_iso, g_iso) and
+        // the body reflects, and, times the cell's mean transmittance along each
+        // direction, it is the cell's fluence.
         let mut sky = DVec4::ZERO;
         if ambient > 0.0 {
             let irradiance = ambient * 4.0 / SKY_DIRECTIONS as f64;
             let mut lit = 0.0;
+            let (mut met, mut met_flux) = (0.0, DVec3::ZERO);
             for k in 0..SKY_DIRECTIONS {
                 let l = sky_direction(k);
                 let seen = irradiance * clear_toward(pos, l, 4.0 * n as f64 * cell);
-                let f = -seen * l;
-                sky += DVec4::new(seen, f.x, f.y, f.z);
+                let (meet, mean) = meet_of(kappa, l);
+                met += seen * meet;
+                met_flux -= seen * meet * l;
+                let f = -seen * mean * l;
+                sky += DVec4::new(seen * mean, f.x, f.y, f.z);
                 lit += seen * surface[c].dot(l).max(0.0);
             }
             // Scattered by the cell's fibres as `propagate` scatters what arrives.
-            let flux = DVec3::new(sky.y, sky.z, sky.w);
             for (ch, out) in state[c].iter_mut().enumerate() {
-                let a = meet * iso[c].albedo[ch];
-                let f = a * scatter_direction(flux, t, s, iso[c].g[ch], iso[c].g[ch]);
-                *out += DVec4::new(a * sky.x, f.x, f.y, f.z);
+                let a = iso[c].albedo[ch];
+                let f = a * scatter_direction(met_flux, t, s, iso[c].g[ch], iso[c].g[ch]);
+                *out += DVec4::new(a * met, f.x, f.y, f.z);
             }
             if lit_mesh > 0.0 {
                 let bounce = lit * (-kappa).exp() * mesh_albedo;
@@ -424,10 +494,9 @@ pub fn volume_grid(input: &VolumeInput<'_>) -> VolumeGridCpu {
                     state[c][ch] += DVec4::new(bounce[ch], f.x, f.y, f.z);
                 }
             }
-            sky *= escape(kappa).0;
         }
         sky_fluence[c] = sky;
-        if meet <= 0.0 && lit_mesh <= 0.0 {
+        if kappa <= 0.0 && lit_mesh <= 0.0 {
             continue;
         }
         for light in input.lights.iter().take(pelage_scene::MAX_LIGHTS) {
@@ -452,7 +521,7 @@ pub fn volume_grid(input: &VolumeInput<'_>) -> VolumeGridCpu {
             let theta = t.dot(l).abs().min(1.0).asin();
             let aligned = table.at(theta);
             let albedo = s * aligned.albedo + (1.0 - s) * iso[c].albedo;
-            let scattered = irradiance * (seen * meet) * albedo;
+            let scattered = irradiance * (seen * meet_of(kappa, l).0) * albedo;
             for ch in 0..3 {
                 let dir = scatter_direction(-l, t, s, aligned.g[ch], iso[c].g[ch]);
                 let f = scattered[ch] * dir;
@@ -484,29 +553,44 @@ pub fn volume_grid(input: &VolumeInput<'_>) -> VolumeGridCpu {
     let energy = |st: &[[[f64; 6]; 3]]| st.iter().flatten().flatten().sum::<f64>();
     let mut step_energy = vec![energy(&state)];
     let mut step_arrivals = Vec::new();
-    // Propagate: light moves one cell per step along its direction.
+    // Propagate: light moves one cell per step along its direction, `spread` of it to
+    // each diagonal neighbour ahead, crossing `step_path` cell edges.
+    let (spread, step_path) = cone_moments();
+    let sent = |state: &[[[f64; 6]; 3]], y: IVec3, ch: usize, k: usize| {
+        if y.min_element() < 0 || y.max_element() >= n as i32 {
+            0.0
+        } else {
+            state[index(y)][ch][k]
+        }
+    };
     for _ in 0..p.volume_iterations {
         let mut next = vec![[[0.0f64; 6]; 3]; cells];
         let mut arrived_total = 0.0;
         for c in 0..cells {
             let xyz = IVec3::new((c % n) as i32, ((c / n) % n) as i32, (c / (n * n)) as i32);
-            // Per channel, what arrives along each direction from the neighbour behind.
+            // Per channel, what arrives along each direction from the neighbour behind
+            // and, `spread` each, the four beside that one.
             let mut arrive = [[0.0f64; 6]; 3];
             for (k, d) in FACES.iter().enumerate() {
-                let y = xyz - *d;
-                if y.min_element() < 0 || y.max_element() >= n as i32 {
-                    continue;
-                }
-                let j = index(y);
-                for ch in 0..3 {
-                    arrive[ch][k] = state[j][ch][k];
+                let behind = xyz - *d;
+                for (ch, a) in arrive.iter_mut().enumerate() {
+                    let mut aside = 0.0;
+                    for e in FACES.iter().filter(|e| e.dot(*d) == 0) {
+                        aside += sent(&state, behind + *e, ch, k);
+                    }
+                    a[k] = (1.0 - 4.0 * spread) * sent(&state, behind, ch, k) + spread * aside;
                 }
             }
             let kappa = depth[c];
-            let keep = (-kappa).exp();
+            let keep = (-kappa * step_path).exp();
             let clear = 1.0 - solid[c];
             let (t, s) = (medium_t[c], medium_s[c]);
-            let (p_cross, _) = escape(kappa);
+            // The mean path in the cell of the light arriving, (1 - keep) / κ.
+            let p_cross = if kappa > 0.0 {
+                -(-kappa * step_path).exp_m1() / kappa
+            } else {
+                step_path
+            };
             let flows: [DVec3; 3] = std::array::from_fn(|ch| {
                 FACES
                     .iter()
@@ -672,4 +756,60 @@ fn occupancy(surface: &[DVec3], n: usize) -> Vec<f64> {
             x.min(y).max(x.max(y).min(z))
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The value of `const NAME: f32 = value;` in the volume method's WGSL.
+    fn wgsl_constant(name: &str) -> f64 {
+        let source = include_str!("../../pelage-shade/wgsl/shade/models/volume_common.wgsl");
+        let line = source
+            .lines()
+            .find(|l| l.starts_with(&format!("const {name}: f32 = ")))
+            .unwrap_or_else(|| panic!("{name} not in volume_common.wgsl"));
+        line.split('=')
+            .nth(1)
+            .unwrap()
+            .trim()
+            .trim_end_matches(';')
+            .parse()
+            .unwrap()
+    }
+
+    /// The spread and step path the GPU is compiled with are the cone's, as integrated
+    /// here (a change to either side shows).
+    #[test]
+    fn cone_moments_are_the_shaders_constants() {
+        let (spread, path) = cone_moments();
+        println!("cone: spread {spread:.5}, step path {path:.5}");
+        assert!(
+            (spread - wgsl_constant("VOLUME_SPREAD")).abs() < 5e-5,
+            "{spread}"
+        );
+        assert!(
+            (path - wgsl_constant("VOLUME_STEP_PATH")).abs() < 5e-5,
+            "{path}"
+        );
+    }
+
+    /// A ray's cells: along an axis from a cell centre, every cell ahead once for a whole
+    /// edge; along a diagonal, lengths that sum to the distance from the first cell's
+    /// corner to the limit.
+    #[test]
+    fn ray_cells_cross_whole_cells() {
+        let along = ray_cells(DVec3::new(1.5, 1.5, 1.5), DVec3::X, 100.0, 5);
+        assert_eq!(along.len(), 3);
+        assert!(
+            along
+                .iter()
+                .all(|&(c, l)| c.y == 1 && c.z == 1 && (l - 1.0).abs() < 1e-12)
+        );
+        let d = DVec3::ONE.normalize();
+        let diagonal = ray_cells(DVec3::splat(0.5), d, 3.0, 8);
+        let total: f64 = diagonal.iter().map(|&(_, l)| l).sum();
+        assert!((total - (3.0 - 0.5 * 3f64.sqrt())).abs() < 1e-12, "{total}");
+        assert!(ray_cells(DVec3::splat(0.5), d, 0.5, 8).is_empty());
+    }
 }

@@ -469,11 +469,12 @@ pub const MAX_VOLUME_GRID: u32 = 128;
 pub const DEFAULT_VOLUME_GRID: u32 = 16;
 /// Largest `volume_iterations`.
 pub const MAX_VOLUME_ITERATIONS: u32 = 256;
-/// Default `volume_iterations`: light moves one cell per step along the axes, so a
-/// beam crosses the default grid in 16; the scattering lab measures 16 steps and 64 the
-/// same within 0.001 of hair luminance (see docs/src/path-tracer.md). A finer grid needs
-/// at least as many steps as cells per side.
-pub const DEFAULT_VOLUME_ITERATIONS: u32 = 16;
+/// Default `volume_iterations`: light moves one cell per step along the axes; on the
+/// default grid the scattering lab measures 12 steps the same as 16 and 64 to the third
+/// decimal of hair luminance and FLIP (8 lose up to 0.001 of FLIP; see
+/// docs/src/path-tracer.md). A finer grid needs proportionally more (the lab runs 32 at
+/// 32³).
+pub const DEFAULT_VOLUME_ITERATIONS: u32 = 12;
 
 /// How Chiang's fibres carry light scattered by other fibres (the orders the single
 /// scattering term leaves out). Names in [`crate::names`]: `none`, `dual`, `volume`.
@@ -488,8 +489,8 @@ pub enum MultipleScattering {
     /// direction splatted into a grid over the hair, single-scattered light injected
     /// through the grid's own transmittance toward each light, propagated cell to cell with
     /// a fibre phase function from Chiang's energy tables, read at shading. The default:
-    /// the scattering lab measures it closest to the path tracer on every row, at 1.15x
-    /// single scattering's shade stage (16³ cells).
+    /// the scattering lab measures it closest to the path tracer on every row, at about
+    /// 1.5x single scattering's shade stage (16³ cells; docs/src/shading.md).
     #[default]
     Volume,
 }
@@ -519,7 +520,7 @@ impl<'de> Deserialize<'de> for MultipleScattering {
 
 impl Default for ChiangParams {
     /// pbrt-v3's defaults (β_m = β_n = 0.3, α = 2°, η = 1.55), absorption from the hair's
-    /// colour, volume scattering (16³ cells, 16 steps).
+    /// colour, volume scattering (16³ cells, 12 steps).
     fn default() -> Self {
         Self {
             beta_m: 0.3,

@@ -495,9 +495,12 @@ impl VolumeGrid {
             pass.dispatch_workgroups(x, y, 1);
         }
         let (x, y) = dispatch_size(limits, cells(v.resolution), 64);
-        pelage_gpu::set_bind_group(&mut pass, 0, &self.mesh_group);
-        pass.set_pipeline(&self.occupy);
-        pass.dispatch_workgroups(x, y, 1);
+        if v.triangle_count > 0 {
+            // Without a mesh every cell's solid share is the cleared 0.
+            pelage_gpu::set_bind_group(&mut pass, 0, &self.mesh_group);
+            pass.set_pipeline(&self.occupy);
+            pass.dispatch_workgroups(x, y, 1);
+        }
         pelage_gpu::set_bind_group(&mut pass, 0, &self.inject_group);
         pelage_gpu::set_bind_group(&mut pass, 2, &self.chiang_group);
         pass.set_pipeline(&self.describe);
@@ -510,13 +513,16 @@ impl VolumeGrid {
             pelage_gpu::set_bind_group(&mut pass, 0, &self.propagate_groups[step % 2]);
             pass.dispatch_workgroups(x, y, 1);
         }
-        // `settle` writes the state the next step would, `settled` reads it back.
-        pelage_gpu::set_bind_group(&mut pass, 0, &self.propagate_groups[steps % 2]);
-        pass.set_pipeline(&self.settle[0]);
-        pass.dispatch_workgroups(x, y, 1);
-        pelage_gpu::set_bind_group(&mut pass, 0, &self.propagate_groups[(steps + 1) % 2]);
-        pass.set_pipeline(&self.settle[1]);
-        pass.dispatch_workgroups(x, y, 1);
+        if v.triangle_count > 0 {
+            // `settle` writes the state the next step would, `settled` reads it back
+            // (without a mesh no cell is solid and the fluence stays as it is).
+            pelage_gpu::set_bind_group(&mut pass, 0, &self.propagate_groups[steps % 2]);
+            pass.set_pipeline(&self.settle[0]);
+            pass.dispatch_workgroups(x, y, 1);
+            pelage_gpu::set_bind_group(&mut pass, 0, &self.propagate_groups[(steps + 1) % 2]);
+            pass.set_pipeline(&self.settle[1]);
+            pass.dispatch_workgroups(x, y, 1);
+        }
     }
 
     /// The pass as the frame plan lists it: reads the strands and the mesh, writes the

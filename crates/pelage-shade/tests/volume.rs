@@ -299,11 +299,15 @@ fn volume_white_fibres_gain_no_energy() {
     let params = volume_params(12, 24, Vec3::ZERO);
     let (_, medium) = run_gpu(&gpu, &hair, hair.strands(), &params, &sky, 0.0, None);
     let mut worst: f32 = 0.0;
-    for cell in medium.chunks_exact(12) {
+    let mut with_fibres = 0;
+    // A cell without fibres has no phase function (`describe` leaves it 0).
+    for cell in medium.chunks_exact(12).filter(|cell| cell[3] > 0.0) {
+        with_fibres += 1;
         for ch in 0..3 {
             worst = worst.max((cell[4 + ch] - 1.0).abs());
         }
     }
+    assert!(with_fibres > 0);
     println!("white fibres: largest |A_iso - 1| on the GPU {worst:.2e}");
     assert!(worst < 2e-3, "A_iso off 1 by {worst}");
     let cpu = mirror(&hair, &params, &sky, 0.0, 0.5, None);
@@ -467,22 +471,23 @@ fn volume_sky_injection_matches_cpu_mirror() {
 /// White fibres (σ_a = 0) in a cube under the sky alone, a white furnace: in a medium
 /// that absorbs nothing, under a uniform sky of radiance `ambient / π`, the light is the
 /// sky's everywhere (fluence `4 ambient`). The GPU is the mirror's. The grid is brighter
-/// than the sky: at an optical depth of 0.64 per cell 0.97x to 1.38x (mean 1.15x; the
-/// moment scheme before the six directions: 1.35x to 1.55x), at 3.8 per cell 1.25x to
-/// 1.51x (mean 1.39x; before: 1.12x to 1.33x). Its border cells are the brightest: the six
-/// directions carry light only along the axes, so a cell on a face receives what its
-/// face's rows send along them, where in a continuum most of that light would have left
-/// (the ray effect of discrete ordinates); in dense hair the fibres' forward cone keeps
-/// light in the grid longer than in the path tracer. The measured values are held (a few
-/// percent of margin) so that the error cannot grow unnoticed, and the lower bounds keep
-/// the sky in.
+/// than the sky: at an optical depth of 0.64 per cell 1.15x to 1.49x (mean 1.28x; with
+/// light held to the six axes, no spread and a path of one cell edge per step: 0.97x to
+/// 1.38x, mean 1.15x), at 3.8 per cell 1.23x to 1.43x (mean 1.31x; before: 1.25x to
+/// 1.51x, mean 1.39x). A path of one cell edge per step with the spread measured 1.01x to
+/// 1.26x and 1.19x to 1.33x, but the cone's path is the geometry's (and the lab's blond
+/// hair and the Monte Carlo check of scripts/volume_transport.py prefer it). A suspected
+/// cause, not yet measured: light scattered near a cell's lit face is treated as born
+/// evenly through the cell, so less of it leaves back through that face. The measured
+/// values are held (a few percent of margin) so that the error cannot grow unnoticed, and
+/// the lower bounds keep the sky in.
 #[test]
 fn volume_white_fibres_under_the_sky_are_the_sky() {
     let gpu = gpu();
     let sky = 4.0 * f64::from(AMBIENT);
     // (width, the brightest cell's bound, the least inner cell's bound), from the
     // measured values printed below with a margin of a few percent.
-    for (width, brightest_bound, inside_bound) in [(0.01, 1.42, 0.94), (0.06, 1.56, 1.21)] {
+    for (width, brightest_bound, inside_bound) in [(0.01, 1.53, 1.11), (0.06, 1.47, 1.19)] {
         let hair = wavy(800, 16, 1.0, width);
         let params = volume_params(12, 64, Vec3::ZERO);
         let (fluence, _) = run_gpu(&gpu, &hair, hair.strands(), &params, &dark(), AMBIENT, None);

@@ -93,7 +93,7 @@ const METHODS: [Method; 5] = [
         p.multiple_scattering = MultipleScattering::None
     }),
     ("dual", |p| p.multiple_scattering = MultipleScattering::Dual),
-    // The volume method beside its defaults (16³ cells, 16 steps): a finer grid (with
+    // The volume method beside its defaults (16³ cells, 12 steps): a finer grid (with
     // the steps a beam needs to cross it), and more steps (light still in flight after
     // the last step is lost).
     ("volume_g32", |p| {

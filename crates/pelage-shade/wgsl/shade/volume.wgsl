@@ -18,11 +18,13 @@
 //   `splat`: one invocation per segment, workgroups of 64, flattened as
 //            gid.y * num_workgroups.x * 64 + gid.x (pelage_gpu::dispatch_size);
 //   `splat_mesh`: one invocation per triangle, flattened the same way (none without one);
-//   `occupy`: one invocation per cell, flattened the same way;
+//   `occupy`: one invocation per cell, flattened the same way (none without a mesh: the
+//             solid shares stay the cleared 0);
 //   `describe`: one invocation per cell, workgroups of 64, flattened the same way;
 //   `inject`: one invocation per cell, workgroups of 64, flattened the same way;
 //   `propagate`: as `inject`, `iterations` times, state_in and state_out swapped each time;
-//   `settle` then `settled`: as `inject`, state_in and state_out swapped between them.
+//   `settle` then `settled`: as `inject`, state_in and state_out swapped between them
+//             (neither without a mesh).
 //
 // Splat: a segment of length L and width w adds optical depth w L (pi/4) / cell^2 to the
 // cells along it (pi/4: the mean of its projected width over isotropic directions; every
@@ -30,14 +32,15 @@
 // its tangent (sign chosen so the largest component is positive) and its colour weighted
 // by that depth. Fixed point, u32 atomics only (saturating; the tangent as wrapping i32).
 // Inject: per cell and light, the light reaching the cell unscattered, exp(-tau) with tau
-// the optical depth marched one cell at a time toward the light, times the share that
-// meets the cell's fibres (1 - exp(-kappa)), scattered once: E = irradiance exp(-tau)
-// (1 - exp(-kappa)) A(theta_l), its flux E times the scattered mean direction. The sky
+// the optical depth from the cell's face toward the light (the cells crossed, each for
+// the length of the ray in it: volume_clear_toward), times the share that meets the
+// cell's fibres over its projected area (volume_meet), scattered once: E = irradiance
+// exp(-tau) meet A(theta_l), its flux E times the scattered mean direction. The sky
 // (radiance frame.ambient / pi from every direction, the path tracer's `sky`) likewise,
 // as VOLUME_SKY_DIRECTIONS directional lights marched to the grid's border; the sky's
-// unscattered light (fluence and flux, times the cell's own mean transmittance
-// (1 - exp(-kappa)) / kappa) is added to the cell's fluence: the hair reads its single
-// scattering of the sky from the grid (orders: lights 1 explicit, >= 2 grid; sky all grid).
+// unscattered light (fluence and flux, times the cell's own mean transmittance along each
+// direction) is added to the cell's fluence: the hair reads its single scattering of the
+// sky from the grid (orders: lights 1 explicit, >= 2 grid; sky all grid).
 // The mesh (the body under the hair, a Lambertian of albedo pi mesh_color, as the path
 // tracer's): `splat_mesh` adds its area-weighted outward normal to the cells, `occupy`
 // derives the share of each cell inside it; the march toward a light is stopped by the
@@ -46,25 +49,26 @@
 // solid share of what arrives at a cell is reflected the same way (inside the mesh,
 // back the way it came).
 // Propagate (discrete ordinates along the six axis directions): light moves one cell per
-// step straight along its direction, so a beam crossing sparse hair leaves the grid in as
-// many steps as it has cells to cross (a moment scheme that spreads each step's light
-// over the six faces lets a beam wander: free-streaming light stayed 2.9x too long).
-// Each cell takes from the neighbour behind it, per direction, what that neighbour sent
-// along it; of the light arriving, the body's solid share reflects (Lambertian, toward
-// its normal; inside the body, back the way it came), exp(-kappa) of the rest crosses the
-// cell unscattered (a cell edge of optical depth kappa), the rest the fibres scatter
+// step along its direction, so a beam crossing sparse hair leaves the grid in as many
+// steps as it has cells to cross (a moment scheme that spreads each step's light over
+// the six faces lets a beam wander: free-streaming light stayed 2.9x too long); each
+// direction stands for the cone of directions nearest it, so VOLUME_SPREAD of it moves
+// to each of the four diagonal neighbours ahead and it crosses VOLUME_STEP_PATH cell
+// edges (volume_common.wgsl). Each cell takes, per direction, what the cells behind it
+// sent along it; of the light arriving, the body's solid share reflects (Lambertian,
+// toward its normal; inside the body, back the way it came), exp(-kappa
+// VOLUME_STEP_PATH) of the rest crosses the cell unscattered, the rest the fibres scatter
 // (energy A_iso, flux as volume_scatter_flux). Light born in a cell (scattered there,
 // reflected, or injected) is born along it uniformly and may scatter again before it
 // leaves: the share p = (1 - exp(-kappa)) / kappa leaves unscattered, the rest is born
 // again times the albedo, so a cell lets out e p / (1 - r), r = A_iso (1 - p), and keeps
 // p / (1 - r |f| / e) of the flux (each scattering in the cell keeps that share of its
 // direction). What leaves is split over the six directions by `volume_directions`. The
-// fluence adds the light's path in the cell: p per unit arriving, (1 - p) / kappa per
-// birth (1/2 as kappa -> 0). Checked against a Monte Carlo random walk in a homogeneous
-// cube (scripts/volume_transport.py: total path within 8% over optical depths 0.2 to 8
-// per cell and albedos 0.8 to 0.99; free streaming 0.82 of the continuum's: a beam off
-// the axes crosses more than a cell edge per step). Then `settle`: the fluence over the
-// clear share of cells the body partly fills (below).
+// fluence adds the light's path in the cell: (1 - exp(-kappa VOLUME_STEP_PATH)) / kappa
+// per unit arriving, (1 - p) / kappa per birth (1/2 as kappa -> 0). Checked against a
+// Monte Carlo random walk in a homogeneous cube (scripts/volume_transport.py, which
+// prints the figures). Then `settle`: the fluence over the clear share of cells the body
+// partly fills (below).
 
 #import shared/math.wgsl
 #import shared/bounds.wgsl
@@ -321,13 +325,12 @@ fn flat_cell(gid: vec3<u32>, groups: vec3<u32>) -> u32 {
     return gid.y * groups.x * 64u + gid.x;
 }
 
-// A cell's fibres from the splat: optical depth, unit mean tangent and alignment, the
-// absorption coordinates of its mean colour and the isotropic phase function's A and g.
+// A cell's fibres from the splat: optical depth, unit mean tangent and alignment, and the
+// isotropic phase function's A and g.
 struct CellFibres {
     kappa: f32,
     t: vec3<f32>,
     s: f32,
-    x: vec3<f32>,
     iso: VolumeFibre,
 }
 
@@ -339,24 +342,37 @@ fn cell_fibres(i: u32) -> CellFibres {
         f32(bitcast<i32>(atomicLoad(&accum[at + 2u]))),
         f32(bitcast<i32>(atomicLoad(&accum[at + 3u]))),
     ) * (u.inv_fixed_scale / VOLUME_TANGENT_SCALE);
+    var t = vec3<f32>(0.0, 1.0, 0.0);
+    var s = 0.0;
+    let tl = length(tangent_sum);
+    if kappa > 0.0 {
+        s = clamp(tl / kappa, 0.0, 1.0);
+    }
+    if tl > 0.0 {
+        t = tangent_sum / tl;
+    }
+    // A cell without fibres scatters nothing: its phase function is never read.
+    var iso = VolumeFibre(vec3<f32>(0.0), vec3<f32>(0.0));
+    if kappa > 0.0 {
+        iso = volume_fibre_isotropic(cell_coordinates(i, kappa));
+    }
+    return CellFibres(kappa, t, s, iso);
+}
+
+// The absorption coordinates (volume_sigma_coordinates) of the mean colour of cell i's
+// fibres (white where it has none), of optical depth kappa.
+fn cell_coordinates(i: u32, kappa: f32) -> vec3<f32> {
+    let at = VOLUME_ACCUM * i;
     let color_sum = vec3<f32>(
         f32(atomicLoad(&accum[at + 4u])),
         f32(atomicLoad(&accum[at + 5u])),
         f32(atomicLoad(&accum[at + 6u])),
     ) * u.inv_fixed_scale;
-    var t = vec3<f32>(0.0, 1.0, 0.0);
-    var s = 0.0;
     var color = vec3<f32>(1.0);
-    let tl = length(tangent_sum);
     if kappa > 0.0 {
-        s = clamp(tl / kappa, 0.0, 1.0);
         color = clamp(color_sum / kappa, vec3<f32>(0.0), vec3<f32>(1.0));
     }
-    if tl > 0.0 {
-        t = tangent_sum / tl;
-    }
-    let x = volume_sigma_coordinates(chiang_sigma_a(chiang, color));
-    return CellFibres(kappa, t, s, x, volume_fibre_isotropic(x));
+    return volume_sigma_coordinates(chiang_sigma_a(chiang, color));
 }
 
 // Per cell, after `occupy`: the medium the later passes read with plain loads (the
@@ -390,13 +406,14 @@ fn inject(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups
     let header = fluence[0];
     let origin = header.xyz;
     let cell = header.w;
-    let fibres = cell_fibres(i);
-    let kappa = fibres.kappa;
-    let t = fibres.t;
-    let s = fibres.s;
-    let x = fibres.x;
-    let iso = fibres.iso;
-    let meet = 1.0 - exp(-kappa);
+    // The cell's fibres as `describe` wrote them (the isotropic phase function is not
+    // integrated twice); their absorption coordinates for the lights' angles.
+    let med = medium[3u * i];
+    let kappa = med.w;
+    let s = length(med.xyz);
+    let t = select(vec3<f32>(0.0, 1.0, 0.0), med.xyz / s, s > 0.0);
+    let x = cell_coordinates(i, kappa);
+    let iso = VolumeFibre(medium[3u * i + 1u].xyz, medium[3u * i + 2u].xyz);
     let surface = surface_at(i);
     let lit_mesh = length(surface);
     let p = origin + (vec3<f32>(c) + vec3<f32>(0.5)) * cell;
@@ -405,23 +422,23 @@ fn inject(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups
     var f = mat3x3<f32>(vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0));
     // The body's reflection leaves along 2/3 of its normal.
     let lambert = select(vec3<f32>(0.0), (2.0 / 3.0) * surface / lit_mesh, lit_mesh > 0.0);
-    if meet > 0.0 || lit_mesh > 0.0 {
+    if kappa > 0.0 || lit_mesh > 0.0 {
         for (var li = 0u; li < min(frame.light_count, MAX_LIGHTS); li += 1u) {
             let light = frame.lights[li];
             let l = frame_to_light(light, p);
             let irradiance = frame_irradiance(light, p);
-            // March toward the light one cell edge at a time (nearest cell), up to the
-            // light itself when it is a point inside the grid.
+            // March toward the light from the cell's face, up to the light itself when
+            // it is a point inside the grid.
             var reach = 4.0 * f32(n) * cell;
             if light.position.w != 0.0 {
                 reach = min(reach, length(light.position.xyz - p));
             }
-            let seen = volume_clear_toward(p, l, origin, cell, reach);
+            let seen = volume_clear_toward(c, p, l, origin, cell, reach);
             let cos_i = length(cross(t, l));
             let theta = fibre_angle(abs(dot(t, l)), min(cos_i, 1.0));
             let aligned = volume_fibre_at(theta, x);
             let albedo = s * aligned.albedo + (1.0 - s) * iso.albedo;
-            let scattered = irradiance * (seen * meet) * albedo;
+            let scattered = irradiance * (seen * volume_meet(kappa, l).x) * albedo;
             let travel = mat3x3<f32>(-l * scattered.x, -l * scattered.y, -l * scattered.z);
             e += scattered;
             f += volume_scatter_flux(travel, t, s, aligned.g, iso.g);
@@ -437,33 +454,33 @@ fn inject(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups
     // The sky: uniform radiance frame.ambient / pi from every direction (the path
     // tracer's `sky`), as VOLUME_SKY_DIRECTIONS directional lights of irradiance
     // 4 ambient / VOLUME_SKY_DIRECTIONS each, marched to the grid's border like a light.
-    // What reaches the cell unscattered (fluence and flux) the cell's fibres scatter as
-    // `propagate` scatters what arrives (the share 1 - exp(-kappa), A_iso and g_iso), and
-    // the body's lit area reflects: that joins the injection (orders >= 2 of the sky once
-    // it propagates); times the cell's own mean transmittance it is the cell's fluence
-    // (order 1: what hair_scattered makes of it is the fibre's single scattering of the
-    // sky, with the grid's visibility).
+    // What reaches the cell unscattered the cell's fibres scatter as `propagate` scatters
+    // what arrives (A_iso and g_iso, the share volume_meet of each direction), and the
+    // body's lit area reflects: that joins the injection (orders >= 2 of the sky once it
+    // propagates); times the cell's own mean transmittance along each direction it is the
+    // cell's fluence (order 1: what hair_scattered makes of it is the fibre's single
+    // scattering of the sky, with the grid's visibility).
     var sky = vec4<f32>(0.0);
     if frame.ambient > 0.0 {
         let irradiance = frame.ambient * 4.0 / f32(VOLUME_SKY_DIRECTIONS);
         var lit = 0.0;
+        var met = vec4<f32>(0.0);
         for (var k = 0u; k < VOLUME_SKY_DIRECTIONS; k += 1u) {
             let l = volume_sky_direction(k);
-            let seen = irradiance * volume_clear_toward(p, l, origin, cell, 4.0 * f32(n) * cell);
-            sky += vec4<f32>(seen, -seen * l);
+            let seen = irradiance * volume_clear_toward(c, p, l, origin, cell, 4.0 * f32(n) * cell);
+            let share = volume_meet(kappa, l);
+            met += seen * share.x * vec4<f32>(1.0, -l);
+            sky += seen * share.y * vec4<f32>(1.0, -l);
             lit += seen * max(0.0, dot(surface, l));
         }
-        let scattered = meet * iso.albedo;
-        e += sky.x * scattered;
-        let travel = mat3x3<f32>(sky.yzw, sky.yzw, sky.yzw);
-        f += volume_columns(volume_scatter_flux(travel, t, s, iso.g, iso.g), scattered);
+        e += met.x * iso.albedo;
+        let travel = mat3x3<f32>(met.yzw, met.yzw, met.yzw);
+        f += volume_columns(volume_scatter_flux(travel, t, s, iso.g, iso.g), iso.albedo);
         if lit_mesh > 0.0 {
             let bounce = lit * exp(-kappa) * u.mesh_albedo;
             e += bounce;
             f += mat3x3<f32>(lambert * bounce.x, lambert * bounce.y, lambert * bounce.z);
         }
-        // The mean over the cell of its own fibres' transmittance along a cell edge.
-        sky *= volume_escape(kappa).x;
     }
     let born = volume_born(e, f, kappa, iso.albedo);
     let none = vec3<f32>(0.0);
@@ -482,22 +499,58 @@ fn volume_sky_direction(k: u32) -> vec3<f32> {
     return vec3<f32>(r * cos(phi), r * sin(phi), z);
 }
 
-// The transmittance from cell centre p toward l up to `reach`: exp(-tau) times the clear
-// share of the body, marched one cell edge at a time (nearest cell) until the border.
-fn volume_clear_toward(p: vec3<f32>, l: vec3<f32>, origin: vec3<f32>, cell: f32, reach: f32) -> f32 {
-    let n = u.resolution;
+// The transmittance toward l up to `reach` (world units from the centre p of cell c),
+// from where the ray from p leaves cell c: exp(-tau) times the clear share of the body,
+// tau the cells' extinction (per cell edge) times the length of the ray in each cell
+// (cell edges), the cells found by a 3D DDA (Amanatides and Woo) until the border.
+fn volume_clear_toward(c: vec3<i32>, p: vec3<f32>, l: vec3<f32>, origin: vec3<f32>, cell: f32, reach: f32) -> f32 {
+    let n = i32(u.resolution);
+    let limit = reach / cell;
+    let step = select(vec3<i32>(-1), vec3<i32>(1), l >= vec3<f32>(0.0));
+    let al = abs(l);
+    let inv = select(vec3<f32>(1e30), 1.0 / al, al > vec3<f32>(1e-20));
+    // Ray length (cell edges) to the next face along each axis: half a cell from the
+    // centre, then one cell each.
+    var next = 0.5 * inv;
+    var at = c;
+    var t = 0.0;
     var tau = 0.0;
-    for (var k = 1u; k < 4u * n; k += 1u) {
-        if f32(k) * cell > reach {
+    for (var k = 0; k < 3 * n + 3; k += 1) {
+        let exit = min(next.x, min(next.y, next.z));
+        if k > 0 {
+            tau += medium[3u * cell_index(at) + 1u].w * (min(exit, limit) - t);
+        }
+        t = exit;
+        if t >= limit {
             break;
         }
-        let q = (p + l * (f32(k) * cell) - origin) / cell;
-        if any(q < vec3<f32>(0.0)) || any(q >= vec3<f32>(f32(n))) {
+        if next.x <= exit {
+            at.x += step.x;
+            next.x += inv.x;
+        } else if next.y <= exit {
+            at.y += step.y;
+            next.y += inv.y;
+        } else {
+            at.z += step.z;
+            next.z += inv.z;
+        }
+        if any(at < vec3<i32>(0)) || any(at >= vec3<i32>(n)) {
             break;
         }
-        tau += medium[3u * cell_index(vec3<i32>(floor(q))) + 1u].w;
     }
     return exp(-tau);
+}
+
+// Of light along l (unit) falling on a cell of optical depth kappa per edge: x, the share
+// its fibres meet, per unit irradiance, over the cell's projected area L1 = |l|_1 (cell
+// faces) and its mean chord 1 / L1 (cell edges), L1 (1 - exp(-kappa / L1)); y, its mean
+// fluence in the cell per unit irradiance, the mean transmittance along that chord,
+// volume_escape(kappa / L1).
+fn volume_meet(kappa: f32, l: vec3<f32>) -> vec2<f32> {
+    let l1 = abs(l.x) + abs(l.y) + abs(l.z);
+    let p = volume_escape(kappa / l1).x;
+    // 1 - exp(-k) = k p: exact as k -> 0.
+    return vec2<f32>(kappa * p, p);
 }
 
 // The share of light crossing a cell edge of optical depth kappa unscattered, averaged
@@ -513,13 +566,11 @@ fn volume_escape(kappa: f32) -> vec2<f32> {
 }
 
 // Light born in a cell, after its scatterings there: what leaves (energy and flux per
-// channel), `path`, the fluence it leaves in the cell per unit leaving, and the cell's
-// `escape` p (volume_escape), which a step also needs for the light crossing it.
+// channel) and `path`, the fluence it leaves in the cell per unit leaving.
 struct VolumeBorn {
     e: vec3<f32>,
     f: mat3x3<f32>,
     path: f32,
-    escape: f32,
 }
 
 // Energy `e` and flux `f` (a column per channel) born in a cell of optical depth `kappa`
@@ -532,7 +583,7 @@ fn volume_born(e: vec3<f32>, f: mat3x3<f32>, kappa: f32, albedo: vec3<f32>) -> V
     let bias = select(vec3<f32>(0.0), min(spread / e, vec3<f32>(1.0)), e > vec3<f32>(0.0));
     let ke = esc.x / (vec3<f32>(1.0) - r);
     let kf = esc.x / (vec3<f32>(1.0) - r * bias);
-    return VolumeBorn(e * ke, volume_columns(f, kf), esc.y / esc.x, esc.x);
+    return VolumeBorn(e * ke, volume_columns(f, kf), esc.y / esc.x);
 }
 
 // Light along the six axis directions, rgb each: what arrives at a cell, or what leaves.
@@ -581,15 +632,35 @@ fn write_state(i: u32, e: vec3<f32>, f: mat3x3<f32>, kept: f32, a: VolumeDirecti
     state_out[j + 5u] = vec4<f32>(out.zn + kept * a.zn, 0.0);
 }
 
-// What the neighbour at `c - d` sent along direction `k` (the k-th of x+, x-, y+, y-, z+,
-// z-, which is d) in the last step: the light arriving at cell `c` along d (none from
+// What cell `j` sent along direction `k` in the last step, if `inside` (none from
 // outside the grid).
-fn arrival(c: vec3<i32>, d: vec3<i32>, k: u32) -> vec3<f32> {
-    let y = c - d;
-    if any(y < vec3<i32>(0)) || any(y >= vec3<i32>(i32(u.resolution))) {
+fn sent(inside: bool, j: u32, k: u32) -> vec3<f32> {
+    if !inside {
         return vec3<f32>(0.0);
     }
-    return state_in[6u * cell_index(y) + k].xyz;
+    return state_in[6u * j + k].xyz;
+}
+
+// The light arriving at cell `c` along direction `k` (the k-th of x+, x-, y+, y-, z+, z-,
+// which is `d`): 1 - 4 VOLUME_SPREAD of what the neighbour behind, b = c - d, sent along
+// d, and VOLUME_SPREAD of what each of the four beside b, b -+ e for e either other axis,
+// sent (volume_common.wgsl); `axis` and `sign` give d.
+fn arrival(c: vec3<i32>, axis: u32, sign: i32, k: u32) -> vec3<f32> {
+    let n = i32(u.resolution);
+    var b = c;
+    b[axis] -= sign;
+    if b[axis] < 0 || b[axis] >= n {
+        return vec3<f32>(0.0);
+    }
+    let j = cell_index(b);
+    // The other two axes and their strides in the cell index.
+    let e1 = select(0u, 1u, axis == 0u);
+    let e2 = select(2u, 1u, axis == 2u);
+    let s1 = select(1u, u32(n), e1 == 1u);
+    let s2 = select(u32(n * n), u32(n), e2 == 1u);
+    let aside = sent(b[e1] + 1 < n, j + s1, k) + sent(b[e1] > 0, j - s1, k)
+        + sent(b[e2] + 1 < n, j + s2, k) + sent(b[e2] > 0, j - s2, k);
+    return (1.0 - 4.0 * VOLUME_SPREAD) * state_in[6u * j + k].xyz + VOLUME_SPREAD * aside;
 }
 
 // One propagation step (the header's scheme): every cell takes the light arriving along
@@ -604,12 +675,12 @@ fn propagate(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
     }
     let c = vec3<i32>(i32(i % n), i32((i / n) % n), i32(i / (n * n)));
     let a = VolumeDirections(
-        arrival(c, vec3<i32>(1, 0, 0), 0u),
-        arrival(c, vec3<i32>(-1, 0, 0), 1u),
-        arrival(c, vec3<i32>(0, 1, 0), 2u),
-        arrival(c, vec3<i32>(0, -1, 0), 3u),
-        arrival(c, vec3<i32>(0, 0, 1), 4u),
-        arrival(c, vec3<i32>(0, 0, -1), 5u),
+        arrival(c, 0u, 1, 0u),
+        arrival(c, 0u, -1, 1u),
+        arrival(c, 1u, 1, 2u),
+        arrival(c, 1u, -1, 3u),
+        arrival(c, 2u, 1, 4u),
+        arrival(c, 2u, -1, 5u),
     );
     let arrived = a.xp + a.xn + a.yp + a.yn + a.zp + a.zn;
     // The arriving flux, a column per channel.
@@ -622,7 +693,8 @@ fn propagate(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
     let phase = medium[3u * i + 2u];
     let solid = phase.w;
     let clear = 1.0 - solid;
-    let keep = exp(-kappa);
+    // The light arriving crosses VOLUME_STEP_PATH cell edges of the cell.
+    let keep = exp(-kappa * VOLUME_STEP_PATH);
     // Scattered by the fibres.
     let scatter = (1.0 - keep) * clear * albedo;
     var e = scatter * arrived;
@@ -643,7 +715,8 @@ fn propagate(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
     }
     let born = volume_born(e, f, kappa, albedo);
     write_state(i, born.e, born.f, keep * clear, a);
-    let p = born.escape * clear;
+    // Its mean path in the cell, (1 - keep) / kappa (VOLUME_STEP_PATH as kappa -> 0).
+    let p = VOLUME_STEP_PATH * volume_escape(kappa * VOLUME_STEP_PATH).x * clear;
     let bp = born.path;
     fluence[1u + 3u * i] += p * vec4<f32>(arrived.x, flow[0]) + bp * vec4<f32>(born.e.x, born.f[0]);
     fluence[2u + 3u * i] += p * vec4<f32>(arrived.y, flow[1]) + bp * vec4<f32>(born.e.y, born.f[1]);
