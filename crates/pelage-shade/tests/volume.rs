@@ -619,3 +619,70 @@ fn volume_bright_body_gains_no_energy() {
     println!("bright body: largest step energy over the step before {worst:.4}");
     assert!(worst <= 1.0 + 1e-9, "a step gained energy: x{worst}");
 }
+
+/// A white body (albedo 1) in the white furnace (white fibres under the sky alone): the
+/// exact fluence is still the sky's everywhere, next to the body too, so a grid that lost
+/// the body's light (or made light at it) would show it in the cells next to the body
+/// against the cells away from it. The mirror: cells 3 or more from the border and at
+/// most half solid, next to the body where they or a face neighbour hold part of it.
+#[test]
+fn volume_white_body_in_the_white_furnace() {
+    let sky = 4.0 * f64::from(AMBIENT);
+    let white = Body {
+        mesh: Mesh::icosphere(0.3, 2).unwrap(),
+        color: Vec3::splat(std::f32::consts::FRAC_1_PI),
+    };
+    for width in [0.01, 0.06] {
+        let hair = wavy(800, 16, 1.0, width);
+        let params = volume_params(12, 64, Vec3::ZERO);
+        let cpu = mirror(&hair, &params, &dark(), AMBIENT, 0.5, Some(&white));
+        let without = mirror(&hair, &params, &dark(), AMBIENT, 0.5, None);
+        let n = cpu.resolution as usize;
+        let index = |c: [usize; 3]| (c[2] * n + c[1]) * n + c[0];
+        let (mut near, mut away, mut none) = (Vec::new(), Vec::new(), Vec::new());
+        for i in 0..n * n * n {
+            let c = [i % n, (i / n) % n, i / (n * n)];
+            if !c.iter().all(|&k| (3..n - 3).contains(&k)) {
+                continue;
+            }
+            none.push(without.fluence[i][0].x / sky);
+            if cpu.solid[i] > 0.5 {
+                continue;
+            }
+            let touching = cpu.solid[i] > 0.0
+                || (0..6).any(|k| {
+                    let mut y = c;
+                    y[k / 2] = if k % 2 == 0 {
+                        y[k / 2] + 1
+                    } else {
+                        y[k / 2] - 1
+                    };
+                    cpu.solid[index(y)] > 0.0
+                });
+            let phi = cpu.fluence[i][0].x / sky;
+            if touching {
+                near.push(phi)
+            } else {
+                away.push(phi)
+            }
+        }
+        let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
+        println!(
+            "white body in the white furnace, width {width}: fluence over the sky's next to \
+             the body {:.4} ({} cells), away from it {:.4} ({}); without the body {:.4}",
+            mean(&near),
+            near.len(),
+            mean(&away),
+            away.len(),
+            mean(&none)
+        );
+        assert!(!near.is_empty() && !away.is_empty());
+        // Measured 1.2466 and 1.4268 next to the body, 1.2843 and 1.3150 without it.
+        assert!(
+            (mean(&near) / mean(&none) - 1.0).abs() < 0.15,
+            "the body moved the light next to it: {} against {}",
+            mean(&near),
+            mean(&none)
+        );
+    }
+}
