@@ -489,8 +489,9 @@ pub enum MultipleScattering {
     /// direction splatted into a grid over the hair, single-scattered light injected
     /// through the grid's own transmittance toward each light, propagated cell to cell with
     /// a fibre phase function from Chiang's energy tables, read at shading. The default:
-    /// the scattering lab measures it closest to the path tracer on every row, at about
-    /// 1.5x single scattering's shade stage (16³ cells; docs/src/shading.md).
+    /// the scattering lab measures it closest to the path tracer on every row, at 1.44x
+    /// single scattering's shade stage (16³ cells, `pelage bench --quick`;
+    /// docs/src/shading.md).
     #[default]
     Volume,
 }
