@@ -11,9 +11,10 @@
 //! direction, 15 directions), through the grid's own transmittance toward the light (so
 //! it works with every shadow method), and add the sky's unscattered light to the fluence
 //! (the hair's single scattering of the sky is read from the grid); propagate it
-//! `volume_iterations` cells, straight along the six axis directions (discrete ordinates),
-//! scattering with Chiang's energies at each cell; keep the fluence and flux per cell and
-//! channel (order-1 spherical harmonics, 4 coefficients per channel).
+//! `volume_iterations` cells along the six axis directions (discrete ordinates, each
+//! direction's light spreading to the four diagonal neighbours ahead as its cone of
+//! directions does), scattering with Chiang's energies at each cell; keep the fluence and
+//! flux per cell and channel (order-1 spherical harmonics, 4 coefficients per channel).
 
 use encase::ShaderType;
 use pelage_gpu::{
