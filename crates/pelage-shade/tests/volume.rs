@@ -476,9 +476,10 @@ fn volume_sky_injection_matches_cpu_mirror() {
 /// 1.38x, mean 1.15x), at 3.8 per cell 1.23x to 1.43x (mean 1.31x; before: 1.25x to
 /// 1.51x, mean 1.39x). A path of one cell edge per step with the spread measured 1.01x to
 /// 1.26x and 1.19x to 1.33x, but the cone's path is the geometry's (and the lab's blond
-/// hair and the Monte Carlo check of scripts/volume_transport.py prefer it). A suspected
-/// cause, not yet measured: light scattered near a cell's lit face is treated as born
-/// evenly through the cell, so less of it leaves back through that face. The measured
+/// hair and the Monte Carlo check of scripts/volume_transport.py prefer it). Light
+/// scattered near a dense cell's lit face, treated as born evenly through the cell, was
+/// measured as a cause: sending it back toward the light took the dense mean to 1.21x
+/// and moved no lab row (not kept); the thin excess is not explained. The measured
 /// values are held (a few percent of margin) so that the error cannot grow unnoticed, and
 /// the lower bounds keep the sky in.
 #[test]
