@@ -327,7 +327,7 @@ impl Frame {
         let reach = pelage_shadow::reach(strands.buffers(), &mesh);
         let vertices =
             u64::from(strands.buffers().strand_count) * u64::from(strands.buffers().segments + 1);
-        let stride = LightVisibility::stride_for(vertices)?;
+        let stride = pelage_contract::Visibility::stride_for(vertices)?;
         // Without a shadow method every vertex is lit: no visibility buffer at all.
         let visibility = match scene.shadow {
             ShadowParams::None => None,

@@ -1,20 +1,26 @@
 //! pelage: compute-first GPU hair and fur rendering on wgpu.
 //!
-//! Three stages chained through GPU storage buffers, never through the CPU:
+//! Three stages chained through GPU storage buffers, never through the CPU, each
+//! reading what the one before hands over ([`contract`]: the mesh and strand buffers,
+//! the frame's [`contract::StrandFrame`], the per-vertex light visibility, the shadow
+//! contract in WGSL):
 //!
-//! 1. [`strands`]: a compute pass grows strands from a mesh (PN triangles, hair
-//!    types, gravity and wind for a time `t`), or bends the strands of a groom file
-//!    (`.hair`, `.tfx`, USD) by the wind;
-//! 2. [`shadow`]: voxel shadows (density splatted into a light-space grid fitted
-//!    to the hair, summed along the light) and a shadow map for the mesh;
-//! 3. [`shade`]: strands drawn as camera-facing ribbons pulled from the strand
-//!    buffer, Kajiya-Kay shaded, over the opaque mesh.
+//! 1. [`strands`]: compute passes grow strands from a mesh (PN triangles, hair
+//!    types, gravity and wind for a time `t`), bend a groom file's (`.hair`, `.tfx`,
+//!    USD) by the wind, interpolate them from guides, or simulate them;
+//! 2. [`shadow`]: one shadow per light (voxel density splatted into a light-space grid
+//!    fitted to the hair and summed along the light, deep opacity maps, a hair shadow
+//!    map, ADSM) evaluated at every strand vertex, and a shadow map for the mesh;
+//! 3. [`shade`]: the hair drawn over the opaque mesh by one of seven compositing
+//!    methods (the compute strand rasterizer by default), shaded by one of four fibre
+//!    models (Chiang with the volume grid's multiple scattering by default).
 //!
-//! [`Renderer`] chains the stages for the common case: one mesh, one groom (grown fur
-//! or a file's, [`Scene::groom`]), up to four lights, an offscreen image. Engines that
-//! bring their own device, buffers and render targets call the stage types directly
-//! ([`strands::GrowStrands`] or [`strands::GroomStrands`],
-//! [`shadow::VoxelShadow`], [`shade::Opaque`]) on their own encoder.
+//! [`Frame`] owns the stages of one scene, wired once, and records them into the
+//! caller's encoder against the caller's colour and depth views (what an engine, the
+//! Bevy plugin and the browser demo use); [`Renderer`] is a [`Frame`] with its own
+//! targets and readback (what the command line uses). An engine with its own device
+//! and buffers may also call the stage types directly ([`strands::GrowStrands`],
+//! [`shadow::VoxelShadow`], [`shade::StrandRaster`], ...) on its own encoder.
 //!
 //! ```no_run
 //! let gpu = pelage::gpu::Gpu::headless()?;
@@ -42,6 +48,7 @@
 //!   in `scene::Groom::load` and scene files, through the pure-Rust `openusd` crate,
 //!   which needs Rust 1.96 (without it pelage builds on 1.87).
 
+pub use pelage_contract as contract;
 pub use pelage_gpu as gpu;
 pub use pelage_scene as scene;
 pub use pelage_shade as shade;
@@ -59,6 +66,10 @@ pub use renderer::{Change, FRAMES_IN_FLIGHT, FrameStats, Renderer, Scene, Update
 /// Any error of the frame pipeline.
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
+    /// Buffers handed between stages do not hold what they say (mesh buffers that
+    /// do not match the mesh, say).
+    #[error("{0}")]
+    Contract(#[from] contract::ContractError),
     /// Stage 1 failed.
     #[error("strands: {0}")]
     Strands(#[from] strands::StrandsError),

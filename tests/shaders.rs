@@ -3,11 +3,12 @@
 //! shadow crate's sources the way a `ShaderBinding` brings them.
 
 use pelage::gpu::{Gpu, Redirect, SHADERS as GPU_SHADERS, ShaderSources};
-use pelage::{shade, shadow, strands};
+use pelage::{contract, shade, shadow, strands};
 
-/// Every stage's sources.
-const ALL: [&ShaderSources; 4] = [
+/// Every crate's sources.
+const ALL: [&ShaderSources; 5] = [
     &GPU_SHADERS,
+    &contract::SHADERS,
     &strands::SHADERS,
     &shadow::SHADERS,
     &shade::SHADERS,

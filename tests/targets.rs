@@ -166,8 +166,9 @@ fn a_projection_that_disagrees_with_the_depth_direction_is_an_error() {
     // The facade projects with standard depth for standard targets: fine.
     renderer.render(&gpu, 0.0, &camera).unwrap();
     // A stage 3 method built for standard depth refuses a reversed projection.
-    let frame = renderer.strands().frame().unwrap();
+    let frame = renderer.frame().strands().frame().unwrap();
     let err = renderer
+        .frame()
         .hair_pass()
         .prepare(&gpu.queue, &frame, &reversed, &s.lights, W, H)
         .unwrap_err();

@@ -3,6 +3,7 @@
 //! must name what was wrong.
 
 use glam::Vec3;
+use pelage::contract::ContractError;
 use pelage::scene::{
     AdsmParams, ChiangParams, DeepOpacityParams, DirectionalLight, HairType, KajiyaKayParams,
     LayerSpacing, Light, MarschnerParams, PointLight, ShadingModel, ShadowMapParams, ShadowParams,
@@ -627,11 +628,15 @@ fn every_bad_input_gets_the_error_that_names_it() {
                 | Error::Shade(_)
                 | Error::Shadow(_),
             ) => message.contains(p),
-            (Kind::Mesh(text), Error::Strands(StrandsError::Mesh(_))) => message.contains(text),
+            (
+                Kind::Mesh(text),
+                Error::Contract(ContractError::Mesh(_)) | Error::Strands(StrandsError::Mesh(_)),
+            ) => message.contains(text),
             (Kind::TooLarge(what), e) => {
                 let too_large = matches!(
                     e,
                     Error::Gpu(GpuError::TooLarge { .. })
+                        | Error::Contract(ContractError::Gpu(GpuError::TooLarge { .. }))
                         | Error::Strands(StrandsError::Gpu(GpuError::TooLarge { .. }))
                         | Error::Shadow(pelage::shadow::ShadowError::Gpu(
                             GpuError::TooLarge { .. }
@@ -676,6 +681,7 @@ fn a_few_zero_area_triangles_are_skipped_and_counted() {
     renderer.render(&gpu, 0.0, &scene.camera).unwrap();
     assert!(
         renderer
+            .frame()
             .strands()
             .roots()
             .iter()

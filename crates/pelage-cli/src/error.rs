@@ -39,6 +39,7 @@ impl CliError {
             | CliError::Usage(_)
             | CliError::Render(
                 pelage::Error::Param(_)
+                | pelage::Error::Contract(pelage::contract::ContractError::Param(_))
                 | pelage::Error::Strands(pelage::strands::StrandsError::Param(_))
                 | pelage::Error::Shadow(pelage::shadow::ShadowError::Param(_))
                 | pelage::Error::Shade(

@@ -296,6 +296,7 @@ fn param_error(e: &CliError) -> Option<&ParamError> {
     match e {
         CliError::Render(
             pelage::Error::Param(p)
+            | pelage::Error::Contract(pelage::contract::ContractError::Param(p))
             | pelage::Error::Strands(StrandsError::Param(p))
             | pelage::Error::Shadow(ShadowError::Param(p))
             | pelage::Error::Shade(ShadeError::Param(p)),

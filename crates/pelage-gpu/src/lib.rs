@@ -4,8 +4,9 @@
 //!   errors come back as [`GpuError`] instead of panics;
 //! - [`ShaderLibrary`]: the WGSL each crate embeds from its `wgsl/` folder
 //!   ([`ShaderSources`], [`wgsl_sources!`]), `#import`-composed across crates and
-//!   naga-validated; this crate's own [`SHADERS`] are `shared/*.wgsl` and the shadow
-//!   contract;
+//!   naga-validated; this crate's own [`SHADERS`] are numeric helpers
+//!   (`shared/*.wgsl`). It knows no stage: what the stages hand each other is
+//!   `pelage-contract`'s;
 //! - typed buffers laid out by encase ([`storage_buffer`], [`UniformBuffer`]);
 //! - [`GpuTimer`]: per-pass GPU time from timestamp queries;
 //! - [`ShaderBinding`]: a WGSL contract implementation plus its resources, handed

@@ -28,16 +28,13 @@ use std::path::{Path, PathBuf};
 use crate::context::Gpu;
 use crate::error::Result;
 
-/// The shaders of pelage-gpu: `shared/*.wgsl`, which every stage includes, and the
-/// shadow contract `shadow/none.wgsl` (the shading stage imports it and pelage-shadow
-/// implements it, and neither depends on the other).
+/// The shaders of pelage-gpu: `shared/*.wgsl`, numeric helpers any pass includes
+/// (constants and finite checks, hashing and noise, the bounds reduction). The
+/// structs and functions the stages hand each other live in `pelage-contract`.
 pub static SHADERS: ShaderSources = crate::wgsl_sources!(
-    "shadow/none.wgsl",
     "shared/bounds.wgsl",
     "shared/math.wgsl",
     "shared/noise.wgsl",
-    "shared/ribbon.wgsl",
-    "shared/strand.wgsl",
 );
 
 /// A [`ShaderSources`] of the calling crate's WGSL files, embedded with `include_str!`.

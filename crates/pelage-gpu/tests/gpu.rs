@@ -383,8 +383,8 @@ fn a_shader_binding_describes_its_layout() {
     let gpu = gpu();
     let buffer = zeroed_storage(&gpu, "b", 16, wgpu::BufferUsages::STORAGE).unwrap();
     let binding = ShaderBinding {
-        contract: "shadow/none.wgsl",
-        module: "shadow/none.wgsl",
+        contract: "shared/math.wgsl",
+        module: "shared/math.wgsl",
         sources: &SHADERS,
         group: 2,
         resources: vec![

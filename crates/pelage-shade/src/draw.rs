@@ -4,12 +4,14 @@
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU32, Ordering};
 
+use pelage_contract::{
+    MeshBuffers, PreparedFrame, StrandBuffers, StrandFrame, StrandLayout, VISIBILITY, Visibility,
+};
 use pelage_gpu::{
     BindLayout, Gpu, GpuTimer, PassInfo, Redirect, ShaderBinding, UniformBuffer, bind_buffers,
     pipeline_layout, wgpu,
 };
 use pelage_scene::{CameraMatrices, Light, ParamError, ShadeParams};
-use pelage_strands::{MeshBuffers, PreparedFrame, StrandBuffers, StrandFrame, StrandLayout};
 
 use crate::hair_model::HairModel;
 use crate::ribbons::{FrameUniforms, MeshStyle, RibbonStyle};
@@ -20,9 +22,6 @@ use crate::volume::{VOLUME_FLUENCE, VolumeGrid};
 pub const TARGET_COLOR: &str = "target.color";
 /// The frame resource naming the depth target a method draws into and tests against.
 pub const TARGET_DEPTH: &str = "target.depth";
-/// The frame resource of the per-vertex light visibility stage 2 hands over (the name
-/// `pelage_shadow::VISIBILITY` has; this crate does not depend on stage 2).
-pub const VISIBILITY: &str = "visibility";
 /// The frame resource naming a transparency method's own per-pixel storage.
 pub const OIT_STORAGE: &str = "oit.storage";
 
@@ -47,16 +46,6 @@ pub struct HairInputs<'a> {
     /// the hair; `false` for an engine that draws its own mesh into the targets first
     /// (then pass [`TargetViews::load`]). The strands still grow from `mesh`.
     pub draw_mesh: bool,
-}
-
-/// Light reaching each strand vertex, per light: light i's value for vertex v at float
-/// `i * stride + v` of `buffer` (what `pelage_shadow::LightVisibility` writes).
-#[derive(Clone, Copy, Debug)]
-pub struct Visibility<'a> {
-    /// The `f32` storage buffer.
-    pub buffer: &'a wgpu::Buffer,
-    /// Floats per light, at least the strand vertex count.
-    pub stride: u32,
 }
 
 /// The views a method renders into, owned by the caller.
@@ -579,7 +568,7 @@ impl Common {
     pub fn mesh_pass(&self, lookup: &[String]) -> Option<PassInfo> {
         self.draw_mesh.then(|| {
             PassInfo::new(self.mesh_draw.label)
-                .reads([pelage_strands::MESH.to_string()])
+                .reads([pelage_contract::MESH.to_string()])
                 .reads(lookup.iter().cloned())
                 .writes([TARGET_COLOR, TARGET_DEPTH])
         })
@@ -615,8 +604,8 @@ impl Common {
     /// reads it.
     pub fn hair_shading(&self, label: &str, model: bool) -> PassInfo {
         let mut pass = PassInfo::new(label).reads([
-            pelage_strands::STRAND_VERTICES,
-            pelage_strands::STRAND_ROOTS,
+            pelage_contract::STRAND_VERTICES,
+            pelage_contract::STRAND_ROOTS,
         ]);
         if model && self.volume.is_some() {
             pass = pass.reads([VOLUME_FLUENCE]);

@@ -3,7 +3,7 @@
 //! Every method ([`HairPass`]: [`Opaque`], [`Wboit`], [`KBuffer`], [`ABuffer`],
 //! [`Dbk`], [`RandomSubsets`], [`StrandRaster`]; [`build`] picks one from
 //! [`ShadeParams::transparency`]) draws the opaque mesh and then the hair, pulled
-//! straight from stage 1's [`StrandBuffers`](pelage_strands::StrandBuffers) in the
+//! straight from stage 1's [`StrandBuffers`](pelage_contract::StrandBuffers) in the
 //! vertex shader (`wgsl/shade/hair.wgsl`), shaded, and composited its own way. They
 //! render into colour and depth views the caller owns ([`Targets`] makes offscreen
 //! ones).
@@ -16,9 +16,7 @@ mod ribbons;
 mod targets;
 mod volume;
 
-pub use draw::{
-    HairInputs, OIT_STORAGE, TARGET_COLOR, TARGET_DEPTH, TargetViews, VISIBILITY, Visibility,
-};
+pub use draw::{HairInputs, OIT_STORAGE, TARGET_COLOR, TARGET_DEPTH, TargetViews};
 pub use hair_model::{HairModel, LUT_RESOLUTION};
 pub use methods::supported_methods;
 pub use methods::{
@@ -29,6 +27,8 @@ pub use models::{
     ChiangTables, ChiangUniforms, KajiyaKayUniforms, MarschnerLut, MarschnerLutInfo,
     MarschnerUniforms, SadeghiUniforms,
 };
+/// The per-vertex light visibility every method reads, defined in `pelage-contract`.
+pub use pelage_contract::{VISIBILITY, Visibility};
 pub use pelage_scene::ShadeParams;
 pub use ribbons::{FrameLight, FrameUniforms, MeshStyle, RibbonStyle};
 pub use targets::{
@@ -36,11 +36,12 @@ pub use targets::{
 };
 pub use volume::{VOLUME_FIXED_SCALE, VOLUME_FLUENCE, VolumeField, VolumeGrid, VolumeUniforms};
 
-/// The shaders of stage 3 (`wgsl/shade/*.wgsl`), importing pelage-gpu's (the shared
-/// files and the shadow contract `shadow/none.wgsl`). A shadow method's lookup comes in
-/// through its [`ShaderBinding`](pelage_gpu::ShaderBinding), with its own crate's sources.
+/// The shaders of stage 3 (`wgsl/shade/*.wgsl`), importing the contracts' (the strand
+/// record, the ribbon and the shadow contract `shadow/none.wgsl`) and pelage-gpu's. A
+/// shadow method's lookup comes in through its
+/// [`ShaderBinding`](pelage_gpu::ShaderBinding), with its own crate's sources.
 pub static SHADERS: pelage_gpu::ShaderSources = pelage_gpu::wgsl_sources!(
-    uses [&pelage_gpu::SHADERS];
+    uses [&pelage_contract::SHADERS];
     "shade/frame.wgsl",
     "shade/hair.wgsl",
     "shade/hair_model.wgsl",
@@ -87,7 +88,7 @@ pub enum ShadeError {
     Gpu(#[from] pelage_gpu::GpuError),
     /// A pass was recorded for another stage 1 frame than it was prepared for.
     #[error(transparent)]
-    FrameOrder(#[from] pelage_strands::FrameOrderError),
+    FrameOrder(#[from] pelage_contract::FrameOrderError),
     /// A parameter cannot change in place: it shapes pipelines or buffers; build the
     /// method (or the renderer) again with it.
     #[error("{0} cannot change in place; build again with the new parameters")]

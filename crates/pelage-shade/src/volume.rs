@@ -17,12 +17,12 @@
 //! flux per cell and channel (order-1 spherical harmonics, 4 coefficients per channel).
 
 use encase::ShaderType;
+use pelage_contract::{MeshBuffers, StrandBuffers, StrandLayout};
 use pelage_gpu::{
     BindLayout, Gpu, GpuTimer, PassInfo, UniformBuffer, bind_numbered,
     compute_pipeline_with_layouts, dispatch_size, wgpu, zeroed_storage,
 };
 use pelage_scene::{ChiangParams, MAX_VOLUME_GRID, MIN_VOLUME_GRID, ParamError, mesh_albedo};
-use pelage_strands::{MeshBuffers, StrandBuffers, StrandLayout};
 
 use crate::models::ChiangTables;
 
@@ -531,9 +531,9 @@ impl VolumeGrid {
     pub fn pass_info(&self) -> PassInfo {
         PassInfo::new(PASS)
             .reads([
-                pelage_strands::STRAND_VERTICES,
-                pelage_strands::STRAND_ROOTS,
-                pelage_strands::MESH,
+                pelage_contract::STRAND_VERTICES,
+                pelage_contract::STRAND_ROOTS,
+                pelage_contract::MESH,
             ])
             .writes([VOLUME_SCRATCH, VOLUME_FLUENCE])
     }

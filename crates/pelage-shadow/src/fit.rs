@@ -3,12 +3,12 @@
 
 use encase::ShaderType;
 use glam::Vec3;
+use pelage_contract::{PreparedFrame, StrandBuffers, StrandFrame, StrandLayout};
 use pelage_gpu::{
     BindLayout, Gpu, GpuTimer, PassInfo, UniformBuffer, bind_buffers,
     compute_pipeline_with_layouts, wgpu, zeroed_storage,
 };
 use pelage_scene::DirectionalLight;
-use pelage_strands::{PreparedFrame, StrandBuffers, StrandFrame, StrandLayout};
 
 use crate::LightSpace;
 
@@ -240,7 +240,7 @@ impl LightFit {
     /// the grid (`shadow.grid`).
     pub fn pass_info(&self, label: &str) -> PassInfo {
         PassInfo::new(label)
-            .reads([pelage_strands::STRAND_VERTICES])
+            .reads([pelage_contract::STRAND_VERTICES])
             .writes([crate::SHADOW_BOUNDS, crate::SHADOW_GRID])
     }
 

@@ -4,7 +4,7 @@
 //! [`StrandFrame`], records its passes into the caller's encoder with `encode` for the
 //! same frame (no readback), and hands the
 //! shading stage a [`ShaderBinding`] implementing the shadow contract
-//! (`wgsl/shadow/none.wgsl`: `light_visibility(p)`), so the shading pass never
+//! (pelage-contract's `wgsl/shadow/none.wgsl`: `light_visibility(p)`), so the shading pass never
 //! knows which method it got. The mesh casts its own shadow through a
 //! [`MeshShadowMap`] with PCF in every method.
 //!
@@ -34,13 +34,14 @@ pub use visibility::LightVisibility;
 pub use voxel::VoxelShadow;
 
 use glam::Vec3;
+use pelage_contract::{MeshBuffers, StrandBuffers, StrandFrame};
 use pelage_gpu::{Gpu, GpuTimer, PassInfo, ShaderBinding, ShaderSources, wgpu};
 use pelage_scene::{DirectionalLight, ShadowParams};
-use pelage_strands::{MeshBuffers, StrandBuffers, StrandFrame};
 
-/// The shaders of stage 2 (`wgsl/shadow/*.wgsl`), importing pelage-gpu's.
+/// The shaders of stage 2 (`wgsl/shadow/*.wgsl`), importing the contracts' and
+/// pelage-gpu's.
 pub static SHADERS: ShaderSources = pelage_gpu::wgsl_sources!(
-    uses [&pelage_gpu::SHADERS];
+    uses [&pelage_contract::SHADERS];
     "shadow/adsm_lookup.wgsl",
     "shadow/dom_lookup.wgsl",
     "shadow/hair_light.wgsl",
@@ -70,13 +71,13 @@ pub const SHADOW_LAYERS: &str = "shadow.layers";
 /// The frame resource of the mesh's own shadow map.
 pub const SHADOW_MESH_MAP: &str = "shadow.mesh_map";
 /// The frame resource of the per-vertex light visibility every light's hand-over
-/// ([`LightVisibility`]) writes and the hair pass reads.
-pub const VISIBILITY: &str = "visibility";
+/// ([`LightVisibility`]) writes and the hair pass reads (the contract's name).
+pub use pelage_contract::VISIBILITY;
 
 /// The WGSL file every shading pass imports for `light_visibility(p)`; a method's
 /// [`ShaderBinding`] redirects it to the method's lookup. It is one of
-/// [`pelage_gpu::SHADERS`], so the shading stage finds it without this crate.
-pub const CONTRACT: &str = "shadow/none.wgsl";
+/// [`pelage_contract::SHADERS`], so the shading stage finds it without this crate.
+pub use pelage_contract::SHADOW_CONTRACT as CONTRACT;
 
 /// One shadow method, as the frame pipeline drives it: each frame `prepare` with stage
 /// 1's [`StrandFrame`], then `encode` with the same frame. `Send + Sync` on native
@@ -165,7 +166,7 @@ pub enum ShadowError {
     Gpu(#[from] pelage_gpu::GpuError),
     /// A pass was recorded for another stage 1 frame than it was prepared for.
     #[error(transparent)]
-    FrameOrder(#[from] pelage_strands::FrameOrderError),
+    FrameOrder(#[from] pelage_contract::FrameOrderError),
 }
 
 /// Result of stage 2.

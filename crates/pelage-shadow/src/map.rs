@@ -4,6 +4,7 @@
 
 use encase::ShaderType;
 use glam::{Vec3, Vec4};
+use pelage_contract::{MeshBuffers, StrandBuffers, StrandFrame};
 use pelage_gpu::{
     BindLayout, BoundResource, Gpu, GpuTimer, PassInfo, ShaderBinding, UniformBuffer, bind_buffers,
     pipeline_layout, wgpu,
@@ -12,7 +13,6 @@ use pelage_scene::{
     AdsmParams, DeepOpacityParams, DirectionalLight, LayerSpacing, MapParams, OpacityFormat,
     ShadowMapParams,
 };
-use pelage_strands::{MeshBuffers, StrandBuffers, StrandFrame};
 
 use crate::{LightFit, LightGridUniforms, MeshShadowMap, ShadowMethod};
 
@@ -392,7 +392,7 @@ impl LightMap {
     /// The passes `encode` records: the fit, the front-most depth (`shadow.depth`), the
     /// opacity layers (`shadow.layers`, deep opacity maps only), the mesh map.
     fn passes(&self) -> Vec<PassInfo> {
-        use pelage_strands::{STRAND_ROOTS, STRAND_VERTICES};
+        use pelage_contract::{STRAND_ROOTS, STRAND_VERTICES};
         let mut passes = vec![
             self.fit.pass_info("shadow: fit"),
             PassInfo::new("shadow: depth")

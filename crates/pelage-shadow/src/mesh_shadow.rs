@@ -3,12 +3,12 @@
 
 use encase::ShaderType;
 use glam::{Mat4, Vec3};
+use pelage_contract::MeshBuffers;
 use pelage_gpu::{
     BindLayout, BoundResource, Gpu, GpuTimer, PassInfo, UniformBuffer, bind_buffers,
     pipeline_layout, wgpu,
 };
 use pelage_scene::DirectionalLight;
-use pelage_strands::MeshBuffers;
 
 use crate::LightSpace;
 
@@ -211,7 +211,7 @@ impl MeshShadowMap {
             .iter()
             .map(|_| {
                 PassInfo::new("shadow: mesh map")
-                    .reads([pelage_strands::MESH])
+                    .reads([pelage_contract::MESH])
                     .writes([crate::SHADOW_MESH_MAP])
             })
             .collect()

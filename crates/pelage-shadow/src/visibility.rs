@@ -1,14 +1,14 @@
 //! Stage 2's hand-over to the hair pass: one light's shadow evaluated at every strand
 //! vertex (`wgsl/shadow/probe.wgsl`), into that light's slice of a visibility buffer.
 
+use pelage_contract::{PreparedFrame, StrandBuffers, StrandFrame, StrandLayout};
 use pelage_gpu::{
     BindLayout, Gpu, GpuTimer, PassInfo, ShaderBinding, compute_pipeline_with_layouts,
     dispatch_size, wgpu, zeroed_storage,
 };
-use pelage_strands::{PreparedFrame, StrandBuffers, StrandFrame, StrandLayout};
 
 /// Light `index`'s visibility at every strand vertex, written each frame at floats
-/// `index * stride ..` of a buffer the hair pass reads (`pelage_shade::Visibility`).
+/// `index * stride ..` of a buffer the hair pass reads ([`pelage_contract::Visibility`]).
 #[derive(Debug)]
 pub struct LightVisibility {
     pipeline: wgpu::ComputePipeline,
@@ -23,19 +23,6 @@ pub struct LightVisibility {
 }
 
 impl LightVisibility {
-    /// Floats per light for `vertices` strand vertices: rounded up to 64, so every
-    /// light's slice starts on a 256-byte boundary (the storage offset alignment).
-    pub fn stride_for(vertices: u64) -> crate::Result<u32> {
-        u32::try_from(vertices.max(1).next_multiple_of(64)).map_err(|_| {
-            pelage_scene::ParamError {
-                name: "roots.count".into(),
-                value: format!("{vertices} strand vertices"),
-                reason: "too many strand vertices for one visibility buffer".into(),
-            }
-            .into()
-        })
-    }
-
     /// A zeroed visibility buffer for `lights` lights of `stride` floats.
     pub fn buffer(gpu: &Gpu, lights: u32, stride: u32) -> crate::Result<wgpu::Buffer> {
         Ok(zeroed_storage(
@@ -47,7 +34,7 @@ impl LightVisibility {
     }
 
     /// Evaluates the shadow method behind `binding` at every vertex of `strands` into
-    /// slice `index` of `out` (`stride` floats per light, from [`LightVisibility::stride_for`]).
+    /// slice `index` of `out` (`stride` floats per light, from [`Visibility::stride_for`](pelage_contract::Visibility::stride_for)).
     pub fn new(
         gpu: &Gpu,
         binding: &ShaderBinding,
@@ -132,7 +119,7 @@ impl LightVisibility {
     pub fn passes(&self, lookup: &[String]) -> Vec<PassInfo> {
         vec![
             PassInfo::new(self.label.clone())
-                .reads([pelage_strands::STRAND_VERTICES.to_string()])
+                .reads([pelage_contract::STRAND_VERTICES.to_string()])
                 .reads(lookup.iter().cloned())
                 .writes([crate::VISIBILITY]),
         ]

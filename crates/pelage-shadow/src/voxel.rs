@@ -1,12 +1,12 @@
 //! Voxel shadows: fit, splat, scan (`wgsl/shadow/voxel_*.wgsl`).
 
 use glam::Vec3;
+use pelage_contract::{MeshBuffers, StrandBuffers, StrandFrame};
 use pelage_gpu::{
     BindLayout, BoundResource, Gpu, GpuTimer, PassInfo, ShaderBinding, bind_buffers,
     compute_pipeline_with_layouts, dispatch_size, wgpu, zeroed_storage,
 };
 use pelage_scene::{DirectionalLight, Splat, VoxelParams};
-use pelage_strands::{MeshBuffers, StrandBuffers, StrandFrame};
 
 use crate::{LightFit, LightGridUniforms, MeshShadowMap, ShadowMethod};
 
@@ -239,7 +239,7 @@ impl ShadowMethod for VoxelShadow {
     }
 
     fn passes(&self) -> Vec<PassInfo> {
-        use pelage_strands::{STRAND_ROOTS, STRAND_VERTICES};
+        use pelage_contract::{STRAND_ROOTS, STRAND_VERTICES};
         let mut passes = vec![
             self.fit.pass_info("shadow: fit"),
             PassInfo::new("shadow: splat")

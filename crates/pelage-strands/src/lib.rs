@@ -32,26 +32,22 @@ mod groom;
 mod grow;
 mod guides;
 mod lod;
-mod mesh_buffers;
 mod roots;
 mod sdf;
 mod simulate;
 mod skin;
 
 pub use groom::GroomStrands;
-pub use grow::{
-    GrowStrands, MESH, STRAND_ROOTS, STRAND_VERTICES, StrandBuffers, StrandPass, StrandStage,
-    StrandStyle,
-};
+pub use grow::{GrowStrands, StrandPass, StrandStage};
 pub use guides::{GUIDE_VERTICES, GuideMemory, GuideStrands};
-pub use lod::{
-    FrameOrderError, LodLevel, PreparedFrame, StrandFrame, StrandLayout, bend_error,
-    bend_per_segment, fewest_segments, reduced_segments,
+pub use lod::{LodLevel, bend_error, bend_per_segment, fewest_segments, reduced_segments};
+/// What stage 1 writes and later stages read, defined in `pelage-contract` (re-exported
+/// here so that stage 1's examples need one import).
+pub use pelage_contract::{
+    ContractError, FrameOrderError, MESH, MeshBuffers, PreparedFrame, STRAND_ROOTS,
+    STRAND_VERTICES, StrandBuffers, StrandFrame, StrandLayout, StrandRoot, StrandStyle,
 };
-pub use mesh_buffers::MeshBuffers;
-pub use roots::{
-    StrandRoot, hash_to_unit, pcg_hash, root_region, root_tint, sample_roots, strand_brightness,
-};
+pub use roots::{hash_to_unit, pcg_hash, root_region, root_tint, sample_roots, strand_brightness};
 pub use sdf::{
     BODY_SDF, BodySdf, COARSE_FACTOR, MAX_BURIED_CHECK, SDF_LABEL, body_triangles, coarse_grid,
     flood_steps,
@@ -62,9 +58,10 @@ pub use skin::{MeshSkin, SKIN_LABEL, SKIN_NON_FINITE};
 use pelage_gpu::{GpuError, ShaderSources};
 use pelage_scene::{MeshError, ParamError};
 
-/// The shaders of stage 1 (`wgsl/strands/*.wgsl`), importing pelage-gpu's.
+/// The shaders of stage 1 (`wgsl/strands/*.wgsl`), importing the contracts' and
+/// pelage-gpu's.
 pub static SHADERS: ShaderSources = pelage_gpu::wgsl_sources!(
-    uses [&pelage_gpu::SHADERS];
+    uses [&pelage_contract::SHADERS];
     "strands/force.wgsl",
     "strands/groom.wgsl",
     "strands/grow.wgsl",
@@ -109,16 +106,10 @@ pub enum StrandsError {
         /// The largest distance allowed.
         limit: f32,
     },
-    /// The caller's mesh buffers do not match the CPU mesh the roots were sampled on.
-    #[error(
-        "mesh buffers hold {buffers} but the mesh has {mesh}; pass buffers made from the same mesh"
-    )]
-    MeshMismatch {
-        /// What the buffers hold.
-        buffers: String,
-        /// What the mesh has.
-        mesh: String,
-    },
+    /// The mesh buffers do not hold the mesh the method was built from (or are too
+    /// small, or lack `STORAGE` usage).
+    #[error(transparent)]
+    Contract(#[from] ContractError),
 }
 
 /// Result of stage 1.

@@ -3,7 +3,7 @@
 //! Strand `i` draws its random numbers from `pcg_hash(i ^ pcg_hash(seed))` alone,
 //! so it keeps its root, length and jitter when the strand count changes.
 
-use encase::ShaderType;
+use crate::StrandRoot;
 use glam::{Vec2, Vec3};
 use pelage_scene::{GrowthParams, Mesh, RootParams};
 
@@ -17,32 +17,6 @@ pub fn pcg_hash(v: u32) -> u32 {
 /// A float in [0, 1) from the top 24 bits of a hash, the same as `hash_to_unit` in WGSL.
 pub fn hash_to_unit(h: u32) -> f32 {
     (h >> 8) as f32 * (1.0 / 16_777_216.0)
-}
-
-/// One strand's root and per-strand attributes, as the GPU reads them (`StrandRoot` in WGSL).
-#[derive(Clone, Copy, Debug, PartialEq, ShaderType)]
-pub struct StrandRoot {
-    /// Triangle the root sits on.
-    pub triangle: u32,
-    /// The strand's own hash seed.
-    pub seed: u32,
-    /// Barycentrics (u, v) of the root for the triangle's first and second corner; w = 1 - u - v.
-    pub bary: Vec2,
-    /// Strand length, scene units, jitter and length map applied.
-    pub length: f32,
-    /// Width at the root, scene units.
-    pub width: f32,
-    /// Gust phase as a fraction of `WindParams::phase_spread`, in [0, 1).
-    pub phase: f32,
-    /// Tilt of the root direction away from the normal, radians.
-    pub tilt: f32,
-    /// Azimuth of that tilt around the normal, radians.
-    pub azimuth: f32,
-    /// Linear RGB colour.
-    pub color: Vec3,
-    /// The strand's region: 0 for `[hair.growth]`, `k` for its `k`-th region
-    /// ([`GrowthParams::regions`]); the growth pass reads its shape by it.
-    pub region: u32,
 }
 
 /// A strand's brightness factor `1 + jitter·(2u − 1)`, `u` being the `draw`-th hash draw
@@ -245,12 +219,6 @@ pub fn sample_roots(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn the_region_fits_in_the_padding_of_a_64_byte_root() {
-        assert_eq!(StrandRoot::min_size().get(), 64);
-        assert_eq!(<StrandRoot as encase::ShaderSize>::SHADER_SIZE.get(), 64);
-    }
 
     #[test]
     fn per_vertex_regions_take_the_nearest_corner() {

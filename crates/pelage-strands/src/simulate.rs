@@ -10,8 +10,9 @@ use pelage_scene::{
     Resampled, SdfGrid,
 };
 
+use crate::MESH;
 use crate::groom::GroomShape;
-use crate::grow::{Input, MESH, StrandPass, StrandStage};
+use crate::grow::{Input, StrandPass, StrandStage};
 use crate::{
     BODY_SDF, BodySdf, LodLevel, MeshBuffers, STRAND_ROOTS, STRAND_VERTICES, StrandFrame,
     StrandRoot, StrandsError,
@@ -704,7 +705,7 @@ impl StrandStage for SimulateStrands {
 /// Refuses mesh buffers that do not hold `mesh`.
 fn check_mesh(mesh: &Mesh, buffers: &MeshBuffers) -> crate::Result<()> {
     mesh.validate()?;
-    buffers.check_matches(mesh)
+    Ok(buffers.check_matches(mesh)?)
 }
 
 /// A root's frame on the mesh at rest, as `root_pose` in WGSL computes it.

@@ -451,7 +451,12 @@ fn bad_input_is_a_typed_error_naming_it() {
         &hair,
         &with(0.5, 4),
     );
-    assert!(matches!(e, Err(StrandsError::MeshMismatch { .. })));
+    assert!(matches!(
+        e,
+        Err(StrandsError::Contract(
+            pelage_strands::ContractError::MeshMismatch { .. }
+        ))
+    ));
 }
 
 /// A device with WebGPU's default limits (8 storage buffers per shader stage).

@@ -278,7 +278,9 @@ fn bad_joints_weights_and_matrices_are_refused_naming_the_field() {
     let other = Mesh::icosphere(1.0, 2).unwrap();
     assert!(matches!(
         MeshSkin::new(&gpu, &other, &good, &buffers),
-        Err(StrandsError::MeshMismatch { .. })
+        Err(StrandsError::Contract(
+            pelage_strands::ContractError::MeshMismatch { .. }
+        ))
     ));
     // Matrices: a NaN and a wrong count are refused and nothing is written.
     let pass = with(&|_| {}).unwrap();

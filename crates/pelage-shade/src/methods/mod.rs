@@ -32,9 +32,9 @@ pub use sliced::OitTile;
 pub use strand_raster::{RasterCapture, StrandRaster, StrandRasterUniforms};
 pub use wboit::Wboit;
 
+use pelage_contract::StrandFrame;
 use pelage_gpu::{Gpu, GpuTimer, PassInfo, wgpu};
 use pelage_scene::{CameraMatrices, Light, Transparency};
-use pelage_strands::StrandFrame;
 
 use crate::draw::{HairInputs, TargetViews};
 

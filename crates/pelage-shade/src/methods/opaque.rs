@@ -1,8 +1,8 @@
 //! The opaque method: depth-tested ribbons, alpha ignored (`shade/ribbons.wgsl`).
 
+use pelage_contract::StrandFrame;
 use pelage_gpu::{Gpu, GpuTimer, PassInfo, wgpu};
 use pelage_scene::{CameraMatrices, Light};
-use pelage_strands::StrandFrame;
 
 use super::HairPass;
 use crate::draw::{Common, Draw, HairInputs, HairPipe, TargetViews, depth_state};

@@ -526,7 +526,7 @@ macro_rules! sliced_hair_pass {
             fn prepare(
                 &self,
                 queue: &pelage_gpu::wgpu::Queue,
-                strands: &pelage_strands::StrandFrame,
+                strands: &pelage_contract::StrandFrame,
                 camera: &pelage_scene::CameraMatrices,
                 lights: &[pelage_scene::Light],
                 width: u32,
@@ -540,7 +540,7 @@ macro_rules! sliced_hair_pass {
             fn encode(
                 &self,
                 encoder: &mut pelage_gpu::wgpu::CommandEncoder,
-                strands: &pelage_strands::StrandFrame,
+                strands: &pelage_contract::StrandFrame,
                 target: &$crate::TargetViews<'_>,
                 timer: Option<&mut pelage_gpu::GpuTimer>,
             ) -> $crate::Result<()> {

@@ -36,11 +36,11 @@ use std::sync::{Arc, Mutex};
 
 use encase::ShaderType;
 use glam::Vec3;
+use pelage_contract::{StrandFrame, StrandLayout};
 use pelage_gpu::{
     BindLayout, Gpu, GpuError, GpuTimer, PassInfo, UniformBuffer, wgpu, zeroed_storage,
 };
 use pelage_scene::{CameraMatrices, Light};
-use pelage_strands::{StrandFrame, StrandLayout};
 
 use super::{HairPass, OitStats};
 use crate::draw::{

@@ -1,8 +1,8 @@
 //! Weighted blended OIT (McGuire and Bavoil 2013) (`shade/oit/wboit.wgsl`).
 
+use pelage_contract::StrandFrame;
 use pelage_gpu::{BindLayout, Gpu, GpuTimer, PassInfo, wgpu};
 use pelage_scene::{CameraMatrices, Light, WboitWeight};
-use pelage_strands::StrandFrame;
 
 use super::HairPass;
 use super::sliced::{OitTile, Sliced};

@@ -3,6 +3,11 @@
 use pelage_gpu::{Gpu, wgpu};
 use pelage_scene::Mesh;
 
+use crate::{ContractError, Result};
+
+/// The frame resource naming the [`MeshBuffers`], which the caller may rewrite every frame.
+pub const MESH: &str = "mesh";
+
 /// A triangle mesh in storage buffers.
 ///
 /// `positions` and `normals` hold tightly packed `f32 x3` (12 bytes per vertex),
@@ -28,7 +33,7 @@ pub struct MeshBuffers {
 
 impl MeshBuffers {
     /// Uploads a validated mesh. Buffers get `STORAGE | COPY_DST | COPY_SRC` so they can be rewritten per frame.
-    pub fn upload(gpu: &Gpu, mesh: &Mesh) -> crate::Result<Self> {
+    pub fn upload(gpu: &Gpu, mesh: &Mesh) -> Result<Self> {
         mesh.validate()?;
         let positions: Vec<f32> = mesh.positions.iter().flat_map(|p| p.to_array()).collect();
         let normals: Vec<f32> = mesh.normals.iter().flat_map(|n| n.to_array()).collect();
@@ -72,7 +77,7 @@ impl MeshBuffers {
         vertex_count: u32,
         triangle_count: u32,
         bounds: (glam::Vec3, glam::Vec3),
-    ) -> crate::Result<Self> {
+    ) -> Result<Self> {
         if !(bounds.0.is_finite() && bounds.1.is_finite() && bounds.0.cmple(bounds.1).all()) {
             return Err(pelage_scene::ParamError::new(
                 "mesh.bounds",
@@ -81,9 +86,9 @@ impl MeshBuffers {
             )
             .into());
         }
-        let need = |what: &str, buf: &wgpu::Buffer, bytes: u64| -> crate::Result<()> {
+        let need = |what: &str, buf: &wgpu::Buffer, bytes: u64| -> Result<()> {
             if buf.size() < bytes || !buf.usage().contains(wgpu::BufferUsages::STORAGE) {
-                return Err(crate::StrandsError::MeshMismatch {
+                return Err(ContractError::MeshMismatch {
                     buffers: format!("{what}: {} bytes, usage {:?}", buf.size(), buf.usage()),
                     mesh: format!("needs at least {bytes} bytes with STORAGE usage"),
                 });
@@ -105,11 +110,11 @@ impl MeshBuffers {
 
     /// Errors unless the buffers hold as many vertices and triangles as `mesh` (the CPU
     /// mesh roots are sampled on).
-    pub(crate) fn check_matches(&self, mesh: &Mesh) -> crate::Result<()> {
+    pub fn check_matches(&self, mesh: &Mesh) -> Result<()> {
         if self.vertex_count as usize != mesh.positions.len()
             || self.triangle_count as usize != mesh.indices.len() / 3
         {
-            return Err(crate::StrandsError::MeshMismatch {
+            return Err(ContractError::MeshMismatch {
                 buffers: format!(
                     "{} vertices, {} triangles",
                     self.vertex_count, self.triangle_count
@@ -125,11 +130,11 @@ impl MeshBuffers {
     }
 
     /// Rewrites positions and normals (same vertex count), e.g. after skinning on the CPU.
-    pub fn update(&self, queue: &wgpu::Queue, mesh: &Mesh) -> crate::Result<()> {
+    pub fn update(&self, queue: &wgpu::Queue, mesh: &Mesh) -> Result<()> {
         if mesh.positions.len() != self.vertex_count as usize
             || mesh.normals.len() != mesh.positions.len()
         {
-            return Err(crate::StrandsError::MeshMismatch {
+            return Err(ContractError::MeshMismatch {
                 buffers: format!("{} vertices", self.vertex_count),
                 mesh: format!(
                     "{} positions, {} normals",

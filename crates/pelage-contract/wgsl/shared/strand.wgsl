@@ -1,4 +1,4 @@
-// The per-strand record stage 1 writes (StrandRoot in pelage-strands/src/roots.rs)
+// The per-strand record stage 1 writes (StrandRoot in pelage-contract/src/strands.rs)
 // and every later stage reads. Declares a struct only.
 
 struct StrandRoot {
