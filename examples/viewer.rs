@@ -626,7 +626,10 @@ impl App {
                     if !stats.passes.is_empty() {
                         self.view.stats = stats;
                     }
-                    self.view.drawn = (renderer.lod().strands, renderer.lod().segments);
+                    self.view.drawn = (
+                        renderer.frame().strands().lod().strands,
+                        renderer.frame().strands().lod().segments,
+                    );
                 }
                 Err(e) => self.view.error = Some(format!("render: {e}")),
             }

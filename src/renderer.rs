@@ -4,17 +4,15 @@ mod update;
 
 pub use update::{Change, Update};
 
-use pelage_gpu::{FramePlan, Gpu, GpuTimer, wgpu};
+use pelage_gpu::{Gpu, GpuTimer, wgpu};
 use pelage_scene::{
     Camera, DynamicsParams, GuideParams, HairParams, Light, Mesh, MeshMotion, Resampled,
     ShadeParams, ShadowParams, SkinBend,
 };
 #[cfg(not(target_arch = "wasm32"))]
 use pelage_shade::TargetViews;
-use pelage_shade::{HairPass, OitStats, TargetFormat, TargetViewSet, Targets};
-use pelage_strands::{
-    GroomStrands, GrowStrands, GuideStrands, MeshBuffers, StrandFrame, StrandStage,
-};
+use pelage_shade::{TargetFormat, TargetViewSet, Targets};
+use pelage_strands::{GroomStrands, GrowStrands, GuideStrands, StrandFrame};
 
 use crate::frame::{Frame, FrameTarget, StrandSource};
 
@@ -466,11 +464,6 @@ impl Renderer {
         &self.frame
     }
 
-    /// Stage 1, for binding its buffers or reading its roots.
-    pub fn strands(&self) -> &dyn StrandStage {
-        self.frame.strands()
-    }
-
     /// Light visibility at every strand vertex after the last frame, one `Vec` per light
     /// (empty without shadows); waits for the GPU.
     pub fn light_visibility(&self, gpu: &Gpu) -> crate::Result<Vec<Vec<f32>>> {
@@ -485,7 +478,10 @@ impl Renderer {
         let vertices = self
             .frame
             .strand_frame()
-            .map_or_else(|| self.strands().buffers().full_layout(), |f| f.layout)
+            .map_or_else(
+                || self.frame.strands().buffers().full_layout(),
+                |f| f.layout,
+            )
             .vertices() as usize;
         Ok(floats
             .chunks(stride as usize)
@@ -494,36 +490,9 @@ impl Renderer {
             .collect())
     }
 
-    /// The level of detail of the last frame: strands and segments grown, and why.
-    pub fn lod(&self) -> &pelage_strands::LodLevel {
-        self.strands().lod()
-    }
-
-    /// The passes [`Renderer::record`] records, in order, with the named resources each
-    /// reads and writes (validated when the renderer was built): what an engine splicing
-    /// the stages into its own render graph must keep in order.
-    pub fn plan(&self) -> &FramePlan {
-        self.frame.plan()
-    }
-
-    /// Stage 3's method.
-    pub fn hair_pass(&self) -> &dyn HairPass {
-        self.frame.hair_pass()
-    }
-
-    /// Counters of stage 3's node pool (linked-list methods); waits for the GPU.
-    pub fn oit_stats(&self, gpu: &Gpu) -> crate::Result<OitStats> {
-        Ok(self.hair_pass().stats(gpu)?)
-    }
-
     /// The formats of the renderer's targets.
     pub fn target_format(&self) -> &TargetFormat {
         &self.targets.format
-    }
-
-    /// The mesh buffers every stage reads.
-    pub fn mesh_buffers(&self) -> &MeshBuffers {
-        self.frame.mesh_buffers()
     }
 
     /// The final single-sample colour target (the renderer's [`TargetFormat`], width x height, usable as `TEXTURE_BINDING` and `COPY_SRC`): bind it to

@@ -91,7 +91,7 @@ fn the_plan_declares_the_passes_a_frame_records_through_the_target_bridge() {
     for (name, s, format) in bridged() {
         let mut renderer = Renderer::with_format(&gpu, &s, 96, 72, &format)
             .unwrap_or_else(|e| panic!("{name}: {e}"));
-        let plan = renderer.plan().clone();
+        let plan = renderer.frame().plan().clone();
         plan.validate().unwrap();
         assert!(
             plan.labels().iter().any(|l| l.starts_with("bridge: ")),
@@ -122,7 +122,7 @@ fn the_plan_declares_the_passes_a_frame_records() {
             }
             Err(e) => panic!("{shadow:?} {method:?}: {e}"),
         };
-        let plan = renderer.plan().clone();
+        let plan = renderer.frame().plan().clone();
         plan.validate().unwrap();
         renderer.render(&gpu, 0.0, &s.camera).unwrap();
         let stats = renderer.finish(&gpu).unwrap();
@@ -236,7 +236,7 @@ fn every_pass_binds_only_what_the_plan_declares() {
         audit.clear_passes();
         renderer.render(&gpu, 0.0, &s.camera).unwrap();
         let bound = audit.finish();
-        let plan = renderer.plan();
+        let plan = renderer.frame().plan();
         let labels: Vec<&str> = bound.iter().map(|p| p.label.as_str()).collect();
         assert_eq!(
             plan.labels(),
@@ -287,8 +287,8 @@ fn a_plan_in_the_wrong_order_names_the_pass_to_record_first() {
     let s = scene(ShadowParams::default(), Transparency::Opaque, 1);
     let renderer = Renderer::new(&gpu, &s, 64, 48).unwrap();
     // Stage 3 before stage 1: the hair pass would read strands nothing wrote yet.
-    let mut wrong = pelage::gpu::FramePlan::new(renderer.plan().inputs().to_vec());
-    let passes = renderer.plan().passes();
+    let mut wrong = pelage::gpu::FramePlan::new(renderer.frame().plan().inputs().to_vec());
+    let passes = renderer.frame().plan().passes();
     let hair: Vec<_> = passes
         .iter()
         .filter(|p| p.label.starts_with("shade:"))
@@ -314,7 +314,11 @@ fn a_plan_in_the_wrong_order_names_the_pass_to_record_first() {
         }
     }
     // The renderer's own assembly, run on its stages, is the valid order.
-    let again = frame_plan(renderer.strands(), &[], renderer.hair_pass());
+    let again = frame_plan(
+        renderer.frame().strands(),
+        &[],
+        renderer.frame().hair_pass(),
+    );
     // Without its shadows the plan is still valid: the hair then reads no visibility
     // only if the method was built without it; this one was, so the mesh pass's
     // lookup is missing and visibility is unwritten.

@@ -146,7 +146,7 @@ fn a_scene_file_groom_is_drawn_and_a_tfx_copy_draws_the_same_picture() {
     let mut renderer = Renderer::new(&gpu, &scene, SIZE.0, SIZE.1).unwrap();
     renderer.render(&gpu, 0.0, &scene.camera).unwrap();
     let hair_image = renderer.image(&gpu).unwrap();
-    assert_eq!(renderer.strands().buffers().strand_count, 3000);
+    assert_eq!(renderer.frame().strands().buffers().strand_count, 3000);
 
     // Below the head there is only hair: where its tips project, the picture is not
     // the background.

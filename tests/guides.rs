@@ -67,14 +67,14 @@ fn the_guides_scene_draws_its_interpolated_strands() {
     let mut renderer = Renderer::new(&gpu, &scene, SIZE.0, SIZE.1).unwrap();
     renderer.render(&gpu, 0.0, &scene.camera).unwrap();
     let image = renderer.image(&gpu).unwrap();
-    let strands = renderer.strands();
+    let strands = renderer.frame().strands();
     assert_eq!(strands.buffers().strand_count, 6000);
     assert_eq!(
         strands.passes().len(),
         2,
         "the guides are bent, then interpolated"
     );
-    let plan = renderer.plan().labels();
+    let plan = renderer.frame().plan().labels();
     assert!(
         plan.contains(&"strands: guides bend") && plan.contains(&"strands: guides"),
         "{plan:?}"
@@ -158,14 +158,15 @@ fn guides_with_dynamics_simulate_the_guides_and_draw_the_interpolated_strands() 
     scene.dynamics = Some(pelage::scene::DynamicsParams::default());
     scene.motion = Some(pelage::scene::MeshMotion::default());
     let mut renderer = Renderer::new(&gpu, &scene, SIZE.0, SIZE.1).unwrap();
-    let plan = renderer.plan().labels();
+    let plan = renderer.frame().plan().labels();
     assert!(
         plan.contains(&"strands: simulate") && plan.contains(&"strands: guides"),
         "{plan:?}"
     );
     assert!(!plan.contains(&"strands: guides bend"), "{plan:?}");
     let read = |renderer: &Renderer| {
-        let bytes = pelage::gpu::read_buffer(&gpu, &renderer.strands().buffers().vertices).unwrap();
+        let bytes =
+            pelage::gpu::read_buffer(&gpu, &renderer.frame().strands().buffers().vertices).unwrap();
         bytemuck::cast_slice::<u8, [f32; 4]>(&bytes)
             .iter()
             .map(|v| Vec4::from_array(*v))
@@ -179,11 +180,11 @@ fn guides_with_dynamics_simulate_the_guides_and_draw_the_interpolated_strands() 
             .unwrap();
     }
     let last = read(&renderer);
-    assert_eq!(renderer.strands().buffers().strand_count, 1500);
+    assert_eq!(renderer.frame().strands().buffers().strand_count, 1500);
     let moved = (first.iter().zip(&last))
         .map(|(a, b)| a.truncate().distance(b.truncate()))
         .fold(0.0f32, f32::max);
-    let reach = renderer.strands().buffers().reach;
+    let reach = renderer.frame().strands().buffers().reach;
     assert!(
         last.iter()
             .all(|v| v.truncate().cmpge(reach.0).all() && v.truncate().cmple(reach.1).all()),

@@ -25,7 +25,8 @@ fn directional(direction: Vec3) -> Light {
 /// Mean visibility of the strand tips (the last vertex of each strand) on each side of x = 0.
 fn sides(renderer: &Renderer, gpu: &Gpu, light: usize) -> (f32, f32) {
     let vis = renderer.light_visibility(gpu).unwrap();
-    let vertices = pelage::gpu::read_buffer(gpu, &renderer.strands().buffers().vertices).unwrap();
+    let vertices =
+        pelage::gpu::read_buffer(gpu, &renderer.frame().strands().buffers().vertices).unwrap();
     let points: &[[f32; 4]] = bytemuck::cast_slice(&vertices);
     let (mut plus, mut minus) = (Vec::new(), Vec::new());
     for (p, v) in points.iter().zip(&vis[light]) {

@@ -35,7 +35,7 @@ fn zoom(gpu: &Gpu, lod: LodParams) -> (Vec<image::RgbaImage>, Vec<(f32, u32, u32
     for i in 0..FRAMES {
         renderer.render(gpu, 0.0, &camera(i)).unwrap();
         images.push(renderer.image(gpu).unwrap());
-        let l = renderer.lod();
+        let l = renderer.frame().strands().lod();
         levels.push((l.zone.lambda, l.strands, l.segments));
     }
     (images, levels)
@@ -121,6 +121,12 @@ fn lod_off_draws_every_strand_at_any_distance() {
     let scene = scene();
     let mut renderer = Renderer::new(&gpu, &scene, SIZE.0, SIZE.1).unwrap();
     renderer.render(&gpu, 0.0, &camera(FRAMES - 1)).unwrap();
-    assert_eq!(renderer.lod().strands, scene.hair.roots.count);
-    assert_eq!(renderer.lod().segments, scene.hair.growth.segments);
+    assert_eq!(
+        renderer.frame().strands().lod().strands,
+        scene.hair.roots.count
+    );
+    assert_eq!(
+        renderer.frame().strands().lod().segments,
+        scene.hair.growth.segments
+    );
 }

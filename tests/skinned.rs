@@ -32,6 +32,7 @@ fn a_skinned_scene_skins_before_stage_1_and_its_roots_follow_the_skin() {
     let rig = scene.skin.clone().unwrap();
     let mut renderer = Renderer::new(&gpu, &scene, 64, 48).unwrap();
     let labels: Vec<&str> = renderer
+        .frame()
         .plan()
         .passes()
         .iter()
@@ -48,10 +49,10 @@ fn a_skinned_scene_skins_before_stage_1_and_its_roots_follow_the_skin() {
     for t in [0.0, 0.6, 1.7] {
         renderer.render(&gpu, t, &scene.camera).unwrap();
         renderer.finish(&gpu).unwrap();
-        let bytes = read_buffer(&gpu, &renderer.strands().buffers().vertices).unwrap();
+        let bytes = read_buffer(&gpu, &renderer.frame().strands().buffers().vertices).unwrap();
         let vertices: &[[f32; 4]] = bytemuck::cast_slice(&bytes);
         let skinned = skin_mesh(&scene.mesh, &skin, &rig.joint_matrices(t));
-        for (strand, root) in vertices.chunks(per).zip(renderer.strands().roots()) {
+        for (strand, root) in vertices.chunks(per).zip(renderer.frame().strands().roots()) {
             let on = eval_surface(&skinned, root.triangle, root.bary, pn).position;
             worst = worst.max(Vec3::from_slice(&strand[0][..3]).distance(on));
         }

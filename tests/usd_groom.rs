@@ -156,7 +156,7 @@ fn a_groom_only_scene_draws_the_hair_and_no_mesh() {
     assert!(hair > 300, "only {hair} hair pixels");
     // Stage 2 shadowed the hair alone: its reach is the groom's.
     let renderer = Renderer::new(&gpu, &only, SIZE.0, SIZE.1).unwrap();
-    assert_eq!(renderer.mesh_buffers().triangle_count, 0);
+    assert_eq!(renderer.frame().mesh_buffers().triangle_count, 0);
     // Dynamics and motion need a mesh: refused, naming the key, not drawn wrong.
     for (key, scene) in [
         (

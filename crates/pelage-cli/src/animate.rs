@@ -276,8 +276,8 @@ fn animate(opts: &AnimateOpts) -> Result<(), CliError> {
     println!(
         "wrote {} frames of {size} ({} strands x {} segments) to {}/frame_*.png and {}",
         plan.len(),
-        renderer.strands().params().roots.count,
-        renderer.strands().params().growth.segments,
+        renderer.frame().strands().params().roots.count,
+        renderer.frame().strands().params().growth.segments,
         opts.out.display(),
         gif_path.display()
     );

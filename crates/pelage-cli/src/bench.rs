@@ -576,7 +576,7 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
                 }
             }
             let pixels = u64::from(width) * u64::from(height);
-            let memory = renderer.hair_pass().memory_bytes();
+            let memory = renderer.frame().hair_pass().memory_bytes();
             for (label, v) in per_label {
                 let ms = median(v);
                 bar.println(format!("  {strands:>7} strands  {label:<26} {ms:9.3} ms"));

@@ -84,7 +84,7 @@ impl TracedScene {
         renderer: &Renderer,
         gpu: &Gpu,
     ) -> Result<Self, TraceError> {
-        let strands = renderer.strands();
+        let strands = renderer.frame().strands();
         let buffers = strands.buffers();
         let frame = strands
             .frame()
@@ -144,7 +144,7 @@ impl TracedScene {
                 ),
             ),
         };
-        let mesh = renderer.mesh_buffers();
+        let mesh = renderer.frame().mesh_buffers();
         let positions = read_buffer(gpu, &mesh.positions)?;
         let positions: &[f32] = bytemuck::try_cast_slice(&positions)
             .map_err(|e| TraceError::Frame(format!("mesh positions: {e}")))?;

@@ -145,12 +145,12 @@ fn render(opts: &RenderOpts) -> Result<(), CliError> {
     println!(
         "wrote {} ({size}, {} strands x {} segments, t = {} s)",
         opts.out.display(),
-        renderer.strands().params().roots.count,
-        renderer.strands().params().growth.segments,
+        renderer.frame().strands().params().roots.count,
+        renderer.frame().strands().params().growth.segments,
         time
     );
     if scene.hair.lod.enabled {
-        let lod = renderer.lod();
+        let lod = renderer.frame().strands().lod();
         println!(
             "level of detail: hair box {:.0} px on screen, lambda {:.3}: {} strands x {} segments drawn",
             lod.pixels, lod.zone.lambda, lod.strands, lod.segments

@@ -44,7 +44,8 @@ pub fn median_per_pass(frames: &[Vec<(String, f64)>]) -> Vec<(String, f64)> {
 
 /// Work a run's frames dropped because a pool of stage 3 was full (the strand
 /// rasterizer's segment references, the A-buffer's and DBK's list nodes): counted frame
-/// by frame from [`pelage::Renderer::oit_stats`], reported once at the end of the run
+/// by frame from `HairPass::stats` (through `Renderer::frame`), reported once at the end
+/// of the run
 /// with the scene key to raise ([`DroppedWork::report`]).
 #[derive(Clone, Debug, Default)]
 pub struct DroppedWork {
@@ -68,7 +69,7 @@ pub struct DroppedWork {
 impl DroppedWork {
     /// Starts counting: reads the counters of `renderer` before its first frame.
     pub fn start(renderer: &Renderer, gpu: &Gpu) -> pelage::Result<Self> {
-        let last = renderer.oit_stats(gpu)?;
+        let last = renderer.frame().hair_pass().stats(gpu)?;
         Ok(Self {
             last,
             capacity: last.capacity,
@@ -83,7 +84,7 @@ impl DroppedWork {
         gpu: &Gpu,
         frame: u32,
     ) -> pelage::Result<()> {
-        let stats = renderer.oit_stats(gpu)?;
+        let stats = renderer.frame().hair_pass().stats(gpu)?;
         self.frames += 1;
         let dropped = stats.dropped.saturating_sub(self.last.dropped);
         if dropped > 0 {

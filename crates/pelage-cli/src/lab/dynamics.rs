@@ -300,7 +300,7 @@ fn compared(name: &'static str, simulated: Scene) -> Scenario {
 
 /// Every strand's vertices (xyz) from the renderer's strand buffers, strand after strand.
 fn read_strands(gpu: &Gpu, renderer: &Renderer) -> LabResult<(Vec<[f32; 3]>, usize)> {
-    let buffers = renderer.strands().buffers();
+    let buffers = renderer.frame().strands().buffers();
     let bytes = read_buffer(gpu, &buffers.vertices)?;
     let per_strand = buffers.vertices_per_strand() as usize;
     let vertices = bytes
@@ -394,12 +394,12 @@ fn measure(
         .iter()
         .map(|r| DroppedWork::start(r, gpu))
         .collect::<Result<Vec<_>, _>>()?;
-    let roots = renderers[0].strands().roots();
+    let roots = renderers[0].frame().strands().roots();
     let lengths: Vec<f64> = roots.iter().map(|r| f64::from(r.length)).collect();
     println!(
         "{name}: {} strands x {} segments, {}x{}, {frames} frames at {FPS} fps{}",
         roots.len(),
-        renderers[0].strands().buffers().segments,
+        renderers[0].frame().strands().buffers().segments,
         size.0,
         size.1,
         if floor.is_none() {

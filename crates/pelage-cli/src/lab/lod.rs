@@ -167,7 +167,7 @@ fn measure(
         image: renderer.image(gpu)?,
         wall_ms: median(wall),
         gpu_ms: median(stamps),
-        level: *renderer.lod(),
+        level: *renderer.frame().strands().lod(),
     })
 }
 
@@ -181,7 +181,7 @@ fn mean_fragments(gpu: &Gpu, scene: &Scene, camera: &Camera, size: (u32, u32)) -
     s.shade.sample_count = 1;
     let mut renderer = Renderer::new(gpu, &s, size.0, size.1)?;
     renderer.render(gpu, 0.5, camera)?;
-    let stats = renderer.oit_stats(gpu)?;
+    let stats = renderer.frame().hair_pass().stats(gpu)?;
     // The pool counts fragments, not pixels: spread them over the creature's pixels.
     let image = renderer.image(gpu)?;
     let bg = background(scene);

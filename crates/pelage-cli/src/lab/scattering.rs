@@ -415,7 +415,7 @@ fn fibre_counts(
                 Some(Light::Directional(d)) => d.to_light()?,
                 _ => return Err("the lab's key light is directional".into()),
             };
-            let strands = renderer.strands();
+            let strands = renderer.frame().strands();
             let per = (strands.buffers().segments + 1) as usize;
             let bytes = read_buffer(&gpu, &strands.buffers().vertices)?;
             let floats: &[f32] =

@@ -116,7 +116,7 @@ pub fn run(opts: &LabOpts) -> Result<(), Box<dyn std::error::Error>> {
     };
     let mut counter = Renderer::new(&gpu, &counting, size, size)?;
     counter.render(&gpu, 0.0, &counting.camera)?;
-    let fragments = counter.oit_stats(&gpu)?.stored.max(1);
+    let fragments = counter.frame().hair_pass().stats(&gpu)?.stored.max(1);
     println!("{fragments} hair fragments per frame at {size}x{size}");
     let models = models();
     let bar = progress::bar(models.len() as u64, "models")?;
