@@ -143,7 +143,8 @@ enum Command {
                       kernel on the same device, scaling with strand count (10k, 50k, 200k), \
                       memory per strand and per pixel, and the cost of shadows plus transparency \
                       over the bare lit strand pass. Writes DIR/bench.csv and \
-                      DIR/scaling.png|svg and prints the tables. About 4 minutes on 2 CPU cores; \
+                      DIR/scaling.png|svg and prints the tables. About 26 minutes on 2 CPU cores \
+                      (lavapipe, AMD EPYC, December 2026); \
                       --quick: small scenes, few frames.\n\n\
                       --gpu: the real-GPU bench instead (docs/src/gpu_bench.md): GPU time per \
                       stage of whole frames at 1920x1080 for 10k, 50k and 200k strands of 16 \
