@@ -287,6 +287,9 @@ fn model_module(model: &ShadingModel) -> &'static str {
         ShadingModel::Chiang(p) if p.multiple_scattering == MultipleScattering::Volume => {
             "shade/models/chiang_volume_model.wgsl"
         }
+        ShadingModel::Chiang(p) if p.multiple_scattering == MultipleScattering::Dual => {
+            "shade/models/chiang_dual_model.wgsl"
+        }
         ShadingModel::Chiang(_) => "shade/models/chiang_model.wgsl",
     }
 }

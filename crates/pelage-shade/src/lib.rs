@@ -47,6 +47,8 @@ pub static SHADERS: pelage_gpu::ShaderSources = pelage_gpu::wgsl_sources!(
     "shade/hair_model.wgsl",
     "shade/mesh.wgsl",
     "shade/models/chiang.wgsl",
+    "shade/models/chiang_common_model.wgsl",
+    "shade/models/chiang_dual_model.wgsl",
     "shade/models/chiang_eval.wgsl",
     "shade/models/chiang_model.wgsl",
     "shade/models/chiang_tables.wgsl",

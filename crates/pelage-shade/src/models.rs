@@ -7,7 +7,7 @@
 //! | Marschner | `shade/models/marschner.wgsl` | `marschner_radiance` | [`MarschnerUniforms`] |
 //! | Marschner, tables | `shade/models/marschner_lut_lookup.wgsl` | `marschner_radiance_lut` | [`MarschnerUniforms`] + [`MarschnerLut`] at group 2 |
 //! | Sadeghi | `shade/models/sadeghi.wgsl` | `sadeghi_radiance` | [`SadeghiUniforms`] |
-//! | Chiang 2016 | `shade/models/chiang.wgsl` | `chiang_radiance`, `chiang_light` (dual scattering) | [`ChiangUniforms`] + [`ChiangTables`] at group 2 |
+//! | Chiang 2016 | `shade/models/chiang.wgsl` | `chiang_radiance`, `chiang_dual_radiance` (dual scattering) | [`ChiangUniforms`] + [`ChiangTables`] at group 2 |
 //!
 //! Every function has the shape
 //! `fn X_radiance(m: XModel, t, l, v, base_color: vec3<f32>, strand_random: f32) -> vec3<f32>`
@@ -497,7 +497,8 @@ pub struct ChiangUniforms {
     pub cos_2k_alpha: Vec3,
     /// [`pelage_scene::chiang_color_scale`] of `β_n`.
     pub color_scale: f32,
-    /// 1: dual scattering.
+    /// 1: dual scattering. The test kernel `chiang_eval.wgsl` reads it; the hair passes
+    /// bind `chiang_dual_model.wgsl` or `chiang_model.wgsl` by the model instead.
     pub dual: u32,
     /// Padding.
     pub _pad0: u32,

@@ -64,7 +64,9 @@ struct ChiangModel {
     cos_2k_alpha: vec3<f32>,
     // The denominator of Chiang's colour inversion for beta_n.
     color_scale: f32,
-    // 1: dual scattering; 0: single scattering.
+    // 1: dual scattering; 0: single scattering. Read by the test kernel chiang_eval.wgsl
+    // only: a hair pass binds chiang_dual_model.wgsl or chiang_model.wgsl instead of
+    // branching on it (a shader holding both paths ran both on lavapipe: 2x).
     dual: u32,
     _pad0: u32,
     _pad1: u32,
@@ -374,21 +376,4 @@ fn chiang_dual_radiance(
         chiang_dual_channel(m, a, eg, f_s.y, vis, n),
         chiang_dual_channel(m, a, eb, f_s.z, vis, n),
     );
-}
-
-// What the hair model contract's hair_light returns: single scattering times the
-// visibility, or dual scattering when it is on.
-fn chiang_light(
-    m: ChiangModel,
-    t: vec3<f32>,
-    l: vec3<f32>,
-    v: vec3<f32>,
-    base_color: vec3<f32>,
-    strand_random: f32,
-    visibility: f32,
-) -> vec3<f32> {
-    if (m.dual != 0u) {
-        return chiang_dual_radiance(m, t, l, v, base_color, visibility);
-    }
-    return chiang_radiance(m, t, l, v, base_color, strand_random) * visibility;
 }

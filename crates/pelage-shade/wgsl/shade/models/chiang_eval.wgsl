@@ -7,8 +7,9 @@
 // Writes: results (storage: per case vec4(radiance, 1)).
 // Dispatch: workgroups of 64 over the cases, flattened as
 //         gid.y * num_workgroups.x * 64 + gid.x (pelage_gpu::dispatch_size).
-// Modes: 0 = single scattering (chiang_radiance), 1 = chiang_light (single or dual as the
-//        model says, times or through the visibility), 2 and 3 = the dual-scattering
+// Modes: 0 = single scattering (chiang_radiance), 1 = what the hair passes' hair_light
+//        returns for the model's `dual` (chiang_dual_model.wgsl: chiang_dual_radiance through
+//        the visibility; chiang_model.wgsl: chiang_radiance times it), 2 and 3 = the dual-scattering
 //        energies as chiang_dual_at reads them, forward (2) or backward (3), per lobe
 //        (R, TT, TRT, residual) at |theta| = t.x and absorption coordinate t.y.
 
@@ -49,8 +50,10 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     var out = vec3<f32>(0.0);
     if (settings.mode == 0u) {
         out = chiang_radiance(chiang, c.t.xyz, c.l.xyz, c.v.xyz, c.color.xyz, 0.0);
+    } else if (chiang.dual != 0u) {
+        out = chiang_dual_radiance(chiang, c.t.xyz, c.l.xyz, c.v.xyz, c.color.xyz, c.t.w);
     } else {
-        out = chiang_light(chiang, c.t.xyz, c.l.xyz, c.v.xyz, c.color.xyz, 0.0, c.t.w);
+        out = chiang_radiance(chiang, c.t.xyz, c.l.xyz, c.v.xyz, c.color.xyz, 0.0) * c.t.w;
     }
     results[i] = vec4<f32>(out, 1.0);
 }
