@@ -489,7 +489,7 @@ pub enum MultipleScattering {
     /// direction splatted into a grid over the hair, single-scattered light injected
     /// through the grid's own transmittance toward each light, propagated cell to cell with
     /// a fibre phase function from Chiang's energy tables, read at shading. The default:
-    /// the scattering lab measures it closest to the path tracer on every row, at 1.44x
+    /// the scattering lab measures it closest to the path tracer on every row, at 1.37x
     /// single scattering's shade stage (16³ cells, `pelage bench --quick`;
     /// docs/src/shading.md).
     #[default]
