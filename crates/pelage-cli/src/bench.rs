@@ -1335,7 +1335,7 @@ fn bridge_section(
 type SdfRatios = Vec<(u32, f64)>;
 
 /// The resolutions of the body's distance field the skinning section times (the lab's;
-/// 128 takes about 8x as long, jump flooding's work growing with the nodes).
+/// 128 takes about 8x as long, every stage's work growing with the nodes).
 const SDF_RESOLUTIONS: [u32; 1] = [64];
 
 /// What [`strand_raster_section`] measured.

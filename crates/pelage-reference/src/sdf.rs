@@ -57,30 +57,32 @@ pub fn closest_bary(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> (f64, f64, f64) {
 }
 
 /// The exact signed distance from `p` to `mesh` (negative inside): the distance to the
-/// nearest triangle with a finite corner (ties: the highest index, as the GPU), signed
-/// by the side of the mesh's normal (the vertex normals interpolated at the nearest
-/// point) that `p` lies on. `None` when no triangle is finite.
+/// nearest triangle with a finite corner, signed by the side of the mesh's normal (the
+/// vertex normals interpolated at the nearest point) that `p` lies on; where triangles
+/// tie for nearest and disagree, outside (as the GPU's keys). `None` when no triangle
+/// is finite.
 pub fn signed_distance(mesh: &Mesh, p: Vec3) -> Option<f32> {
-    let mut best: Option<(f64, usize, (f64, f64, f64))> = None;
-    for (t, tri) in mesh.indices.chunks_exact(3).enumerate() {
+    let mut best: Option<(f64, bool)> = None;
+    let pd = p.as_dvec3();
+    for tri in mesh.indices.chunks_exact(3) {
         let [a, b, c] = [0, 1, 2].map(|k| mesh.positions[tri[k] as usize]);
         if !(a.is_finite() && b.is_finite() && c.is_finite()) {
             continue;
         }
-        let bary = closest_bary(p, a, b, c);
-        let q = a.as_dvec3() * bary.0 + b.as_dvec3() * bary.1 + c.as_dvec3() * bary.2;
-        let d = p.as_dvec3().distance(q);
-        if best.is_none_or(|(bd, _, _)| d <= bd) {
-            best = Some((d, t, bary));
+        let (u, v, w) = closest_bary(p, a, b, c);
+        let q = a.as_dvec3() * u + b.as_dvec3() * v + c.as_dvec3() * w;
+        let d = pd.distance(q);
+        if best.is_some_and(|(bd, _)| d > bd) {
+            continue;
         }
+        let [na, nb, nc] = [0, 1, 2].map(|k| mesh.normals[tri[k] as usize].as_dvec3());
+        let inside = (pd - q).dot(na * u + nb * v + nc * w) < 0.0;
+        best = Some(match best {
+            Some((bd, was_inside)) if d == bd => (d, was_inside && inside),
+            _ => (d, inside),
+        });
     }
-    let (d, t, (u, v, w)) = best?;
-    let tri = &mesh.indices[3 * t..3 * t + 3];
-    let [a, b, c] = [0, 1, 2].map(|k| mesh.positions[tri[k] as usize].as_dvec3());
-    let [na, nb, nc] = [0, 1, 2].map(|k| mesh.normals[tri[k] as usize].as_dvec3());
-    let q = a * u + b * v + c * w;
-    let n = na * u + nb * v + nc * w;
-    let inside = (p.as_dvec3() - q).dot(n) < 0.0;
+    let (d, inside) = best?;
     Some(if inside { -d as f32 } else { d as f32 })
 }
 

@@ -20,8 +20,8 @@ pub const SDF_MARGIN_CELLS: u32 = 2;
 
 /// Cells around the surface within which the field's distance is exact (the narrow band
 /// each triangle writes itself: the nodes of its box grown by this many cells that lie
-/// this near its plane; farther nodes take the nearest surface point that jump flooding
-/// on a coarser grid finds, an approximation: `pelage_strands::BodySdf`).
+/// this near its plane; farther nodes take the nearest surface point that sweeps over a
+/// coarser grid find, an approximation: `pelage_strands::BodySdf`).
 pub const SDF_BAND_CELLS: u32 = 2;
 
 /// Where the nodes of a body's signed distance field are: `dims` nodes per axis, node

@@ -43,7 +43,7 @@ pub(crate) struct SdfUniforms {
     pub pitch: u32,
 }
 
-/// Fine cells per cell of the coarse grid on which jump flooding runs.
+/// Fine cells per cell of the coarse grid over which the sweeps carry the surface.
 pub const COARSE_FACTOR: u32 = 4;
 
 /// The coarse grid of `grid`: the same origin, [`COARSE_FACTOR`] times the cell, and
@@ -59,27 +59,18 @@ pub fn coarse_grid(grid: &SdfGrid) -> SdfGrid {
     }
 }
 
-/// One jump-flooding step's distance in nodes (`JfaStep` in `sdf.wgsl`).
+/// Which half of the coarse points a pass of the build reads and writes, and a sweep's
+/// axis (`Pass` in `sdf.wgsl`).
 #[derive(Clone, Copy, Debug, PartialEq, ShaderType)]
-struct JfaStep {
-    step: u32,
-    pad0: u32,
-    pad1: u32,
-    pad2: u32,
+struct PassUniforms {
+    axis: u32,
+    read_half: u32,
+    write_half: u32,
+    pad: u32,
 }
 
-/// The jump-flooding steps for a grid whose longest axis has `longest` nodes: halving
-/// from the largest power of two below it to 1, then 1 again (JFA+1, Rong and Tan 2006).
-pub fn flood_steps(longest: u32) -> Vec<u32> {
-    let mut steps = Vec::new();
-    let mut s = (longest.max(2) - 1).next_power_of_two() / 2;
-    while s >= 1 {
-        steps.push(s);
-        s /= 2;
-    }
-    steps.push(1);
-    steps
-}
+/// The axes the sweeps over the coarse grid run along, in order (0: x, 1: y, 2: z).
+pub const SWEEP_AXES: [u32; 3] = [0, 1, 2];
 
 /// Vertex-triangle pairs past which [`body_triangles`] does not look for buried
 /// triangles (keeps them all).
@@ -205,16 +196,20 @@ fn winding(mesh: &Mesh, triangles: &[usize], p: Vec3) -> f64 {
 /// is).
 ///
 /// **Build.** Each triangle writes its exact distance into the nodes of its box grown by
-/// [`SDF_BAND_CELLS`] cells that lie within that band of its plane (an `atomicMin` on the
-/// distance's bits, then, where its distance is the minimum, an `atomicMax` on its index
-/// with the side of the mesh's normal the node is on). The same on a coarse grid
-/// ([`coarse_grid`]: every [`COARSE_FACTOR`]-th node, one coarse cell around each
-/// triangle) seeds each coarse node near the surface with its nearest surface point, and
-/// jump flooding over the coarse nodes ([`flood_steps`] of the coarse grid's longest
-/// axis, 26 neighbours each) carries the points to the rest. A last pass, one invocation
-/// per coarse cell, writes each fine node's signed distance to a buffer, which is copied
-/// into the texture (on lavapipe, storing a 3D texture node by node cost more than the
-/// rest of the build).
+/// [`SDF_BAND_CELLS`] cells that lie within that band of its plane, together with the
+/// side of the mesh's normal the node is on (one atomic on a key: the distance's bits
+/// above, the side below, so the nearest triangle's side comes with its distance). The
+/// same on a coarse grid ([`coarse_grid`]: every [`COARSE_FACTOR`]-th node, one coarse
+/// cell around each triangle, and a second splat naming each node's nearest triangle)
+/// seeds each coarse node near the surface with its nearest surface point; sweeps along
+/// each line of the coarse grid ([`SWEEP_AXES`], both ways: each node hands on
+/// whichever of its point and the one it was handed is nearer the next node) carry the
+/// points to the rest. A last pass, one invocation per coarse cell, writes each fine
+/// node's signed distance to a buffer, which is copied into the texture (on lavapipe,
+/// storing a 3D texture node by node cost more than the rest of the build). The arrays
+/// the splats take extremes in are cleared with buffer fills, and every buffer the
+/// passes write is bound read-write in all of them (on lavapipe a dispatch that changes
+/// how a buffer is used costs a barrier of about 0.8 ms).
 ///
 /// **What the field holds.** Every node within the band ([`SdfGrid::band`]) of the
 /// surface holds its exact signed distance (to float rounding): what the collision step
@@ -222,7 +217,7 @@ fn winding(mesh: &Mesh, triangles: &[usize], p: Vec3) -> f64 {
 /// farther node holds the distance to the nearest of the surface points that the 8
 /// coarse nodes around it hold, signed by the side of that point's normal: never nearer
 /// than the surface is (each is a point of it), farther by up to about 2 cells (measured
-/// against the CPU mirror `pelage_reference::sdf`: 1.2 cells on a sphere, 1.5 on the
+/// against the CPU mirror `pelage_reference::sdf`: 1.6 cells on a sphere, 1.6 on the
 /// creature), and of the right sign outside the body; inside a mesh of overlapping
 /// closed parts, where a buried part's surface faces outward, a node about as far from
 /// it as from the body's surface may take either side (as with the exact nearest-normal
@@ -240,18 +235,19 @@ pub struct BodySdf {
     /// The finish's output, rows of `pitch` texels, copied into `texture`.
     field: wgpu::Buffer,
     pitch: u32,
+    /// The splats' keys (fine and coarse) and the coarse nearest triangles, cleared to 0
+    /// before each build.
+    cleared: [wgpu::Buffer; 3],
     seed: wgpu::ComputePipeline,
     texture: wgpu::Texture,
     view: wgpu::TextureView,
-    clear: wgpu::ComputePipeline,
-    splat_distance: wgpu::ComputePipeline,
+    splat: wgpu::ComputePipeline,
     splat_nearest: wgpu::ComputePipeline,
-    flood: wgpu::ComputePipeline,
+    sweep: wgpu::ComputePipeline,
     finish: wgpu::ComputePipeline,
-    /// The fine level's clear and splats; the coarse level's; the seed; one per flood
-    /// step (on the coarse level); the finish.
+    /// The fine level's splat; the coarse level's splats and seed; one per sweep; the
+    /// finish.
     groups: Vec<wgpu::BindGroup>,
-    steps: Vec<u32>,
     triangle_count: u32,
     limits: wgpu::Limits,
 }
@@ -355,39 +351,22 @@ impl BodySdf {
         let pitch = grid.dims.x.next_multiple_of(64);
         let field_bytes = u64::from(pitch) * u64::from(grid.dims.y) * u64::from(grid.dims.z) * 4;
         let storage = wgpu::BufferUsages::STORAGE;
-        let bits = zeroed_storage(gpu, "pelage sdf distance bits", nodes * 4, storage)?;
-        let near = zeroed_storage(gpu, "pelage sdf nearest", nodes * 4, storage)?;
+        // Cleared before every build (the splats' keys and nearest triangles start at 0).
+        let cleared = storage | wgpu::BufferUsages::COPY_DST;
+        let keys = zeroed_storage(gpu, "pelage sdf keys", nodes * 4, cleared)?;
         let field = zeroed_storage(
             gpu,
             "pelage sdf field",
             field_bytes,
             storage | wgpu::BufferUsages::COPY_SRC,
         )?;
-        let coarse_bits = zeroed_storage(gpu, "pelage sdf coarse bits", coarse_nodes * 4, storage)?;
+        let coarse_keys = zeroed_storage(gpu, "pelage sdf coarse keys", coarse_nodes * 4, cleared)?;
         let coarse_near =
-            zeroed_storage(gpu, "pelage sdf coarse nearest", coarse_nodes * 4, storage)?;
-        let points_a = zeroed_storage(
-            gpu,
-            "pelage sdf coarse points A",
-            coarse_nodes * 16,
-            storage,
-        )?;
-        let points_b = zeroed_storage(
-            gpu,
-            "pelage sdf coarse points B",
-            coarse_nodes * 16,
-            storage,
-        )?;
+            zeroed_storage(gpu, "pelage sdf coarse nearest", coarse_nodes * 4, cleared)?;
+        // The coarse points, two halves (A, B) the passes read one of and write the other.
+        let points = zeroed_storage(gpu, "pelage sdf coarse points", coarse_nodes * 32, storage)?;
         // Scratch of the build: written and read inside its one pass.
-        for b in [
-            &bits,
-            &near,
-            &field,
-            &coarse_bits,
-            &coarse_near,
-            &points_a,
-            &points_b,
-        ] {
+        for b in [&keys, &field, &coarse_keys, &coarse_near, &points] {
             pelage_gpu::audit::name_buffer(b, BODY_SDF);
         }
         let diagonal = (grid.dims - UVec3::ONE).as_vec3().length() * grid.cell;
@@ -409,19 +388,37 @@ impl BodySdf {
         // The coarse level's splats reach every node within one coarse cell of a triangle.
         let coarse_uniforms =
             UniformBuffer::new(gpu, "pelage sdf coarse uniforms", &level(&coarse, 1, 1))?;
-        let steps = flood_steps(coarse.dims.max_element());
-        let step_buffers = std::iter::once(0)
-            .chain(steps.iter().copied())
-            .map(|step| {
-                let value = JfaStep {
-                    step,
-                    pad0: 0,
-                    pad1: 0,
-                    pad2: 0,
-                };
-                UniformBuffer::new(gpu, "pelage sdf flood step", &value)
-            })
-            .collect::<Result<Vec<_>, _>>()?;
+        // Which half of `points` each pass reads and writes: the seed writes A, the
+        // sweeps along x, y and z go A to B, B to A, A to B, and the finish reads B.
+        let half = u32::try_from(coarse_nodes).map_err(|_| {
+            ParamError::new(
+                "dynamics.sdf_resolution",
+                resolution,
+                "makes a coarse grid past 2^32 nodes",
+            )
+        })?;
+        let (a, b) = (0, half);
+        let pass_uniforms = [
+            (0, a, a),
+            (SWEEP_AXES[0], a, b),
+            (SWEEP_AXES[1], b, a),
+            (SWEEP_AXES[2], a, b),
+            (0, b, b),
+        ]
+        .map(|(axis, read_half, write_half)| {
+            UniformBuffer::new(
+                gpu,
+                "pelage sdf pass",
+                &PassUniforms {
+                    axis,
+                    read_half,
+                    write_half,
+                    pad: 0,
+                },
+            )
+        });
+        let [seed_pass, sweep_x, sweep_y, sweep_z, finish_pass] = pass_uniforms;
+        let passes = [seed_pass?, sweep_x?, sweep_y?, sweep_z?, finish_pass?];
         let module = crate::SHADERS.library().module(gpu, "strands/sdf.wgsl")?;
         let built = gpu.scoped(|device| {
             let texture = device.create_texture(&wgpu::TextureDescriptor {
@@ -448,21 +445,20 @@ impl BodySdf {
                 .storage(2)
                 .storage(3)
                 .storage_rw(4)
-                .storage(5)
+                .storage_rw(5)
                 .storage_rw(6)
+                .storage_rw(7)
                 .uniform(8)
                 .uniform(9)
-                .storage(10)
                 .build(device);
             let pipeline = |entry: &str| {
                 compute_pipeline_with_layouts(device, SDF_LABEL, &module, entry, &[Some(&layout)])
             };
             let pipelines = [
-                pipeline("clear"),
-                pipeline("splat_distance"),
+                pipeline("splat"),
                 pipeline("splat_nearest"),
                 pipeline("seed"),
-                pipeline("flood"),
+                pipeline("sweep"),
                 pipeline("finish"),
             ];
             fn buffer(binding: u32, b: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
@@ -471,14 +467,9 @@ impl BodySdf {
                     resource: b.as_entire_binding(),
                 }
             }
-            // A level's uniforms and distance bits, the array read and the one written,
-            // the flood step, and the coarse points read.
-            let group = |uniforms: &wgpu::Buffer,
-                         bits: &wgpu::Buffer,
-                         read: &wgpu::Buffer,
-                         write: &wgpu::Buffer,
-                         step: &wgpu::Buffer,
-                         points: &wgpu::Buffer| {
+            // A level's uniforms and keys, and a pass's uniforms; the field, the coarse
+            // nearest triangles and points are the same in every group.
+            let group = |uniforms: &wgpu::Buffer, keys: &wgpu::Buffer, pass: &wgpu::Buffer| {
                 pelage_gpu::create_bind_group(
                     device,
                     &wgpu::BindGroupDescriptor {
@@ -489,79 +480,46 @@ impl BodySdf {
                             buffer(1, &mesh.positions),
                             buffer(2, &mesh.normals),
                             buffer(3, &indices),
-                            buffer(4, bits),
-                            buffer(5, read),
-                            buffer(6, write),
-                            buffer(8, step),
+                            buffer(4, keys),
+                            buffer(5, &field),
+                            buffer(6, &coarse_near),
+                            buffer(7, &points),
+                            buffer(8, pass),
                             buffer(9, &coarse_uniforms.buffer),
-                            buffer(10, points),
                         ],
                     },
                 )
             };
-            let (fine_u, coarse_u, step0) = (
-                &fine_uniforms.buffer,
-                &coarse_uniforms.buffer,
-                &step_buffers[0].buffer,
-            );
-            // Unused bindings hold buffers the dispatch does not write.
-            let mut groups = vec![
-                // The fine splats write `near`.
-                group(fine_u, &bits, &coarse_near, &near, step0, &points_a),
-                // The coarse splats write `coarse_near`.
-                group(
-                    coarse_u,
-                    &coarse_bits,
-                    &near,
-                    &coarse_near,
-                    step0,
-                    &points_a,
-                ),
-                // The seed reads it and writes points A.
-                group(
-                    coarse_u,
-                    &coarse_bits,
-                    &coarse_near,
-                    &points_a,
-                    step0,
-                    &points_b,
-                ),
+            let (fine_u, coarse_u) = (&fine_uniforms.buffer, &coarse_uniforms.buffer);
+            let groups: Vec<wgpu::BindGroup> = vec![
+                // The fine splat.
+                group(fine_u, &keys, &passes[0].buffer),
+                // The coarse splats and the seed.
+                group(coarse_u, &coarse_keys, &passes[0].buffer),
+                // The sweeps along x, y and z.
+                group(coarse_u, &coarse_keys, &passes[1].buffer),
+                group(coarse_u, &coarse_keys, &passes[2].buffer),
+                group(coarse_u, &coarse_keys, &passes[3].buffer),
+                // The finish.
+                group(fine_u, &keys, &passes[4].buffer),
             ];
-            // Flood step k reads A (as the coarse points) and writes B when k is even.
-            for (k, step) in step_buffers[1..].iter().enumerate() {
-                let (from, to) = if k % 2 == 0 {
-                    (&points_a, &points_b)
-                } else {
-                    (&points_b, &points_a)
-                };
-                groups.push(group(coarse_u, &coarse_bits, &near, to, &step.buffer, from));
-            }
-            let last = if steps.len() % 2 == 1 {
-                &points_b
-            } else {
-                &points_a
-            };
-            // The finish reads `near` and the last points, and writes the field.
-            groups.push(group(fine_u, &bits, &near, &field, step0, last));
             (texture, view, pipelines, groups)
         })?;
-        let (texture, view, [clear, splat_distance, splat_nearest, seed, flood, finish], groups) =
-            built;
+        let (texture, view, [splat, splat_nearest, seed, sweep, finish], groups) = built;
         Ok(Self {
             grid,
             coarse,
             field,
             pitch,
+            cleared: [keys, coarse_keys, coarse_near],
             seed,
             texture,
             view,
-            clear,
-            splat_distance,
+            splat,
             splat_nearest,
-            flood,
+            sweep,
             finish,
             groups,
-            steps,
             triangle_count,
             limits: gpu.limits().clone(),
         })
@@ -570,6 +528,7 @@ impl BodySdf {
     /// Records the build ([`SDF_LABEL`]: one compute pass, every dispatch reading the
     /// mesh buffers as they are when it runs).
     pub fn encode(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&mut GpuTimer>) {
+        self.clear(encoder);
         let timestamp_writes = timer.and_then(|t| t.compute_pass(SDF_LABEL));
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some(SDF_LABEL),
@@ -580,6 +539,14 @@ impl BodySdf {
         }
         drop(pass);
         self.copy_field(encoder);
+    }
+
+    /// Clears the arrays the splats take their extremes in (a fill: on lavapipe the
+    /// clearing dispatch it replaces took 1.1 ms at 64³).
+    fn clear(&self, encoder: &mut wgpu::CommandEncoder) {
+        for buffer in &self.cleared {
+            encoder.clear_buffer(buffer, 0, None);
+        }
     }
 
     /// Copies the finish's output into the texture.
@@ -617,6 +584,7 @@ impl BodySdf {
         encoder: &mut wgpu::CommandEncoder,
         mut timer: Option<&mut GpuTimer>,
     ) {
+        self.clear(encoder);
         for (stage, dispatches) in self.stages() {
             let label = format!("{SDF_LABEL} / {stage}");
             let timestamp_writes = timer.as_deref_mut().and_then(|t| t.compute_pass(&label));
@@ -630,40 +598,36 @@ impl BodySdf {
     }
 
     /// The names of the build's stages, in order ([`BodySdf::encode_stages`]).
-    pub const STAGES: [&str; 4] = ["splat", "coarse", "flood", "finish"];
+    pub const STAGES: [&str; 4] = ["splat", "coarse", "sweeps", "finish"];
 
     /// The build's dispatches, by stage.
     fn stages(&self) -> Vec<(&'static str, Vec<Dispatch<'_>>)> {
         let size = |n: u64| dispatch_size(&self.limits, n, WORKGROUP);
-        let nodes = size(self.grid.nodes() as u64);
         let coarse_nodes = size(self.coarse.nodes() as u64);
         let triangles = size(u64::from(self.triangle_count));
-        let [fine, coarse, seed] = [0, 1, 2].map(|k| &self.groups[k]);
-        let flood = self.groups[3..3 + self.steps.len()]
-            .iter()
-            .map(|group| (&self.flood, group, coarse_nodes))
-            .collect();
-        let last = &self.groups[self.groups.len() - 1];
+        let [fine, coarse, x, y, z, finish] = [0, 1, 2, 3, 4, 5].map(|k| &self.groups[k]);
+        // A sweep runs one invocation per line of the coarse grid along its axis.
+        let d = self.coarse.dims;
+        let lines = |across: u32| size(u64::from(across));
         vec![
-            (
-                "splat",
-                vec![
-                    (&self.clear, fine, nodes),
-                    (&self.splat_distance, fine, triangles),
-                    (&self.splat_nearest, fine, triangles),
-                ],
-            ),
+            ("splat", vec![(&self.splat, fine, triangles)]),
             (
                 "coarse",
                 vec![
-                    (&self.clear, coarse, coarse_nodes),
-                    (&self.splat_distance, coarse, triangles),
+                    (&self.splat, coarse, triangles),
                     (&self.splat_nearest, coarse, triangles),
-                    (&self.seed, seed, coarse_nodes),
+                    (&self.seed, coarse, coarse_nodes),
                 ],
             ),
-            ("flood", flood),
-            ("finish", vec![(&self.finish, last, coarse_nodes)]),
+            (
+                "sweeps",
+                vec![
+                    (&self.sweep, x, lines(d.y * d.z)),
+                    (&self.sweep, y, lines(d.x * d.z)),
+                    (&self.sweep, z, lines(d.x * d.y)),
+                ],
+            ),
+            ("finish", vec![(&self.finish, finish, coarse_nodes)]),
         ]
     }
 
@@ -689,11 +653,6 @@ impl BodySdf {
         &self.grid
     }
 
-    /// The jump-flooding steps the build runs (on the coarse grid).
-    pub fn flood_steps(&self) -> &[u32] {
-        &self.steps
-    }
-
     /// The field (`texture_3d<f32>`, `r32float`, one texel per node).
     pub fn view(&self) -> &wgpu::TextureView {
         &self.view
@@ -701,10 +660,10 @@ impl BodySdf {
 
     /// Bytes the field and its build buffers take on the GPU.
     pub fn bytes(&self) -> u64 {
-        self.grid.nodes() as u64 * 12 + self.field.size() + self.coarse.nodes() as u64 * 40
+        self.grid.nodes() as u64 * 4 + self.field.size() + self.coarse.nodes() as u64 * 40
     }
 
-    /// The coarse grid jump flooding runs on ([`coarse_grid`]).
+    /// The coarse grid the sweeps run over ([`coarse_grid`]).
     pub fn coarse_grid(&self) -> &SdfGrid {
         &self.coarse
     }
@@ -776,18 +735,5 @@ fn record(pass: &mut wgpu::ComputePass<'_>, dispatches: &[Dispatch<'_>]) {
         pass.set_pipeline(pipeline);
         pelage_gpu::set_bind_group(pass, 0, group);
         pass.dispatch_workgroups(size.0, size.1, 1);
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn flood_steps_halve_to_one_then_repeat_it() {
-        assert_eq!(flood_steps(64), vec![32, 16, 8, 4, 2, 1, 1]);
-        assert_eq!(flood_steps(65), vec![32, 16, 8, 4, 2, 1, 1]);
-        assert_eq!(flood_steps(66), vec![64, 32, 16, 8, 4, 2, 1, 1]);
-        assert_eq!(flood_steps(2), vec![1]);
     }
 }

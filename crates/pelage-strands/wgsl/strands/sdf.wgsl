@@ -1,49 +1,49 @@
 // A signed distance field of the mesh on a grid of nodes (BodySdf, pelage-strands/src/sdf.rs),
 // rebuilt from the mesh buffers in one compute pass, on two levels: the fine grid (the
-// field's nodes) and a coarse one (every COARSE_FACTOR-th node along each axis) on which
-// jump flooding carries the surface to the nodes far from it.
-//  1. clear (per node of a level): distance bits to FAR_BITS, nearest to none (0);
-//  2. splat_distance (per triangle): the exact distance from the triangle to every node
-//     of its box grown by `band` cells that lies within `band` cells of its plane,
-//     atomicMin on the distance's bits (non-negative floats order as their bits do);
-//  3. splat_nearest (per triangle): the same nodes again; where this triangle's distance
-//     is the minimum (within NEAREST_ULPS), atomicMax on (index + 1) << 1 | inside, inside
-//     being the side of the mesh's normal at the nearest point (the vertex normals
-//     interpolated there) the node is on: ties go to the highest index, and the winner's
-//     side comes with it, so the field is the same run after run;
-//     (1-3 run on the fine level with `band` = SDF_BAND_CELLS, then on the coarse level
+// field's nodes) and a coarse one (every COARSE_FACTOR-th node along each axis) over which
+// sweeps carry the surface to the nodes far from it. The arrays the splats take extremes
+// in start at 0 (buffer clears before the pass, not dispatches).
+//  1. splat (per triangle): the exact distance from the triangle to every node of its box
+//     grown by `band` cells that lies within `band` cells of its plane, with the side of
+//     the mesh's normal at the nearest point (the vertex normals interpolated there) the
+//     node is on, as one key: the distance's bits (non-negative floats order as their
+//     bits do) shifted up one, the side (1: inside) below; atomicMax on its complement
+//     keeps the least key, so the nearest triangle's side comes with its distance and the
+//     field is the same run after run (an exact tie between sides: outside);
+//  2. splat_nearest (per triangle, the coarse level only): the same nodes again; where
+//     this triangle's distance is the minimum (within NEAREST_ULPS), atomicMax on its
+//     index + 1 (ties: the highest index);
+//     (1 runs on the fine level with `band` = SDF_BAND_CELLS, 1-2 on the coarse level
 //     with one coarse cell;)
-//  4. seed (per coarse node): the nearest point of the triangle the splats left there
+//  3. seed (per coarse node): the nearest point of the triangle the splats left there
 //     and the mesh's normal at it (packed);
-//  5. flood (per coarse node, once per step, steps halving from the largest power of two
-//     below the coarse grid's longest axis to 1, then 1 again: "JFA+1"): the nearest of
-//     the surface points the node and its 26 neighbours `step` nodes away hold (a node
-//     whose point is within the coarse band keeps it: its seed is exact);
-//  6. finish (per fine node): within the band (the splat's minimum at most `band` cells)
-//     the splat's exact distance, negative where the winner says inside; beyond, the
+//  4. sweep (per line of coarse nodes, along x, then y, then z): each node takes the
+//     nearest of its point and those the line hands it from either end (vector
+//     propagation: a node hands on whichever of its point and the one it was handed is
+//     nearer the next node);
+//  5. finish (per fine node): within the band (the splat's least key at most `band`
+//     cells) the splat's exact distance, negative where its side is inside; beyond, the
 //     nearest of the splat's triangle and the 8 surface points the coarse nodes around
-//     the node hold, signed by the side of that point's normal the node is on; +far
-//     where nothing reached (every triangle non-finite). Written to a buffer with the
-//     rows of the field's texture (a copy moves it there: writing a 3D storage texture
-//     node by node costs more than the rest of the build on some devices).
+//     the node hold, signed by the side of that point's normal the node is on; +far where
+//     nothing reached (every triangle non-finite). Written to a buffer with the rows of
+//     the field's texture (a copy moves it there: writing a 3D storage texture node by
+//     node costs more than the rest of the build on some devices).
 // The field: every node within `band` cells of the surface holds its exact signed
 // distance (its nearest triangle's grown box and slab hold it). A farther node holds the
 // distance to a point of the surface (so never less than the exact distance), the
-// nearest one jump flooding brought to the coarse nodes around it: an approximation
-// whose error the tests measure against the CPU mirror (pelage-reference/src/sdf.rs).
+// nearest one the sweeps brought to the coarse nodes around it: an approximation whose
+// error the tests measure against the CPU mirror (pelage-reference/src/sdf.rs).
 // A mesh with holes: the sign is the nearest surface point's normal side, so the field
 // says "inside" only behind the surface near a node, and a hole's rim is a surface like
 // any other (no flood fill, no winding number: an open mesh is not inside-out).
 // Bindings: the level's uniforms, the mesh (positions and normals f32 x3, u32 triangle
-// list), the distance bits, a u32 array read and one written (the nearest triangles; the
-// coarse points, 4 u32 per node; the field), the flood step, the coarse level's uniforms
-// and its points.
+// list), the level's keys, the field, the coarse nearest triangles, the coarse points
+// (two halves), the pass's uniforms (which half it reads and writes, a sweep's axis) and
+// the coarse level's uniforms.
 
 #import shared/math.wgsl
 
-// Bits of the largest finite f32: no distance yet.
-const FAR_BITS: u32 = 0x7f7fffffu;
-// Units in the last place a recomputed distance may differ from the minimum and still
+// Units in the last place a recomputed distance may differ from the least key's and still
 // claim the node (the two splats compile to different pipelines).
 const NEAREST_ULPS: u32 = 4u;
 
@@ -62,23 +62,28 @@ struct SdfUniforms {
     pitch: u32,
 }
 
-struct JfaStep {
-    step: u32,
-    pad0: u32,
-    pad1: u32,
-    pad2: u32,
+// Which coarse points a pass reads and writes (offsets into `points`: its two halves, A at
+// 0 and B past it) and, for a sweep, its axis.
+struct Pass {
+    axis: u32,
+    read_half: u32,
+    write_half: u32,
+    pad: u32,
 }
 
 @group(0) @binding(0) var<uniform> g: SdfUniforms;
 @group(0) @binding(1) var<storage, read> positions: array<f32>;
 @group(0) @binding(2) var<storage, read> normals: array<f32>;
 @group(0) @binding(3) var<storage, read> indices: array<u32>;
-@group(0) @binding(4) var<storage, read_write> dist_bits: array<atomic<u32>>;
-@group(0) @binding(5) var<storage, read> near_in: array<u32>;
-@group(0) @binding(6) var<storage, read_write> near_out: array<atomic<u32>>;
-@group(0) @binding(8) var<uniform> jfa: JfaStep;
+// Every buffer a pass writes is bound read-write in every pass, so that no dispatch
+// changes how a buffer is used (on lavapipe a dispatch that did cost 0.8 ms even when it
+// returned at once: a barrier).
+@group(0) @binding(4) var<storage, read_write> keys: array<atomic<u32>>;
+@group(0) @binding(5) var<storage, read_write> field: array<f32>;
+@group(0) @binding(6) var<storage, read_write> nearest: array<atomic<u32>>;
+@group(0) @binding(7) var<storage, read_write> points: array<vec4<u32>>;
+@group(0) @binding(8) var<uniform> pass_: Pass;
 @group(0) @binding(9) var<uniform> coarse_g: SdfUniforms;
-@group(0) @binding(10) var<storage, read> coarse_points: array<vec4<u32>>;
 
 fn load_position(i: u32) -> vec3<f32> {
     return vec3<f32>(positions[3u * i], positions[3u * i + 1u], positions[3u * i + 2u]);
@@ -242,45 +247,25 @@ fn triangle_normal(t: u32, bary: vec3<f32>) -> vec3<f32> {
         + load_normal(indices[3u * t + 2u]) * bary.z;
 }
 
-@compute @workgroup_size(64)
-fn clear(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let i = flat_id(gid, groups);
-    if i >= node_count() {
-        return;
-    }
-    atomicStore(&dist_bits[i], FAR_BITS);
-    atomicStore(&near_out[i], 0u);
+// A splat's key at a node: its distance's bits shifted up one, 1 below where the node is
+// inside (the least key is the nearest triangle's, and outside on a tie).
+fn splat_key(d: f32, inside: bool) -> u32 {
+    return (bitcast<u32>(d) << 1u) | select(0u, 1u, inside);
+}
+
+// The least key splatted at node `i` (0xffffffff: none), from the complement the splats
+// take the maximum of (the buffer starts at 0).
+fn least_key(i: u32) -> u32 {
+    return ~atomicLoad(&keys[i]);
+}
+
+// The distance of a key.
+fn key_distance(key: u32) -> f32 {
+    return bitcast<f32>(key >> 1u);
 }
 
 @compute @workgroup_size(64)
-fn splat_distance(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let t = flat_id(gid, groups);
-    if t >= g.triangle_count {
-        return;
-    }
-    let tri = load_triangle(t);
-    if !tri.ok || box_misses(tri) {
-        return;
-    }
-    let bx = splat_box(tri);
-    let slab = splat_slab(tri);
-    for (var z = bx.lo.z; z <= bx.hi.z; z++) {
-        for (var y = bx.lo.y; y <= bx.hi.y; y++) {
-            for (var x = bx.lo.x; x <= bx.hi.x; x++) {
-                let n = vec3<u32>(x, y, z);
-                let p = node_position(n);
-                if outside_slab(slab, p) {
-                    continue;
-                }
-                let d = triangle_distance(p, tri);
-                atomicMin(&dist_bits[node_index(n)], bitcast<u32>(d));
-            }
-        }
-    }
-}
-
-@compute @workgroup_size(64)
-fn splat_nearest(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+fn splat(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let t = flat_id(gid, groups);
     if t >= g.triangle_count {
         return;
@@ -304,12 +289,42 @@ fn splat_nearest(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wor
                 }
                 let bary = closest_bary(p, tri.a, tri.b, tri.c);
                 let q = tri.a * bary.x + tri.b * bary.y + tri.c * bary.z;
-                let d = distance(p, q);
+                let normal = na * bary.x + nb * bary.y + nc * bary.z;
+                let key = ~splat_key(distance(p, q), dot(p - q, normal) < 0.0);
                 let i = node_index(n);
-                if bitcast<u32>(d) <= atomicLoad(&dist_bits[i]) + NEAREST_ULPS {
-                    let normal = na * bary.x + nb * bary.y + nc * bary.z;
-                    let inside = select(0u, 1u, dot(p - q, normal) < 0.0);
-                    atomicMax(&near_out[i], ((t + 1u) << 1u) | inside);
+                // Most nodes already hold a nearer triangle's key: a load skips the atomic.
+                if key > atomicLoad(&keys[i]) {
+                    atomicMax(&keys[i], key);
+                }
+            }
+        }
+    }
+}
+
+@compute @workgroup_size(64)
+fn splat_nearest(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let t = flat_id(gid, groups);
+    if t >= g.triangle_count {
+        return;
+    }
+    let tri = load_triangle(t);
+    if !tri.ok || box_misses(tri) {
+        return;
+    }
+    let bx = splat_box(tri);
+    let slab = splat_slab(tri);
+    for (var z = bx.lo.z; z <= bx.hi.z; z++) {
+        for (var y = bx.lo.y; y <= bx.hi.y; y++) {
+            for (var x = bx.lo.x; x <= bx.hi.x; x++) {
+                let n = vec3<u32>(x, y, z);
+                let p = node_position(n);
+                if outside_slab(slab, p) {
+                    continue;
+                }
+                let d = triangle_distance(p, tri);
+                let i = node_index(n);
+                if bitcast<u32>(d) <= bitcast<u32>(key_distance(least_key(i))) + NEAREST_ULPS {
+                    atomicMax(&nearest[i], t + 1u);
                 }
             }
         }
@@ -324,70 +339,108 @@ fn seed(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     if i >= node_count() {
         return;
     }
-    let packed = near_in[i];
+    let packed = atomicLoad(&nearest[i]);
     var out = vec4<u32>(0u);
     if packed != 0u {
-        let t = (packed >> 1u) - 1u;
+        let t = packed - 1u;
         let tri = load_triangle(t);
         let bary = closest_bary(node_position(node_of(i)), tri.a, tri.b, tri.c);
         let q = tri.a * bary.x + tri.b * bary.y + tri.c * bary.z;
         let n = safe_normalize(triangle_normal(t, bary), vec3<f32>(0.0));
         out = vec4<u32>(bitcast<vec3<u32>>(q), pack4x8snorm(vec4<f32>(n, 1.0)));
     }
-    for (var k = 0u; k < 4u; k++) {
-        atomicStore(&near_out[4u * i + k], out[k]);
-    }
+    write_point(i, out);
 }
 
-// The flood reads the points of the last step as `coarse_points`.
+// Writes coarse node `i`'s surface point (into the pass's write half).
+fn write_point(i: u32, point: vec4<u32>) {
+    points[pass_.write_half + i] = point;
+}
+
+// Coarse node `i`'s surface point as the pass's read half holds it.
 fn point_in(i: u32) -> vec4<u32> {
-    return coarse_points[i];
+    return points[pass_.read_half + i];
 }
 
+
+// The nearer to `p` of the surface points `a` and `b` (w = 0: none); on a tie the larger
+// bits, so the field is the same run after run.
+fn nearer_point(p: vec3<f32>, a: vec4<u32>, b: vec4<u32>) -> vec4<u32> {
+    if b.w == 0u {
+        return a;
+    }
+    if a.w == 0u {
+        return b;
+    }
+    let oa = p - bitcast<vec3<f32>>(a.xyz);
+    let ob = p - bitcast<vec3<f32>>(b.xyz);
+    let da = dot(oa, oa);
+    let db = dot(ob, ob);
+    if db < da || (db == da && (b.x > a.x || (b.x == a.x && b.y > a.y))) {
+        return b;
+    }
+    return a;
+}
+
+// One invocation per line of coarse nodes along axis `pass_.axis` (0: x, 1: y, 2: z): each
+// node of the line takes the nearest of its own point and the points the line carries
+// to it from either end (a sweep each way: vector propagation, after Danielsson 1980).
+// Three passes, x then y then z, carry every seed through the grid.
 @compute @workgroup_size(64)
-fn flood(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let i = flat_id(gid, groups);
-    if i >= node_count() {
+fn sweep(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let line = flat_id(gid, groups);
+    let axis = pass_.axis;
+    let dims = g.dims;
+    // The line's length and the two axes across it.
+    var n = dims.x;
+    var across = vec2<u32>(dims.y, dims.z);
+    if axis == 1u {
+        n = dims.y;
+        across = vec2<u32>(dims.x, dims.z);
+    } else if axis == 2u {
+        n = dims.z;
+        across = vec2<u32>(dims.x, dims.y);
+    }
+    if line >= across.x * across.y {
         return;
     }
-    let node = node_of(i);
-    let p = node_position(node);
-    var best = point_in(i);
-    var best_d = 3.4e38;
-    if best.w != 0u {
-        best_d = distance(p, bitcast<vec3<f32>>(best.xyz));
+    let u = line % across.x;
+    let v = line / across.x;
+    var first = vec3<u32>(0u, u, v);
+    var stride = 1u;
+    if axis == 1u {
+        first = vec3<u32>(u, 0u, v);
+        stride = dims.x;
+    } else if axis == 2u {
+        first = vec3<u32>(u, v, 0u);
+        stride = dims.x * dims.y;
     }
-    // Within the coarse splat's band the seed is the nearest point already: kept.
-    if best.w != 0u && best_d <= f32(g.band) * g.cell {
-        for (var k = 0u; k < 4u; k++) {
-            atomicStore(&near_out[4u * i + k], best[k]);
-        }
-        return;
+    var along = vec3<u32>(1u, 0u, 0u);
+    if axis == 1u {
+        along = vec3<u32>(0u, 1u, 0u);
+    } else if axis == 2u {
+        along = vec3<u32>(0u, 0u, 1u);
     }
-    let step = i32(jfa.step);
-    let dims = vec3<i32>(g.dims);
-    for (var dz = -1; dz <= 1; dz++) {
-        for (var dy = -1; dy <= 1; dy++) {
-            for (var dx = -1; dx <= 1; dx++) {
-                let q = vec3<i32>(node) + vec3<i32>(dx, dy, dz) * step;
-                if any(q < vec3<i32>(0)) || any(q >= dims) {
-                    continue;
-                }
-                let c = point_in(node_index(vec3<u32>(q)));
-                if c.w == 0u {
-                    continue;
-                }
-                let d = distance(p, bitcast<vec3<f32>>(c.xyz));
-                // Ties: the larger bits, so the field is the same run after run.
-                if d < best_d || (d == best_d && (c.x > best.x || (c.x == best.x && c.y > best.y))) {
-                    best = c;
-                    best_d = d;
-                }
-            }
-        }
+    let base = node_index(first);
+    // Forward: from the line's start. A node hands on whichever of its own point and
+    // what it was handed is nearer the next node.
+    var carry = vec4<u32>(0u);
+    let ahead = g.cell * vec3<f32>(along);
+    for (var k = 0u; k < n; k++) {
+        let i = base + k * stride;
+        let p = node_position(first + along * k);
+        let own = point_in(i);
+        write_point(i, nearer_point(p, own, carry));
+        carry = nearer_point(p + ahead, own, carry);
     }
-    for (var k = 0u; k < 4u; k++) {
-        atomicStore(&near_out[4u * i + k], best[k]);
+    // Backward: from its end, against what the forward sweep left.
+    carry = vec4<u32>(0u);
+    for (var k = n; k > 0u; k--) {
+        let i = base + (k - 1u) * stride;
+        let p = node_position(first + along * (k - 1u));
+        let own = point_in(i);
+        write_point(i, nearer_point(p, points[pass_.write_half + i], nearer_point(p, own, carry)));
+        carry = nearer_point(p - ahead, own, carry);
     }
 }
 
@@ -399,7 +452,7 @@ struct Candidate {
 }
 
 fn candidate(c: vec3<u32>) -> Candidate {
-    let point = coarse_points[(c.z * coarse_g.dims.y + c.y) * coarse_g.dims.x + c.x];
+    let point = point_in((c.z * coarse_g.dims.y + c.y) * coarse_g.dims.x + c.x);
     return Candidate(bitcast<vec3<f32>>(point.xyz), unpack4x8snorm(point.w));
 }
 
@@ -437,16 +490,16 @@ fn finish(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups
         for (var y = first.y; y <= last.y; y++) {
             for (var x = first.x; x <= last.x; x++) {
                 let node = vec3<u32>(x, y, z);
-                let i = node_index(node);
-                let packed = near_in[i];
-                let splat_d = bitcast<f32>(atomicLoad(&dist_bits[i]));
+                let key = least_key(node_index(node));
+                let reached = key != 0xffffffffu;
+                let splat_d = key_distance(key);
                 // (distance, side): within the band the splat's exact distance and its
-                // winner's side.
+                // nearest triangle's side.
                 var best = vec2<f32>(g.far, 1.0);
-                if packed != 0u {
-                    best = vec2<f32>(splat_d, select(1.0, -1.0, (packed & 1u) == 1u));
+                if reached {
+                    best = vec2<f32>(splat_d, select(1.0, -1.0, (key & 1u) == 1u));
                 }
-                if packed == 0u || splat_d > f32(g.band) * g.cell {
+                if !reached || splat_d > f32(g.band) * g.cell {
                     // Beyond the band: the nearest of the surface points the coarse nodes
                     // around hold, on the side of its normal.
                     let p = node_position(node);
@@ -460,8 +513,7 @@ fn finish(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups
                     best = nearer(p, best, c7);
                 }
                 let value = select(best.x, -best.x, best.y < 0.0);
-                let out = (z * g.dims.y + y) * g.pitch + x;
-                atomicStore(&near_out[out], bitcast<u32>(value));
+                field[(z * g.dims.y + y) * g.pitch + x] = value;
             }
         }
     }
