@@ -968,12 +968,20 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
     ]
     .into_iter()
     .map(|(name, value, note)| (name.to_string(), value, note.to_string()))
-    .chain(sdf_ratios.iter().map(|&(r, ratio)| {
-        (
-            format!("sdf: body field {r} build over growth pass"),
-            ratio,
-            "timestamps, the creature's distance field rebuilt every frame on its skinned mesh (targets: <= 1 built once, <= 0.5 every frame), 20000 strands x 8 segments grown".to_string(),
-        )
+    .chain(sdf_ratios.iter().map(|&(r, still, ratio)| {
+        if still {
+            (
+                format!("sdf: body field {r} (still body) build over growth pass"),
+                ratio,
+                "timestamps, the still creature's distance field over its own box (target: <= 1, a rigid body builds it once), 20000 strands x 8 segments grown".to_string(),
+            )
+        } else {
+            (
+                format!("sdf: body field {r} build over growth pass"),
+                ratio,
+                "timestamps, the creature's distance field rebuilt every frame on its skinned mesh (target: <= 0.5 every frame), 20000 strands x 8 segments grown".to_string(),
+            )
+        }
     })) {
         table.push(vec![
             "summary".into(),
@@ -1043,10 +1051,16 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
     println!(
         "  skinning: the skin pass takes {skin_ratio:.3}x the growth pass of a {SKIN_STRANDS}-strand creature (target <= 0.1)"
     );
-    for (r, ratio) in &sdf_ratios {
-        println!(
-            "  body sdf {r}: its build takes {ratio:.3}x the growth pass of a {SKIN_STRANDS}-strand creature (targets: <= 1 built once for a rigid body, <= 0.5 rebuilt every frame for a skinned one)"
-        );
+    for (r, still, ratio) in &sdf_ratios {
+        if *still {
+            println!(
+                "  body sdf {r}, still body: its build takes {ratio:.3}x the growth pass of a {SKIN_STRANDS}-strand creature (target: <= 1 built once for a rigid body)"
+            );
+        } else {
+            println!(
+                "  body sdf {r}, skinned body: its build takes {ratio:.3}x the growth pass of a {SKIN_STRANDS}-strand creature (target: <= 0.5 rebuilt every frame)"
+            );
+        }
     }
     for line in raster.summary.iter().chain(&bridge.summary) {
         println!("  {line}");
@@ -1179,10 +1193,46 @@ fn skinning_section(
             )
         });
     }
-    let sdf_ratios = sdf_times
+    let mut sdf_ratios: SdfRatios = sdf_times
         .iter()
-        .map(|&(r, s, g, _, _)| (r, s / g))
+        .map(|&(r, s, g, _, _)| (r, false, s / g))
         .collect();
+    // The same creature still (a rigid body's case, built once): the field over its own
+    // box, built here every frame so that the timestamps catch it, against the growth
+    // pass of the same frames.
+    let still = MeshBuffers::upload(&gpu, &s.mesh)?;
+    let mut still_grow = GrowStrands::new(&gpu, &s.mesh, &still, &s.hair)?;
+    for &r in &SDF_RESOLUTIONS {
+        let sdf = BodySdf::of_body(&gpu, &still, &s.mesh, still.bounds, r)?;
+        let times = time_frames(&gpu, frames, |encoder, mut timer, frame| {
+            let frame = still_grow.prepare(&gpu.queue, frame as f32 / 24.0)?;
+            sdf.encode(encoder, timer.as_deref_mut());
+            still_grow.encode(encoder, &frame, timer)?;
+            Ok(())
+        })?;
+        let (sdf_ms, grow_ms) = (get(&times, SDF_LABEL), get(&times, "strands: grow"));
+        let nodes = sdf.grid().nodes();
+        bar.println(format!(
+            "  {SKIN_STRANDS:>7} strands  {} still ({nodes} nodes) {sdf_ms:9.3} ms, {:.3}x the growth pass ({grow_ms:.3} ms)",
+            sdf_label(r),
+            sdf_ms / grow_ms
+        ));
+        rows.push(Row {
+            stage: format!("{} still", sdf_label(r)),
+            gpu_ms: sdf_ms,
+            bytes: sdf.bytes(),
+            copy_ratio: sdf_ms / grow_ms,
+            ..row(
+                SDF_LABEL,
+                sdf_ms,
+                sdf.bytes(),
+                format!(
+                    "the still creature's distance field over its own box, {nodes} nodes (a rigid body builds it once); ratio: over the growth pass of the same frames"
+                ),
+            )
+        });
+        sdf_ratios.push((r, true, sdf_ms / grow_ms));
+    }
     rows.extend([
             row(
                 SKIN_LABEL,
@@ -1331,8 +1381,10 @@ fn bridge_section(
     Ok(RasterSection { rows, summary })
 }
 
-/// The body's distance field's build over the growth pass, per resolution.
-type SdfRatios = Vec<(u32, f64)>;
+/// The body's distance field's build over the growth pass: per resolution, for the
+/// still creature (true: a rigid body's case, over its own box) or the skinned one
+/// (false: rebuilt every frame, over the box of every pose).
+type SdfRatios = Vec<(u32, bool, f64)>;
 
 /// The resolutions of the body's distance field the skinning section times (the lab's;
 /// 128 takes about 8x as long, every stage's work growing with the nodes).

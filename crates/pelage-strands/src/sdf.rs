@@ -525,8 +525,8 @@ impl BodySdf {
         })
     }
 
-    /// Records the build ([`SDF_LABEL`]: one compute pass, every dispatch reading the
-    /// mesh buffers as they are when it runs).
+    /// Records the build: buffer fills, one compute pass ([`SDF_LABEL`], every dispatch
+    /// reading the mesh buffers as they are when it runs) and a copy into the texture.
     pub fn encode(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&mut GpuTimer>) {
         self.clear(encoder);
         let timestamp_writes = timer.and_then(|t| t.compute_pass(SDF_LABEL));
