@@ -1117,14 +1117,7 @@ fn skinning_section(
             grow.encode(encoder, &frame, timer)?;
             Ok(())
         })?;
-        let (sdf_ms, grow_ms) = (get(&times, SDF_LABEL), get(&times, "strands: grow"));
-        let nodes = sdf.grid().nodes();
-        bar.println(format!(
-            "  {SKIN_STRANDS:>7} strands  {} ({nodes} nodes) {sdf_ms:9.3} ms, {:.3}x the growth pass ({grow_ms:.3} ms)",
-            sdf_label(r),
-            sdf_ms / grow_ms
-        ));
-        sdf_times.push((r, sdf_ms, grow_ms, nodes, sdf.bytes()));
+        sdf_times.push(SdfTiming::measured(sdf, r, false, &times, bar));
         // The same build, each stage in a pass of its own: where its time goes.
         let times = time_frames(&gpu, frames, |encoder, mut timer, frame| {
             let t = frame as f32 / 24.0;
@@ -1148,6 +1141,21 @@ fn skinning_section(
             sdf_label(r),
             stages.join(", ")
         ));
+    }
+    // The same creature still (a rigid body's case, built once): the field over its own
+    // box, built here every frame so that the timestamps catch it, against the growth
+    // pass of the same frames.
+    let still = MeshBuffers::upload(&gpu, &s.mesh)?;
+    let mut still_grow = GrowStrands::new(&gpu, &s.mesh, &still, &s.hair)?;
+    for &r in &SDF_RESOLUTIONS {
+        let sdf = BodySdf::of_body(&gpu, &still, &s.mesh, still.bounds, r)?;
+        let times = time_frames(&gpu, frames, |encoder, mut timer, frame| {
+            let frame = still_grow.prepare(&gpu.queue, frame as f32 / 24.0)?;
+            sdf.encode(encoder, timer.as_deref_mut());
+            still_grow.encode(encoder, &frame, timer)?;
+            Ok(())
+        })?;
+        sdf_times.push(SdfTiming::measured(&sdf, r, true, &times, bar));
     }
     let times = time_frames(&gpu, frames, |encoder, mut timer, frame| {
         let t = frame as f32 / 24.0;
@@ -1177,62 +1185,36 @@ fn skinning_section(
         note,
     };
     let mut rows = Vec::new();
-    for &(r, sdf_ms, sdf_grow_ms, nodes, bytes) in &sdf_times {
+    for t in &sdf_times {
+        let (what, label) = if t.still {
+            (
+                "the still creature's distance field over its own box",
+                format!("{} still", sdf_label(t.resolution)),
+            )
+        } else {
+            (
+                "the skinned creature's distance field, rebuilt every frame",
+                sdf_label(t.resolution),
+            )
+        };
         rows.push(Row {
-            stage: sdf_label(r),
-            gpu_ms: sdf_ms,
-            bytes,
-            copy_ratio: sdf_ms / sdf_grow_ms,
+            stage: label,
+            copy_ratio: t.sdf_ms / t.grow_ms,
             ..row(
                 SDF_LABEL,
-                sdf_ms,
-                bytes,
+                t.sdf_ms,
+                t.bytes,
                 format!(
-                    "the skinned creature's distance field, {nodes} nodes, rebuilt every frame; ratio: over the growth pass of the same frames"
+                    "{what}, {} nodes; ratio: over the growth pass of the same frames",
+                    t.nodes
                 ),
             )
         });
     }
-    let mut sdf_ratios: SdfRatios = sdf_times
+    let sdf_ratios = sdf_times
         .iter()
-        .map(|&(r, s, g, _, _)| (r, false, s / g))
+        .map(|t| (t.resolution, t.still, t.sdf_ms / t.grow_ms))
         .collect();
-    // The same creature still (a rigid body's case, built once): the field over its own
-    // box, built here every frame so that the timestamps catch it, against the growth
-    // pass of the same frames.
-    let still = MeshBuffers::upload(&gpu, &s.mesh)?;
-    let mut still_grow = GrowStrands::new(&gpu, &s.mesh, &still, &s.hair)?;
-    for &r in &SDF_RESOLUTIONS {
-        let sdf = BodySdf::of_body(&gpu, &still, &s.mesh, still.bounds, r)?;
-        let times = time_frames(&gpu, frames, |encoder, mut timer, frame| {
-            let frame = still_grow.prepare(&gpu.queue, frame as f32 / 24.0)?;
-            sdf.encode(encoder, timer.as_deref_mut());
-            still_grow.encode(encoder, &frame, timer)?;
-            Ok(())
-        })?;
-        let (sdf_ms, grow_ms) = (get(&times, SDF_LABEL), get(&times, "strands: grow"));
-        let nodes = sdf.grid().nodes();
-        bar.println(format!(
-            "  {SKIN_STRANDS:>7} strands  {} still ({nodes} nodes) {sdf_ms:9.3} ms, {:.3}x the growth pass ({grow_ms:.3} ms)",
-            sdf_label(r),
-            sdf_ms / grow_ms
-        ));
-        rows.push(Row {
-            stage: format!("{} still", sdf_label(r)),
-            gpu_ms: sdf_ms,
-            bytes: sdf.bytes(),
-            copy_ratio: sdf_ms / grow_ms,
-            ..row(
-                SDF_LABEL,
-                sdf_ms,
-                sdf.bytes(),
-                format!(
-                    "the still creature's distance field over its own box, {nodes} nodes (a rigid body builds it once); ratio: over the growth pass of the same frames"
-                ),
-            )
-        });
-        sdf_ratios.push((r, true, sdf_ms / grow_ms));
-    }
     rows.extend([
             row(
                 SKIN_LABEL,
@@ -1379,6 +1361,45 @@ fn bridge_section(
     }
     bar.inc(1);
     Ok(RasterSection { rows, summary })
+}
+
+/// One body distance field's build timed against the growth pass of the same frames.
+struct SdfTiming {
+    resolution: u32,
+    /// The still creature over its own box (a rigid body's case), or the skinned one
+    /// over the box of every pose.
+    still: bool,
+    sdf_ms: f64,
+    grow_ms: f64,
+    nodes: usize,
+    bytes: u64,
+}
+
+impl SdfTiming {
+    /// The timing of `sdf` (at `resolution`) in `times`, printed as it is taken.
+    fn measured(
+        sdf: &BodySdf,
+        resolution: u32,
+        still: bool,
+        times: &[(String, f64)],
+        bar: &progress::Progress,
+    ) -> Self {
+        let (sdf_ms, grow_ms) = (get(times, SDF_LABEL), get(times, "strands: grow"));
+        let nodes = sdf.grid().nodes();
+        bar.println(format!(
+            "  {SKIN_STRANDS:>7} strands  {SDF_LABEL} {resolution}{} ({nodes} nodes) {sdf_ms:9.3} ms, {:.3}x the growth pass ({grow_ms:.3} ms)",
+            if still { " still" } else { "" },
+            sdf_ms / grow_ms
+        ));
+        Self {
+            resolution,
+            still,
+            sdf_ms,
+            grow_ms,
+            nodes,
+            bytes: sdf.bytes(),
+        }
+    }
 }
 
 /// The body's distance field's build over the growth pass: per resolution, for the

@@ -66,7 +66,6 @@ struct PassUniforms {
     axis: u32,
     read_half: u32,
     write_half: u32,
-    pad: u32,
 }
 
 /// The axes the sweeps over the coarse grid run along, in order (0: x, 1: y, 2: z).
@@ -413,7 +412,6 @@ impl BodySdf {
                     axis,
                     read_half,
                     write_half,
-                    pad: 0,
                 },
             )
         });
@@ -606,9 +604,13 @@ impl BodySdf {
         let coarse_nodes = size(self.coarse.nodes() as u64);
         let triangles = size(u64::from(self.triangle_count));
         let [fine, coarse, x, y, z, finish] = [0, 1, 2, 3, 4, 5].map(|k| &self.groups[k]);
-        // A sweep runs one invocation per line of the coarse grid along its axis.
-        let d = self.coarse.dims;
-        let lines = |across: u32| size(u64::from(across));
+        // A sweep runs one invocation per line of the coarse grid along its axis: as
+        // many as the nodes of the plane across it.
+        let d = self.coarse.dims.to_array();
+        let lines = |k: usize| {
+            let a = SWEEP_AXES[k] as usize;
+            size(u64::from(d[(a + 1) % 3]) * u64::from(d[(a + 2) % 3]))
+        };
         vec![
             ("splat", vec![(&self.splat, fine, triangles)]),
             (
@@ -622,9 +624,9 @@ impl BodySdf {
             (
                 "sweeps",
                 vec![
-                    (&self.sweep, x, lines(d.y * d.z)),
-                    (&self.sweep, y, lines(d.x * d.z)),
-                    (&self.sweep, z, lines(d.x * d.y)),
+                    (&self.sweep, x, lines(0)),
+                    (&self.sweep, y, lines(1)),
+                    (&self.sweep, z, lines(2)),
                 ],
             ),
             ("finish", vec![(&self.finish, finish, coarse_nodes)]),

@@ -68,7 +68,6 @@ struct Pass {
     axis: u32,
     read_half: u32,
     write_half: u32,
-    pad: u32,
 }
 
 @group(0) @binding(0) var<uniform> g: SdfUniforms;
@@ -389,38 +388,22 @@ fn nearer_point(p: vec3<f32>, a: vec4<u32>, b: vec4<u32>) -> vec4<u32> {
 @compute @workgroup_size(64)
 fn sweep(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let line = flat_id(gid, groups);
-    let axis = pass_.axis;
+    // The line's axis and the two across it.
+    let a = pass_.axis;
+    let b = (a + 1u) % 3u;
+    let c = (a + 2u) % 3u;
     let dims = g.dims;
-    // The line's length and the two axes across it.
-    var n = dims.x;
-    var across = vec2<u32>(dims.y, dims.z);
-    if axis == 1u {
-        n = dims.y;
-        across = vec2<u32>(dims.x, dims.z);
-    } else if axis == 2u {
-        n = dims.z;
-        across = vec2<u32>(dims.x, dims.y);
-    }
-    if line >= across.x * across.y {
+    if line >= dims[b] * dims[c] {
         return;
     }
-    let u = line % across.x;
-    let v = line / across.x;
-    var first = vec3<u32>(0u, u, v);
-    var stride = 1u;
-    if axis == 1u {
-        first = vec3<u32>(u, 0u, v);
-        stride = dims.x;
-    } else if axis == 2u {
-        first = vec3<u32>(u, v, 0u);
-        stride = dims.x * dims.y;
-    }
-    var along = vec3<u32>(1u, 0u, 0u);
-    if axis == 1u {
-        along = vec3<u32>(0u, 1u, 0u);
-    } else if axis == 2u {
-        along = vec3<u32>(0u, 0u, 1u);
-    }
+    var first = vec3<u32>(0u);
+    first[b] = line % dims[b];
+    first[c] = line / dims[b];
+    var along = vec3<u32>(0u);
+    along[a] = 1u;
+    let n = dims[a];
+    // Index steps between neighbours along the line.
+    let stride = node_index(along);
     let base = node_index(first);
     // Forward: from the line's start. A node hands on whichever of its own point and
     // what it was handed is nearer the next node.
