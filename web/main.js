@@ -3,10 +3,10 @@
 //
 // Query parameters: `t=0.5` draws that time in every frame instead of the clock;
 // `frames=3` stops after that many frames; `strands`, `wind` and `method` set the
-// controls; `groom=URL` shows that .hair or .tfx file instead of the creature (as a file
-// opened or dropped on the picture does); `test=1` (with `t` and `frames`) marks the
-// page done once the last frame is shown: <body data-done="ok"> (or "error") and the
-// title "done" (or "error: ...").
+// controls; `groom=URL` shows that groom file (.hair, .tfx or USD) instead of the
+// creature (as a file opened or dropped on the picture does); `test=1` (with `t` and
+// `frames`) marks the page done once the last frame is shown: <body data-done="ok">
+// (or "error") and the title "done" (or "error: ...").
 import init, { Demo } from './pkg/pelage_web.js';
 
 const params = new URLSearchParams(location.search);

@@ -139,9 +139,8 @@ pub fn scene(settings: &Settings) -> Result<Scene, DemoError> {
     Ok(scene)
 }
 
-/// A groom file's bytes (`.hair` or `.tfx`, told by `name`'s extension; the page is
-/// built without USD, whose reader needs a newer Rust than the browser build's
-/// dependencies allow: such a file is refused naming the feature) placed for the page:
+/// A groom file's bytes (`.hair`, `.tfx`, or USD `BasisCurves` in `.usda`, `.usdc`,
+/// `.usd` or `.usdz`, told by `name`'s extension: `Groom::read`) placed for the page:
 /// centred on the origin, its longest side [`GROOM_FIT`], resampled to
 /// [`GROOM_SEGMENTS`] segments per strand.
 pub fn read_groom(bytes: Vec<u8>, name: &str) -> Result<Resampled, DemoError> {
@@ -202,8 +201,8 @@ mod tests {
     }
 
     /// The page's groom: the file's strands, placed and resampled, drawn alone; a
-    /// strand count other than the file's, a USD file (not in the page's build) and a
-    /// broken file are errors naming what was wrong.
+    /// strand count other than the file's and a broken file (`.hair` or USD) are errors
+    /// naming what was wrong.
     #[test]
     fn a_groom_file_is_drawn_alone_with_its_own_strand_count() {
         let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenes/long_hair.hair");
@@ -229,14 +228,31 @@ mod tests {
         };
         let e = groom_scene(&groom, &other).unwrap_err().to_string();
         assert!(e.contains("the groom's own count"), "{e}");
-        let e = read_groom(vec![0; 16], "groom.usda")
+        let e = read_groom(b"#usda 1.0\ndef BasisCurves \"C\" {".to_vec(), "broken.usda")
             .unwrap_err()
             .to_string();
-        assert!(e.contains("groom.usda") && e.contains("usd"), "{e}");
+        assert!(e.starts_with("broken.usda"), "{e}");
         let e = read_groom(b"HAIR".to_vec(), "broken.hair")
             .unwrap_err()
             .to_string();
         assert!(e.starts_with("broken.hair: "), "{e}");
+    }
+
+    /// A USD groom (the repository's `scenes/usd_groom.usda`: 500 cubic B-splines under
+    /// an Xform) reads in the page's build as `pelage render` reads it: same strands,
+    /// placed and resampled like any groom.
+    #[test]
+    fn a_usd_groom_reads_in_the_pages_build() {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenes/usd_groom.usda");
+        let groom = read_groom(std::fs::read(path).unwrap(), "usd_groom.usda").unwrap();
+        assert_eq!(groom.strands, 500);
+        assert_eq!(groom.segments, GROOM_SEGMENTS);
+        let (lo, hi) = groom.bounds();
+        let side = (hi - lo).max_element();
+        assert!(
+            (side - GROOM_FIT).abs() < 0.05 * GROOM_FIT,
+            "longest side {side}"
+        );
     }
 
     #[test]
