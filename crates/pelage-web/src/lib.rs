@@ -228,9 +228,12 @@ mod tests {
         };
         let e = groom_scene(&groom, &other).unwrap_err().to_string();
         assert!(e.contains("the groom's own count"), "{e}");
-        let e = read_groom(b"#usda 1.0\ndef BasisCurves \"C\" {".to_vec(), "broken.usda")
-            .unwrap_err()
-            .to_string();
+        let e = read_groom(
+            b"#usda 1.0\ndef BasisCurves \"C\" {".to_vec(),
+            "broken.usda",
+        )
+        .unwrap_err()
+        .to_string();
         assert!(e.starts_with("broken.usda"), "{e}");
         let e = read_groom(b"HAIR".to_vec(), "broken.hair")
             .unwrap_err()
