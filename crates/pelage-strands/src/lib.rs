@@ -49,8 +49,8 @@ pub use pelage_contract::{
 };
 pub use roots::{hash_to_unit, pcg_hash, root_region, root_tint, sample_roots, strand_brightness};
 pub use sdf::{
-    BODY_SDF, BodySdf, COARSE_FACTOR, MAX_BURIED_CHECK, SDF_LABEL, SWEEP_AXES, body_triangles,
-    coarse_grid,
+    BODY_SDF, BodySdf, COARSE_FACTOR, MAX_BURIED_CHECK, MAX_SDF_TRIANGLES, SDF_LABEL, SWEEP_AXES,
+    body_triangles, coarse_grid,
 };
 pub use simulate::{SIMULATE_LABEL, SIMULATION_STATE, SimulateStrands};
 pub use skin::{MeshSkin, SKIN_LABEL, SKIN_NON_FINITE};

@@ -1,11 +1,10 @@
 //! A signed distance field of the body the strands grow on, built on the GPU
 //! (`wgsl/strands/sdf.wgsl`), which the simulation's collision step samples.
 
-use encase::ShaderType;
 use glam::{UVec3, Vec3};
 use pelage_gpu::{
-    BindLayout, Gpu, GpuTimer, PassInfo, UniformBuffer, compute_pipeline_with_layouts,
-    dispatch_size, read_buffer, wgpu, zeroed_storage,
+    BindLayout, Gpu, GpuTimer, PassInfo, compute_pipeline_with_constants, dispatch_size,
+    read_buffer, wgpu, zeroed_storage,
 };
 use pelage_scene::{Mesh, ParamError, SDF_BAND_CELLS, SdfGrid};
 
@@ -20,27 +19,75 @@ pub const SDF_LABEL: &str = "strands: sdf";
 /// The frame resource of the body's distance field (a 3D `r32float` texture).
 pub const BODY_SDF: &str = "strands.sdf";
 
-/// The uniforms of `sdf.wgsl` (`SdfUniforms` there).
-#[derive(Clone, Copy, Debug, PartialEq, ShaderType)]
-pub(crate) struct SdfUniforms {
+/// The grid one dispatch of the build runs on, as `sdf.wgsl`'s pipeline constants
+/// (`SdfUniforms` there, built from them by `level()`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct SdfLevel {
     /// Position of node (0, 0, 0).
-    pub origin: Vec3,
+    origin: Vec3,
     /// Edge of a cell.
-    pub cell: f32,
+    cell: f32,
     /// Nodes per axis.
-    pub dims: UVec3,
+    dims: UVec3,
     /// Triangles of the mesh.
-    pub triangle_count: u32,
+    triangle_count: u32,
     /// Cells around each triangle's box it writes exactly ([`SDF_BAND_CELLS`]).
-    pub band: u32,
+    band: u32,
     /// The distance written where no triangle reached (every triangle non-finite).
-    pub far: f32,
+    far: f32,
     /// Fine nodes per coarse cell along each axis at the fine level
     /// ([`COARSE_FACTOR`]); 1 at the coarse level.
-    pub coarse: u32,
+    coarse: u32,
     /// Texels per row of the buffer the finish writes the field to (a multiple of 64:
     /// 256-byte rows for the copy to the texture).
-    pub pitch: u32,
+    pitch: u32,
+    /// Bits of a coarse key that name a triangle ([`index_bits`]).
+    index_bits: u32,
+}
+
+/// Which half of the coarse points a dispatch of the build reads and writes, and a
+/// sweep's axis (pipeline constants of `sdf.wgsl`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct SdfPass {
+    axis: u32,
+    read_half: u32,
+    write_half: u32,
+}
+
+/// `sdf.wgsl`'s pipeline constants for a dispatch on `level` (whose coarse level has
+/// `coarse_dims` nodes) in `pass`. Every value is an f32 or a u32, exact as an f64.
+fn constants(level: &SdfLevel, coarse_dims: UVec3, pass: SdfPass) -> Vec<(&'static str, f64)> {
+    vec![
+        ("ORIGIN_X", f64::from(level.origin.x)),
+        ("ORIGIN_Y", f64::from(level.origin.y)),
+        ("ORIGIN_Z", f64::from(level.origin.z)),
+        ("CELL", f64::from(level.cell)),
+        ("DIMS_X", f64::from(level.dims.x)),
+        ("DIMS_Y", f64::from(level.dims.y)),
+        ("DIMS_Z", f64::from(level.dims.z)),
+        ("TRIANGLES", f64::from(level.triangle_count)),
+        ("BAND", f64::from(level.band)),
+        ("FAR", f64::from(level.far)),
+        ("COARSE", f64::from(level.coarse)),
+        ("PITCH", f64::from(level.pitch)),
+        ("INDEX_BITS", f64::from(level.index_bits)),
+        ("COARSE_DIMS_X", f64::from(coarse_dims.x)),
+        ("COARSE_DIMS_Y", f64::from(coarse_dims.y)),
+        ("COARSE_DIMS_Z", f64::from(coarse_dims.z)),
+        ("READ_HALF", f64::from(pass.read_half)),
+        ("WRITE_HALF", f64::from(pass.write_half)),
+        ("AXIS", f64::from(pass.axis)),
+    ]
+}
+
+/// The most triangles a body's distance field takes: the coarse keys hold a triangle's
+/// index below at least 8 bits of its distance (2^24, past the triangles a default
+/// 128 MiB storage binding of indices holds).
+pub const MAX_SDF_TRIANGLES: u32 = 1 << 24;
+
+/// Bits that name every one of `triangles` (at least 1).
+fn index_bits(triangles: u32) -> u32 {
+    (u32::BITS - triangles.saturating_sub(1).leading_zeros()).max(1)
 }
 
 /// Fine cells per cell of the coarse grid over which the sweeps carry the surface.
@@ -57,15 +104,6 @@ pub fn coarse_grid(grid: &SdfGrid) -> SdfGrid {
         cell: grid.cell * COARSE_FACTOR as f32,
         dims,
     }
-}
-
-/// Which half of the coarse points a pass of the build reads and writes, and a sweep's
-/// axis (`Pass` in `sdf.wgsl`).
-#[derive(Clone, Copy, Debug, PartialEq, ShaderType)]
-struct PassUniforms {
-    axis: u32,
-    read_half: u32,
-    write_half: u32,
 }
 
 /// The axes the sweeps over the coarse grid run along, in order (0: x, 1: y, 2: z).
@@ -199,7 +237,8 @@ fn winding(mesh: &Mesh, triangles: &[usize], p: Vec3) -> f64 {
 /// side of the mesh's normal the node is on (one atomic on a key: the distance's bits
 /// above, the side below, so the nearest triangle's side comes with its distance). The
 /// same on a coarse grid ([`coarse_grid`]: every [`COARSE_FACTOR`]-th node, one coarse
-/// cell around each triangle, and a second splat naming each node's nearest triangle)
+/// cell around each triangle, the key the distance in fixed point above the triangle's
+/// index, so that the least names the nearest triangle; hence [`MAX_SDF_TRIANGLES`])
 /// seeds each coarse node near the surface with its nearest surface point; sweeps along
 /// each line of the coarse grid ([`SWEEP_AXES`], both ways: each node hands on
 /// whichever of its point and the one it was handed is nearer the next node) carry the
@@ -208,7 +247,10 @@ fn winding(mesh: &Mesh, triangles: &[usize], p: Vec3) -> f64 {
 /// storing a 3D texture node by node cost more than the rest of the build). The arrays
 /// the splats take extremes in are cleared with buffer fills, and every buffer the
 /// passes write is bound read-write in all of them (on lavapipe a dispatch that changes
-/// how a buffer is used costs a barrier of about 0.8 ms).
+/// how a buffer is used costs a barrier of about 0.8 ms). The grids and passes are
+/// pipeline constants, one pipeline per dispatch, made once here: lavapipe (Mesa 22)
+/// compiled a shader again at every dispatch whose loops were bounded by uniforms (it
+/// inlines their values), about 0.9 ms each.
 ///
 /// **What the field holds.** Every node within the band ([`SdfGrid::band`]) of the
 /// surface holds its exact signed distance (to float rounding): what the collision step
@@ -234,19 +276,15 @@ pub struct BodySdf {
     /// The finish's output, rows of `pitch` texels, copied into `texture`.
     field: wgpu::Buffer,
     pitch: u32,
-    /// The splats' keys (fine and coarse) and the coarse nearest triangles, cleared to 0
-    /// before each build.
-    cleared: [wgpu::Buffer; 3],
-    seed: wgpu::ComputePipeline,
+    /// The splats' keys (fine and coarse), cleared to 0 before each build.
+    cleared: [wgpu::Buffer; 2],
     texture: wgpu::Texture,
     view: wgpu::TextureView,
-    splat: wgpu::ComputePipeline,
-    splat_nearest: wgpu::ComputePipeline,
-    sweep: wgpu::ComputePipeline,
-    finish: wgpu::ComputePipeline,
-    /// The fine level's splat; the coarse level's splats and seed; one per sweep; the
-    /// finish.
-    groups: Vec<wgpu::BindGroup>,
+    /// One pipeline per dispatch, each specialised to its level and pass: the fine
+    /// splat; the coarse splat and seed; the sweeps along x, y and z; the finish.
+    pipelines: [wgpu::ComputePipeline; 7],
+    /// The fine level's group (its keys) and the coarse level's.
+    groups: [wgpu::BindGroup; 2],
     triangle_count: u32,
     limits: wgpu::Limits,
 }
@@ -257,7 +295,8 @@ impl BodySdf {
     /// is computed until [`BodySdf::encode`] (or [`BodySdf::build`]) runs. Refuses a
     /// resolution outside `[MIN_SDF_RESOLUTION, MAX_SDF_RESOLUTION]` or past the device's
     /// `max_texture_dimension_3d` (named `dynamics.sdf_resolution`), a mesh without
-    /// triangles (`mesh.indices`), and a grid whose buffers the device cannot bind.
+    /// triangles or with more than [`MAX_SDF_TRIANGLES`] (`mesh.indices`), and a grid
+    /// whose buffers the device cannot bind.
     pub fn new(
         gpu: &Gpu,
         mesh: &MeshBuffers,
@@ -342,6 +381,14 @@ impl BodySdf {
             )
             .into());
         }
+        if triangle_count > MAX_SDF_TRIANGLES {
+            return Err(ParamError::new(
+                "mesh.indices",
+                triangle_count,
+                &format!("a body's distance field takes at most {MAX_SDF_TRIANGLES} triangles"),
+            )
+            .into());
+        }
         let grid = SdfGrid::new(bounds, resolution)?;
         let coarse = coarse_grid(&grid);
         let nodes = grid.nodes() as u64;
@@ -360,16 +407,14 @@ impl BodySdf {
             storage | wgpu::BufferUsages::COPY_SRC,
         )?;
         let coarse_keys = zeroed_storage(gpu, "pelage sdf coarse keys", coarse_nodes * 4, cleared)?;
-        let coarse_near =
-            zeroed_storage(gpu, "pelage sdf coarse nearest", coarse_nodes * 4, cleared)?;
         // The coarse points, two halves (A, B) the passes read one of and write the other.
         let points = zeroed_storage(gpu, "pelage sdf coarse points", coarse_nodes * 32, storage)?;
         // Scratch of the build: written and read inside its one pass.
-        for b in [&keys, &field, &coarse_keys, &coarse_near, &points] {
+        for b in [&keys, &field, &coarse_keys, &points] {
             pelage_gpu::audit::name_buffer(b, BODY_SDF);
         }
         let diagonal = (grid.dims - UVec3::ONE).as_vec3().length() * grid.cell;
-        let level = |g: &SdfGrid, band: u32, factor: u32| SdfUniforms {
+        let level = |g: &SdfGrid, band: u32, factor: u32| SdfLevel {
             origin: g.origin,
             cell: g.cell,
             dims: g.dims,
@@ -378,15 +423,11 @@ impl BodySdf {
             far: 2.0 * diagonal,
             coarse: factor,
             pitch,
+            index_bits: index_bits(triangle_count),
         };
-        let fine_uniforms = UniformBuffer::new(
-            gpu,
-            "pelage sdf uniforms",
-            &level(&grid, SDF_BAND_CELLS, COARSE_FACTOR),
-        )?;
+        let fine_level = level(&grid, SDF_BAND_CELLS, COARSE_FACTOR);
         // The coarse level's splats reach every node within one coarse cell of a triangle.
-        let coarse_uniforms =
-            UniformBuffer::new(gpu, "pelage sdf coarse uniforms", &level(&coarse, 1, 1))?;
+        let coarse_level = level(&coarse, 1, 1);
         // Which half of `points` each pass reads and writes: the seed writes A, the
         // sweeps along x, y and z go A to B, B to A, A to B, and the finish reads B.
         let half = u32::try_from(coarse_nodes).map_err(|_| {
@@ -397,26 +438,22 @@ impl BodySdf {
             )
         })?;
         let (a, b) = (0, half);
-        let pass_uniforms = [
-            (0, a, a),
-            (SWEEP_AXES[0], a, b),
-            (SWEEP_AXES[1], b, a),
-            (SWEEP_AXES[2], a, b),
-            (0, b, b),
-        ]
-        .map(|(axis, read_half, write_half)| {
-            UniformBuffer::new(
-                gpu,
-                "pelage sdf pass",
-                &PassUniforms {
-                    axis,
-                    read_half,
-                    write_half,
-                },
-            )
-        });
-        let [seed_pass, sweep_x, sweep_y, sweep_z, finish_pass] = pass_uniforms;
-        let passes = [seed_pass?, sweep_x?, sweep_y?, sweep_z?, finish_pass?];
+        let pass = |axis, read_half, write_half| SdfPass {
+            axis,
+            read_half,
+            write_half,
+        };
+        let none = pass(0, a, a);
+        // (entry point, level, pass) of each dispatch, in order.
+        let dispatches = [
+            ("splat", &fine_level, none),
+            ("splat_coarse", &coarse_level, none),
+            ("seed", &coarse_level, none),
+            ("sweep", &coarse_level, pass(SWEEP_AXES[0], a, b)),
+            ("sweep", &coarse_level, pass(SWEEP_AXES[1], b, a)),
+            ("sweep", &coarse_level, pass(SWEEP_AXES[2], a, b)),
+            ("finish", &fine_level, pass(0, b, b)),
+        ];
         let module = crate::SHADERS.library().module(gpu, "strands/sdf.wgsl")?;
         let built = gpu.scoped(|device| {
             let texture = device.create_texture(&wgpu::TextureDescriptor {
@@ -438,85 +475,53 @@ impl BodySdf {
             let view = texture.create_view(&wgpu::TextureViewDescriptor::default());
             pelage_gpu::audit::name_view(&view, BODY_SDF);
             let layout = BindLayout::new(SDF_LABEL, wgpu::ShaderStages::COMPUTE)
-                .uniform(0)
+                .storage(0)
                 .storage(1)
                 .storage(2)
-                .storage(3)
+                .storage_rw(3)
                 .storage_rw(4)
                 .storage_rw(5)
-                .storage_rw(6)
-                .storage_rw(7)
-                .uniform(8)
-                .uniform(9)
                 .build(device);
-            let pipeline = |entry: &str| {
-                compute_pipeline_with_layouts(device, SDF_LABEL, &module, entry, &[Some(&layout)])
-            };
-            let pipelines = [
-                pipeline("splat"),
-                pipeline("splat_nearest"),
-                pipeline("seed"),
-                pipeline("sweep"),
-                pipeline("finish"),
-            ];
-            fn buffer(binding: u32, b: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
-                wgpu::BindGroupEntry {
-                    binding,
-                    resource: b.as_entire_binding(),
-                }
-            }
-            // A level's uniforms and keys, and a pass's uniforms; the field, the coarse
-            // nearest triangles and points are the same in every group.
-            let group = |uniforms: &wgpu::Buffer, keys: &wgpu::Buffer, pass: &wgpu::Buffer| {
-                pelage_gpu::create_bind_group(
+            let pipelines = dispatches.map(|(entry, level, pass)| {
+                compute_pipeline_with_constants(
                     device,
-                    &wgpu::BindGroupDescriptor {
-                        label: Some(SDF_LABEL),
-                        layout: &layout,
-                        entries: &[
-                            buffer(0, uniforms),
-                            buffer(1, &mesh.positions),
-                            buffer(2, &mesh.normals),
-                            buffer(3, &indices),
-                            buffer(4, keys),
-                            buffer(5, &field),
-                            buffer(6, &coarse_near),
-                            buffer(7, &points),
-                            buffer(8, pass),
-                            buffer(9, &coarse_uniforms.buffer),
-                        ],
-                    },
+                    SDF_LABEL,
+                    &module,
+                    entry,
+                    &[Some(&layout)],
+                    &constants(level, coarse.dims, pass),
+                )
+            });
+            // A level's keys; the mesh, the field, the coarse nearest triangles and
+            // points are the same in both groups.
+            let group = |keys: &wgpu::Buffer| {
+                pelage_gpu::bind_buffers(
+                    device,
+                    SDF_LABEL,
+                    &layout,
+                    &[
+                        &mesh.positions,
+                        &mesh.normals,
+                        &indices,
+                        keys,
+                        &field,
+                        &points,
+                    ],
                 )
             };
-            let (fine_u, coarse_u) = (&fine_uniforms.buffer, &coarse_uniforms.buffer);
-            let groups: Vec<wgpu::BindGroup> = vec![
-                // The fine splat.
-                group(fine_u, &keys, &passes[0].buffer),
-                // The coarse splats and the seed.
-                group(coarse_u, &coarse_keys, &passes[0].buffer),
-                // The sweeps along x, y and z.
-                group(coarse_u, &coarse_keys, &passes[1].buffer),
-                group(coarse_u, &coarse_keys, &passes[2].buffer),
-                group(coarse_u, &coarse_keys, &passes[3].buffer),
-                // The finish.
-                group(fine_u, &keys, &passes[4].buffer),
-            ];
+            let groups = [group(&keys), group(&coarse_keys)];
             (texture, view, pipelines, groups)
         })?;
-        let (texture, view, [splat, splat_nearest, seed, sweep, finish], groups) = built;
+        let (texture, view, pipelines, groups) = built;
         Ok(Self {
             grid,
             coarse,
             field,
             pitch,
-            cleared: [keys, coarse_keys, coarse_near],
-            seed,
+            cleared: [keys, coarse_keys],
             texture,
             view,
-            splat,
-            splat_nearest,
-            sweep,
-            finish,
+            pipelines,
             groups,
             triangle_count,
             limits: gpu.limits().clone(),
@@ -603,7 +608,8 @@ impl BodySdf {
         let size = |n: u64| dispatch_size(&self.limits, n, WORKGROUP);
         let coarse_nodes = size(self.coarse.nodes() as u64);
         let triangles = size(u64::from(self.triangle_count));
-        let [fine, coarse, x, y, z, finish] = [0, 1, 2, 3, 4, 5].map(|k| &self.groups[k]);
+        let [fine, coarse] = &self.groups;
+        let [splat, coarse_splat, seed, x, y, z, finish] = &self.pipelines;
         // A sweep runs one invocation per line of the coarse grid along its axis: as
         // many as the nodes of the plane across it.
         let d = self.coarse.dims.to_array();
@@ -612,24 +618,23 @@ impl BodySdf {
             size(u64::from(d[(a + 1) % 3]) * u64::from(d[(a + 2) % 3]))
         };
         vec![
-            ("splat", vec![(&self.splat, fine, triangles)]),
+            ("splat", vec![(splat, fine, triangles)]),
             (
                 "coarse",
                 vec![
-                    (&self.splat, coarse, triangles),
-                    (&self.splat_nearest, coarse, triangles),
-                    (&self.seed, coarse, coarse_nodes),
+                    (coarse_splat, coarse, triangles),
+                    (seed, coarse, coarse_nodes),
                 ],
             ),
             (
                 "sweeps",
                 vec![
-                    (&self.sweep, x, lines(0)),
-                    (&self.sweep, y, lines(1)),
-                    (&self.sweep, z, lines(2)),
+                    (x, coarse, lines(0)),
+                    (y, coarse, lines(1)),
+                    (z, coarse, lines(2)),
                 ],
             ),
-            ("finish", vec![(&self.finish, finish, coarse_nodes)]),
+            ("finish", vec![(finish, fine, coarse_nodes)]),
         ]
     }
 
@@ -660,9 +665,11 @@ impl BodySdf {
         &self.view
     }
 
-    /// Bytes the field and its build buffers take on the GPU.
+    /// Bytes the field and its build buffers take on the GPU: per fine node the texture
+    /// and the key (4 bytes each), the finish's buffer, and per coarse node a key and two
+    /// points (4 + 2 x 16 bytes).
     pub fn bytes(&self) -> u64 {
-        self.grid.nodes() as u64 * 4 + self.field.size() + self.coarse.nodes() as u64 * 40
+        self.grid.nodes() as u64 * 8 + self.field.size() + self.coarse.nodes() as u64 * 36
     }
 
     /// The coarse grid the sweeps run over ([`coarse_grid`]).

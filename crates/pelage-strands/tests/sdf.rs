@@ -2,14 +2,14 @@
 //! mirror's exact distances, and its bad input.
 
 use glam::{Vec3, Vec4};
-use pelage_gpu::Gpu;
+use pelage_gpu::{Gpu, wgpu};
 use pelage_reference::sdf::{body_surface, buried_triangles, depths, exact_field, winding_number};
 use pelage_reference::skin::skin_mesh;
 use pelage_scene::{
     DynamicsParams, HairParams, MIN_SDF_RESOLUTION, Mesh, MeshMotion, SkinBend, WindParams,
 };
 use pelage_strands::{
-    BodySdf, MeshBuffers, MeshSkin, SimulateStrands, StrandStage, body_triangles,
+    BodySdf, MAX_SDF_TRIANGLES, MeshBuffers, MeshSkin, SimulateStrands, StrandStage, body_triangles,
 };
 
 mod common;
@@ -510,6 +510,29 @@ fn bad_input_is_refused_by_name_and_a_nan_mesh_reads_outside() {
     .unwrap();
     let e = BodySdf::new(&gpu, &empty, head.bounds(), 32).unwrap_err();
     assert!(e.to_string().contains("mesh.indices"), "{e}");
+    // One triangle past the most the coarse keys can name (an index buffer that large,
+    // never written: refused before anything reads it).
+    let past = MAX_SDF_TRIANGLES + 1;
+    let huge = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("too many triangles"),
+        size: u64::from(past) * 12,
+        usage: wgpu::BufferUsages::STORAGE,
+        mapped_at_creation: false,
+    });
+    let too_many = MeshBuffers::from_buffers(
+        buffers.positions.clone(),
+        buffers.normals.clone(),
+        huge,
+        buffers.vertex_count,
+        past,
+        buffers.bounds,
+    )
+    .unwrap();
+    let e = BodySdf::new(&gpu, &too_many, head.bounds(), 32).unwrap_err();
+    assert!(
+        e.to_string().contains("mesh.indices") && e.to_string().contains(&past.to_string()),
+        "{e}"
+    );
 
     // The field is made with the simulation: a new resolution is refused, not ignored.
     let mut sim = SimulateStrands::grown(

@@ -3,20 +3,20 @@
 // field's nodes) and a coarse one (every COARSE_FACTOR-th node along each axis) over which
 // sweeps carry the surface to the nodes far from it. The arrays the splats take extremes
 // in start at 0 (buffer clears before the pass, not dispatches).
-//  1. splat (per triangle): the exact distance from the triangle to every node of its box
-//     grown by `band` cells that lies within `band` cells of its plane, with the side of
-//     the mesh's normal at the nearest point (the vertex normals interpolated there) the
-//     node is on, as one key: the distance's bits (non-negative floats order as their
-//     bits do) shifted up one, the side (1: inside) below; atomicMax on its complement
-//     keeps the least key, so the nearest triangle's side comes with its distance and the
-//     field is the same run after run (an exact tie between sides: outside);
-//  2. splat_nearest (per triangle, the coarse level only): the same nodes again; where
-//     this triangle's distance is the minimum (within NEAREST_ULPS), atomicMax on its
-//     index + 1 (ties: the highest index);
-//     (1 runs on the fine level with `band` = SDF_BAND_CELLS, 1-2 on the coarse level
-//     with one coarse cell;)
-//  3. seed (per coarse node): the nearest point of the triangle the splats left there
-//     and the mesh's normal at it (packed);
+//  1. splat (per triangle, the fine level): the exact distance from the triangle to every
+//     node of its box grown by `band` cells that lies within `band` cells of its plane,
+//     with the side of the mesh's normal at the nearest point (the vertex normals
+//     interpolated there) the node is on, as one key: the distance's bits (non-negative
+//     floats order as their bits do) shifted up one, the side (1: inside) below;
+//     atomicMax on its complement keeps the least key, so the nearest triangle's side
+//     comes with its distance and the field is the same run after run (an exact tie
+//     between sides: outside);
+//  2. splat_coarse (per triangle, the coarse level, one coarse cell around it): the same
+//     nodes and distances, the key the distance in fixed point above the triangle's
+//     index (INDEX_BITS below): the least key names the node's nearest triangle (ties
+//     within a quantum, COARSE_RANGE cells / 2^(32 - INDEX_BITS): the lowest index);
+//  3. seed (per coarse node): the nearest point of the triangle its key names and the
+//     mesh's normal there (packed);
 //  4. sweep (per line of coarse nodes, along x, then y, then z): each node takes the
 //     nearest of its point and those the line hands it from either end (vector
 //     propagation: a node hands on whichever of its point and the one it was handed is
@@ -36,16 +36,20 @@
 // A mesh with holes: the sign is the nearest surface point's normal side, so the field
 // says "inside" only behind the surface near a node, and a hole's rim is a surface like
 // any other (no flood fill, no winding number: an open mesh is not inside-out).
-// Bindings: the level's uniforms, the mesh (positions and normals f32 x3, u32 triangle
-// list), the level's keys, the field, the coarse nearest triangles, the coarse points
-// (two halves), the pass's uniforms (which half it reads and writes, a sweep's axis) and
-// the coarse level's uniforms.
+// Bindings: the mesh (positions and normals f32 x3, u32 triangle list), the level's keys,
+// the field and the coarse points (two halves).
+//
+// The grid a dispatch runs on and the halves it reads and writes are pipeline constants:
+// BodySdf builds one pipeline per dispatch of the build, each specialised to its level
+// and pass. (As uniforms, lavapipe (Mesa 22) inlined their values into the shader and
+// compiled it again at every dispatch, about 0.9 ms each; as storage, the shader ran
+// several times slower without the constants folded in.)
 
 #import shared/math.wgsl
 
-// Units in the last place a recomputed distance may differ from the least key's and still
-// claim the node (the two splats compile to different pipelines).
-const NEAREST_ULPS: u32 = 4u;
+// Coarse cells of distance the coarse keys' fixed point spans (farther: the largest
+// quantum, any triangle as far; the sweeps carry nearer points there).
+const COARSE_RANGE: f32 = 4.0;
 
 struct SdfUniforms {
     origin: vec3<f32>,
@@ -62,27 +66,58 @@ struct SdfUniforms {
     pitch: u32,
 }
 
-// Which coarse points a pass reads and writes (offsets into `points`: its two halves, A at
-// 0 and B past it) and, for a sweep, its axis.
-struct Pass {
-    axis: u32,
-    read_half: u32,
-    write_half: u32,
+// The level's grid (SdfLevel::constants in sdf.rs).
+override ORIGIN_X: f32;
+override ORIGIN_Y: f32;
+override ORIGIN_Z: f32;
+override CELL: f32;
+override DIMS_X: u32;
+override DIMS_Y: u32;
+override DIMS_Z: u32;
+override TRIANGLES: u32;
+override BAND: u32;
+override FAR: f32;
+override COARSE: u32;
+override PITCH: u32;
+// Bits of a coarse key that hold the triangle's index (enough for every triangle).
+override INDEX_BITS: u32;
+// The coarse level's nodes per axis (the finish reads its points).
+override COARSE_DIMS_X: u32;
+override COARSE_DIMS_Y: u32;
+override COARSE_DIMS_Z: u32;
+// Which coarse points the dispatch reads and writes (offsets into `points`: its two
+// halves, A at 0 and B past it) and, for a sweep, its axis.
+override READ_HALF: u32 = 0u;
+override WRITE_HALF: u32 = 0u;
+override AXIS: u32 = 0u;
+
+// The level as one value (every field a pipeline constant).
+fn level() -> SdfUniforms {
+    return SdfUniforms(
+        vec3<f32>(ORIGIN_X, ORIGIN_Y, ORIGIN_Z),
+        CELL,
+        vec3<u32>(DIMS_X, DIMS_Y, DIMS_Z),
+        TRIANGLES,
+        BAND,
+        FAR,
+        COARSE,
+        PITCH,
+    );
 }
 
-@group(0) @binding(0) var<uniform> g: SdfUniforms;
-@group(0) @binding(1) var<storage, read> positions: array<f32>;
-@group(0) @binding(2) var<storage, read> normals: array<f32>;
-@group(0) @binding(3) var<storage, read> indices: array<u32>;
+fn coarse_dims() -> vec3<u32> {
+    return vec3<u32>(COARSE_DIMS_X, COARSE_DIMS_Y, COARSE_DIMS_Z);
+}
+
+@group(0) @binding(0) var<storage, read> positions: array<f32>;
+@group(0) @binding(1) var<storage, read> normals: array<f32>;
+@group(0) @binding(2) var<storage, read> indices: array<u32>;
 // Every buffer a pass writes is bound read-write in every pass, so that no dispatch
 // changes how a buffer is used (on lavapipe a dispatch that did cost 0.8 ms even when it
 // returned at once: a barrier).
-@group(0) @binding(4) var<storage, read_write> keys: array<atomic<u32>>;
-@group(0) @binding(5) var<storage, read_write> field: array<f32>;
-@group(0) @binding(6) var<storage, read_write> nearest: array<atomic<u32>>;
-@group(0) @binding(7) var<storage, read_write> points: array<vec4<u32>>;
-@group(0) @binding(8) var<uniform> pass_: Pass;
-@group(0) @binding(9) var<uniform> coarse_g: SdfUniforms;
+@group(0) @binding(3) var<storage, read_write> keys: array<atomic<u32>>;
+@group(0) @binding(4) var<storage, read_write> field: array<f32>;
+@group(0) @binding(5) var<storage, read_write> points: array<vec4<u32>>;
 
 fn load_position(i: u32) -> vec3<f32> {
     return vec3<f32>(positions[3u * i], positions[3u * i + 1u], positions[3u * i + 2u]);
@@ -171,19 +206,19 @@ fn triangle_distance(p: vec3<f32>, tri: Triangle) -> f32 {
 }
 
 fn node_position(i: vec3<u32>) -> vec3<f32> {
-    return g.origin + vec3<f32>(i) * g.cell;
+    return level().origin + vec3<f32>(i) * level().cell;
 }
 
 fn node_index(i: vec3<u32>) -> u32 {
-    return (i.z * g.dims.y + i.y) * g.dims.x + i.x;
+    return (i.z * level().dims.y + i.y) * level().dims.x + i.x;
 }
 
 fn node_of(index: u32) -> vec3<u32> {
-    return vec3<u32>(index % g.dims.x, index / g.dims.x % g.dims.y, index / (g.dims.x * g.dims.y));
+    return vec3<u32>(index % level().dims.x, index / level().dims.x % level().dims.y, index / (level().dims.x * level().dims.y));
 }
 
 fn node_count() -> u32 {
-    return g.dims.x * g.dims.y * g.dims.z;
+    return level().dims.x * level().dims.y * level().dims.z;
 }
 
 fn flat_id(gid: vec3<u32>, groups: vec3<u32>) -> u32 {
@@ -197,10 +232,10 @@ struct NodeBox {
 }
 
 fn splat_box(tri: Triangle) -> NodeBox {
-    let top = vec3<f32>(g.dims - vec3<u32>(1u));
-    let band = f32(g.band);
-    let lo = (min(min(tri.a, tri.b), tri.c) - g.origin) / g.cell - vec3<f32>(band);
-    let hi = (max(max(tri.a, tri.b), tri.c) - g.origin) / g.cell + vec3<f32>(band);
+    let top = vec3<f32>(level().dims - vec3<u32>(1u));
+    let band = f32(level().band);
+    let lo = (min(min(tri.a, tri.b), tri.c) - level().origin) / level().cell - vec3<f32>(band);
+    let hi = (max(max(tri.a, tri.b), tri.c) - level().origin) / level().cell + vec3<f32>(band);
     let lo_node = vec3<u32>(clamp(ceil(lo), vec3<f32>(0.0), top));
     let hi_node = vec3<u32>(clamp(floor(hi), vec3<f32>(0.0), top));
     return NodeBox(lo_node, hi_node);
@@ -208,10 +243,10 @@ fn splat_box(tri: Triangle) -> NodeBox {
 
 // True when the grown box misses the grid altogether.
 fn box_misses(tri: Triangle) -> bool {
-    let top = vec3<f32>(g.dims - vec3<u32>(1u));
-    let band = f32(g.band);
-    let lo = (min(min(tri.a, tri.b), tri.c) - g.origin) / g.cell - vec3<f32>(band);
-    let hi = (max(max(tri.a, tri.b), tri.c) - g.origin) / g.cell + vec3<f32>(band);
+    let top = vec3<f32>(level().dims - vec3<u32>(1u));
+    let band = f32(level().band);
+    let lo = (min(min(tri.a, tri.b), tri.c) - level().origin) / level().cell - vec3<f32>(band);
+    let hi = (max(max(tri.a, tri.b), tri.c) - level().origin) / level().cell + vec3<f32>(band);
     return any(hi < vec3<f32>(0.0)) || any(lo > top);
 }
 
@@ -232,7 +267,7 @@ fn splat_slab(tri: Triangle) -> Slab {
         unit = n / len;
     }
     // A hundredth of a cell more than the band: rounding never culls a node at the band.
-    return Slab(unit, dot(unit, tri.a), (f32(g.band) + 0.01) * g.cell);
+    return Slab(unit, dot(unit, tri.a), (f32(level().band) + 0.01) * level().cell);
 }
 
 fn outside_slab(slab: Slab, p: vec3<f32>) -> bool {
@@ -266,7 +301,7 @@ fn key_distance(key: u32) -> f32 {
 @compute @workgroup_size(64)
 fn splat(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let t = flat_id(gid, groups);
-    if t >= g.triangle_count {
+    if t >= level().triangle_count {
         return;
     }
     let tri = load_triangle(t);
@@ -300,10 +335,18 @@ fn splat(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
     }
 }
 
+// A coarse key: the distance in fixed point above the triangle's index (the least key
+// is the nearest triangle's; never 0xffffffff, the empty complement's).
+fn coarse_key(d: f32, t: u32) -> u32 {
+    let levels = (1u << (32u - INDEX_BITS)) - 2u;
+    let q = min(d / (COARSE_RANGE * level().cell), 1.0) * f32(levels);
+    return (min(u32(q), levels) << INDEX_BITS) | t;
+}
+
 @compute @workgroup_size(64)
-fn splat_nearest(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+fn splat_coarse(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let t = flat_id(gid, groups);
-    if t >= g.triangle_count {
+    if t >= level().triangle_count {
         return;
     }
     let tri = load_triangle(t);
@@ -320,10 +363,10 @@ fn splat_nearest(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wor
                 if outside_slab(slab, p) {
                     continue;
                 }
-                let d = triangle_distance(p, tri);
+                let key = ~coarse_key(triangle_distance(p, tri), t);
                 let i = node_index(n);
-                if bitcast<u32>(d) <= bitcast<u32>(key_distance(least_key(i))) + NEAREST_ULPS {
-                    atomicMax(&nearest[i], t + 1u);
+                if key > atomicLoad(&keys[i]) {
+                    atomicMax(&keys[i], key);
                 }
             }
         }
@@ -338,10 +381,10 @@ fn seed(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     if i >= node_count() {
         return;
     }
-    let packed = atomicLoad(&nearest[i]);
+    let key = atomicLoad(&keys[i]);
     var out = vec4<u32>(0u);
-    if packed != 0u {
-        let t = packed - 1u;
+    if key != 0u {
+        let t = ~key & ((1u << INDEX_BITS) - 1u);
         let tri = load_triangle(t);
         let bary = closest_bary(node_position(node_of(i)), tri.a, tri.b, tri.c);
         let q = tri.a * bary.x + tri.b * bary.y + tri.c * bary.z;
@@ -353,12 +396,12 @@ fn seed(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
 
 // Writes coarse node `i`'s surface point (into the pass's write half).
 fn write_point(i: u32, point: vec4<u32>) {
-    points[pass_.write_half + i] = point;
+    points[WRITE_HALF + i] = point;
 }
 
 // Coarse node `i`'s surface point as the pass's read half holds it.
 fn point_in(i: u32) -> vec4<u32> {
-    return points[pass_.read_half + i];
+    return points[READ_HALF + i];
 }
 
 
@@ -381,7 +424,7 @@ fn nearer_point(p: vec3<f32>, a: vec4<u32>, b: vec4<u32>) -> vec4<u32> {
     return a;
 }
 
-// One invocation per line of coarse nodes along axis `pass_.axis` (0: x, 1: y, 2: z): each
+// One invocation per line of coarse nodes along axis `AXIS` (0: x, 1: y, 2: z): each
 // node of the line takes the nearest of its own point and the points the line carries
 // to it from either end (a sweep each way: vector propagation, after Danielsson 1980).
 // Three passes, x then y then z, carry every seed through the grid.
@@ -389,10 +432,10 @@ fn nearer_point(p: vec3<f32>, a: vec4<u32>, b: vec4<u32>) -> vec4<u32> {
 fn sweep(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let line = flat_id(gid, groups);
     // The line's axis and the two across it.
-    let a = pass_.axis;
+    let a = AXIS;
     let b = (a + 1u) % 3u;
     let c = (a + 2u) % 3u;
-    let dims = g.dims;
+    let dims = level().dims;
     if line >= dims[b] * dims[c] {
         return;
     }
@@ -408,7 +451,7 @@ fn sweep(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
     // Forward: from the line's start. A node hands on whichever of its own point and
     // what it was handed is nearer the next node.
     var carry = vec4<u32>(0u);
-    let ahead = g.cell * vec3<f32>(along);
+    let ahead = level().cell * vec3<f32>(along);
     for (var k = 0u; k < n; k++) {
         let i = base + k * stride;
         let p = node_position(first + along * k);
@@ -422,7 +465,7 @@ fn sweep(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
         let i = base + (k - 1u) * stride;
         let p = node_position(first + along * (k - 1u));
         let own = point_in(i);
-        write_point(i, nearer_point(p, points[pass_.write_half + i], nearer_point(p, own, carry)));
+        write_point(i, nearer_point(p, points[WRITE_HALF + i], nearer_point(p, own, carry)));
         carry = nearer_point(p - ahead, own, carry);
     }
 }
@@ -435,7 +478,7 @@ struct Candidate {
 }
 
 fn candidate(c: vec3<u32>) -> Candidate {
-    let point = point_in((c.z * coarse_g.dims.y + c.y) * coarse_g.dims.x + c.x);
+    let point = point_in((c.z * coarse_dims().y + c.y) * coarse_dims().x + c.x);
     return Candidate(bitcast<vec3<f32>>(point.xyz), unpack4x8snorm(point.w));
 }
 
@@ -453,7 +496,7 @@ fn nearer(p: vec3<f32>, best: vec2<f32>, c: Candidate) -> vec2<f32> {
 @compute @workgroup_size(64)
 fn finish(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let cell = flat_id(gid, groups);
-    let cdims = coarse_g.dims;
+    let cdims = coarse_dims();
     if cell >= cdims.x * cdims.y * cdims.z {
         return;
     }
@@ -467,8 +510,8 @@ fn finish(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups
     let c5 = candidate(lo + vec3<u32>(1u, 0u, 1u));
     let c6 = candidate(lo + vec3<u32>(0u, 1u, 1u));
     let c7 = candidate(lo + vec3<u32>(1u, 1u, 1u));
-    let first = cnode * g.coarse;
-    let last = min(first + vec3<u32>(g.coarse - 1u), g.dims - vec3<u32>(1u));
+    let first = cnode * level().coarse;
+    let last = min(first + vec3<u32>(level().coarse - 1u), level().dims - vec3<u32>(1u));
     for (var z = first.z; z <= last.z; z++) {
         for (var y = first.y; y <= last.y; y++) {
             for (var x = first.x; x <= last.x; x++) {
@@ -478,11 +521,11 @@ fn finish(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups
                 let splat_d = key_distance(key);
                 // (distance, side): within the band the splat's exact distance and its
                 // nearest triangle's side.
-                var best = vec2<f32>(g.far, 1.0);
+                var best = vec2<f32>(level().far, 1.0);
                 if reached {
                     best = vec2<f32>(splat_d, select(1.0, -1.0, (key & 1u) == 1u));
                 }
-                if !reached || splat_d > f32(g.band) * g.cell {
+                if !reached || splat_d > f32(level().band) * level().cell {
                     // Beyond the band: the nearest of the surface points the coarse nodes
                     // around hold, on the side of its normal.
                     let p = node_position(node);
@@ -496,7 +539,7 @@ fn finish(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups
                     best = nearer(p, best, c7);
                 }
                 let value = select(best.x, -best.x, best.y < 0.0);
-                field[(z * g.dims.y + y) * g.pitch + x] = value;
+                field[(z * level().dims.y + y) * level().pitch + x] = value;
             }
         }
     }
