@@ -492,8 +492,8 @@ impl BodySdf {
                     &constants(level, coarse.dims, pass),
                 )
             });
-            // A level's keys; the mesh, the field, the coarse nearest triangles and
-            // points are the same in both groups.
+            // A level's keys; the mesh, the field and the coarse points are the same in
+            // both groups.
             let group = |keys: &wgpu::Buffer| {
                 pelage_gpu::bind_buffers(
                     device,
