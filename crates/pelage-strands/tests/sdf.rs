@@ -354,10 +354,11 @@ fn creature_depth(gpu: &Gpu, sdf_resolution: u32, frames: u32) -> Depth {
 /// inside another the field, sampled trilinearly between nodes a cell apart, cannot
 /// follow the crease (nor a rim thinner than a cell), so a vertex can slip through
 /// there. Measured at resolution 64: the mean depth falls from 2.25 strand widths
-/// without the field to 0.061 with it, and 2.99% of the vertices (32% without) end a
-/// frame deeper than half a width; the deepest 16.4 widths (34.4 without). (3.12% when
-/// the buried triangles were part of the field; 0.65% with the field at 128, a scratch
-/// run: the cell, not the sign, is most of what is left.)
+/// without the field to 0.050 with it, and 2.59% of the vertices (32% without) end a
+/// frame deeper than half a width; the deepest 11.3 widths (34.4 without). (0.061,
+/// 2.99% and 16.4 before the sample's cap by the nodes' distances plus the way to them;
+/// 3.12% when the buried triangles were part of the field; 0.65% with the field at 128,
+/// a scratch run: the cell, not the sign, is most of what is left.)
 #[test]
 fn fur_stays_out_of_the_skinned_creature_but_at_its_part_junctions() {
     let gpu = gpu();
@@ -435,11 +436,11 @@ fn resting(gpu: &Gpu, sdf_resolution: u32, sphere: bool) -> (Movement, Depth) {
 
 /// Hair resting on the still head stays on it as still as on the sphere collider: after
 /// settling, its mean move per frame is at most 1.5x the sphere collider's (measured
-/// 0.085 against 0.072 strand widths: 1.2x), and no vertex is deeper than half a width
+/// 0.080 against 0.072 strand widths: 1.1x), and no vertex is deeper than half a width
 /// inside the head; without the field the hair hangs through the head (113 widths
 /// deep). Neither comes wholly to rest: friction takes a fraction of the tangential
 /// velocity at each contact (no static friction), so hair on a slope of the head keeps
-/// sliding slowly (99th percentile 1.5 widths per frame, largest 24).
+/// sliding slowly (99th percentile 1.1 widths per frame, largest 20).
 #[test]
 fn hair_resting_on_the_head_stays_at_rest() {
     let gpu = gpu();
