@@ -205,16 +205,8 @@ mod tests {
     /// naming what was wrong.
     #[test]
     fn a_groom_file_is_drawn_alone_with_its_own_strand_count() {
-        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenes/long_hair.hair");
-        let groom = read_groom(std::fs::read(path).unwrap(), "long_hair.hair").unwrap();
+        let groom = read_placed("long_hair.hair");
         assert!(groom.strands > 1000, "{} strands", groom.strands);
-        assert_eq!(groom.segments, GROOM_SEGMENTS);
-        let (lo, hi) = groom.bounds();
-        let side = (hi - lo).max_element();
-        assert!(
-            (side - GROOM_FIT).abs() < 0.05 * GROOM_FIT,
-            "longest side {side}"
-        );
         let settings = Settings {
             strands: groom.strands,
             ..Settings::default()
@@ -246,16 +238,22 @@ mod tests {
     /// placed and resampled like any groom.
     #[test]
     fn a_usd_groom_reads_in_the_pages_build() {
-        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenes/usd_groom.usda");
-        let groom = read_groom(std::fs::read(path).unwrap(), "usd_groom.usda").unwrap();
-        assert_eq!(groom.strands, 500);
+        assert_eq!(read_placed("usd_groom.usda").strands, 500);
+    }
+
+    /// `scenes/NAME` read as the page reads a groom, checked to be resampled to
+    /// [`GROOM_SEGMENTS`] and scaled to [`GROOM_FIT`].
+    fn read_placed(name: &str) -> Resampled {
+        let path = format!("{}/../../scenes/{name}", env!("CARGO_MANIFEST_DIR"));
+        let groom = read_groom(std::fs::read(path).unwrap(), name).unwrap();
         assert_eq!(groom.segments, GROOM_SEGMENTS);
         let (lo, hi) = groom.bounds();
         let side = (hi - lo).max_element();
         assert!(
             (side - GROOM_FIT).abs() < 0.05 * GROOM_FIT,
-            "longest side {side}"
+            "{name}: longest side {side}"
         );
+        groom
     }
 
     #[test]
