@@ -542,7 +542,7 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
     }
 
     // 1b. GPU skinning, stage 1's input, against the growth pass it feeds.
-    let (skin_rows, skin_ratio, sdf_ratios) = skinning_section(frames, &bar)?;
+    let (skin_rows, skin_ratio, sdf_times) = skinning_section(frames, &bar)?;
     rows.extend(skin_rows);
     bar.inc(1);
 
@@ -968,20 +968,13 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
     ]
     .into_iter()
     .map(|(name, value, note)| (name.to_string(), value, note.to_string()))
-    .chain(sdf_ratios.iter().map(|&(r, still, ratio)| {
-        if still {
-            (
-                format!("sdf: body field {r} (still body) build over growth pass"),
-                ratio,
-                "timestamps, the still creature's distance field over its own box (target: <= 1, a rigid body builds it once), 20000 strands x 8 segments grown".to_string(),
-            )
-        } else {
-            (
-                format!("sdf: body field {r} build over growth pass"),
-                ratio,
-                "timestamps, the creature's distance field rebuilt every frame on its skinned mesh (target: <= 0.5 every frame), 20000 strands x 8 segments grown".to_string(),
-            )
-        }
+    .chain(sdf_times.iter().map(|t| {
+        let (case, target, what) = t.case();
+        (
+            format!("sdf: body field {} ({case}) build over growth pass", t.resolution),
+            t.ratio(),
+            format!("timestamps, {what} (target: {target}), {SKIN_STRANDS} strands x 8 segments grown"),
+        )
     })) {
         table.push(vec![
             "summary".into(),
@@ -1051,16 +1044,13 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
     println!(
         "  skinning: the skin pass takes {skin_ratio:.3}x the growth pass of a {SKIN_STRANDS}-strand creature (target <= 0.1)"
     );
-    for (r, still, ratio) in &sdf_ratios {
-        if *still {
-            println!(
-                "  body sdf {r}, still body: its build takes {ratio:.3}x the growth pass of a {SKIN_STRANDS}-strand creature (target: <= 1 built once for a rigid body)"
-            );
-        } else {
-            println!(
-                "  body sdf {r}, skinned body: its build takes {ratio:.3}x the growth pass of a {SKIN_STRANDS}-strand creature (target: <= 0.5 rebuilt every frame)"
-            );
-        }
+    for t in &sdf_times {
+        let (case, target, _) = t.case();
+        println!(
+            "  body sdf {}, {case}: its build takes {:.3}x the growth pass of a {SKIN_STRANDS}-strand creature (target: {target})",
+            t.resolution,
+            t.ratio()
+        );
     }
     for line in raster.summary.iter().chain(&bridge.summary) {
         println!("  {line}");
@@ -1091,7 +1081,7 @@ const SKIN_STRANDS: u32 = 20_000;
 fn skinning_section(
     frames: usize,
     bar: &progress::Progress,
-) -> Result<(Vec<Row>, f64, SdfRatios), Error> {
+) -> Result<(Vec<Row>, f64, Vec<SdfTiming>), Error> {
     let gpu = Gpu::headless()?;
     let s = scene(SKIN_STRANDS, 8);
     let mut mesh = MeshBuffers::upload(&gpu, &s.mesh)?;
@@ -1186,20 +1176,10 @@ fn skinning_section(
     };
     let mut rows = Vec::new();
     for t in &sdf_times {
-        let (what, label) = if t.still {
-            (
-                "the still creature's distance field over its own box",
-                format!("{} still", sdf_label(t.resolution)),
-            )
-        } else {
-            (
-                "the skinned creature's distance field, rebuilt every frame",
-                sdf_label(t.resolution),
-            )
-        };
+        let (_, _, what) = t.case();
         rows.push(Row {
-            stage: label,
-            copy_ratio: t.sdf_ms / t.grow_ms,
+            stage: t.label(),
+            copy_ratio: t.ratio(),
             ..row(
                 SDF_LABEL,
                 t.sdf_ms,
@@ -1211,10 +1191,6 @@ fn skinning_section(
             )
         });
     }
-    let sdf_ratios = sdf_times
-        .iter()
-        .map(|t| (t.resolution, t.still, t.sdf_ms / t.grow_ms))
-        .collect();
     rows.extend([
             row(
                 SKIN_LABEL,
@@ -1231,7 +1207,7 @@ fn skinning_section(
                 "the growth pass on the skinned mesh, same frames; ratio: skin over grow".into(),
             ),
         ]);
-    Ok((rows, skin_ms / grow_ms, sdf_ratios))
+    Ok((rows, skin_ms / grow_ms, sdf_times))
 }
 
 /// Label prefix of the frame's target bridge passes (`src/bridge.rs`).
@@ -1384,28 +1360,54 @@ impl SdfTiming {
         times: &[(String, f64)],
         bar: &progress::Progress,
     ) -> Self {
-        let (sdf_ms, grow_ms) = (get(times, SDF_LABEL), get(times, "strands: grow"));
-        let nodes = sdf.grid().nodes();
-        bar.println(format!(
-            "  {SKIN_STRANDS:>7} strands  {SDF_LABEL} {resolution}{} ({nodes} nodes) {sdf_ms:9.3} ms, {:.3}x the growth pass ({grow_ms:.3} ms)",
-            if still { " still" } else { "" },
-            sdf_ms / grow_ms
-        ));
-        Self {
+        let timing = Self {
             resolution,
             still,
-            sdf_ms,
-            grow_ms,
-            nodes,
+            sdf_ms: get(times, SDF_LABEL),
+            grow_ms: get(times, "strands: grow"),
+            nodes: sdf.grid().nodes(),
             bytes: sdf.bytes(),
+        };
+        bar.println(format!(
+            "  {SKIN_STRANDS:>7} strands  {} ({} nodes) {:9.3} ms, {:.3}x the growth pass ({:.3} ms)",
+            timing.label(),
+            timing.nodes,
+            timing.sdf_ms,
+            timing.ratio(),
+            timing.grow_ms
+        ));
+        timing
+    }
+
+    /// The bench's label of the build: the pass's, its resolution, "still" for the
+    /// still body.
+    fn label(&self) -> String {
+        let still = if self.still { " still" } else { "" };
+        format!("{SDF_LABEL} {}{still}", self.resolution)
+    }
+
+    /// The build over the growth pass.
+    fn ratio(&self) -> f64 {
+        self.sdf_ms / self.grow_ms
+    }
+
+    /// The body as the summary names it, the target for it, and what was timed.
+    fn case(&self) -> (&'static str, &'static str, &'static str) {
+        if self.still {
+            (
+                "still body",
+                "<= 1 built once for a rigid body",
+                "the still creature's distance field over its own box",
+            )
+        } else {
+            (
+                "skinned body",
+                "<= 0.5 rebuilt every frame",
+                "the skinned creature's distance field, rebuilt every frame",
+            )
         }
     }
 }
-
-/// The body's distance field's build over the growth pass: per resolution, for the
-/// still creature (true: a rigid body's case, over its own box) or the skinned one
-/// (false: rebuilt every frame, over the box of every pose).
-type SdfRatios = Vec<(u32, bool, f64)>;
 
 /// The resolutions of the body's distance field the skinning section times (the lab's;
 /// 128 takes about 8x as long, every stage's work growing with the nodes).
