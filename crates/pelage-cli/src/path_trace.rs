@@ -56,12 +56,25 @@ pub struct TracedScene {
     pub segments: Vec<Segment>,
     /// Strands read back.
     pub strands: usize,
+    /// The strand vertices as stage 1 left them (`strands × (segments + 1)`, w the strand
+    /// parameter): what the volume grid's CPU mirror splats.
+    pub vertices: Vec<Vec4>,
+    /// Segments per strand.
+    pub segments_per_strand: u32,
+    /// Root width of each strand.
+    pub widths: Vec<f32>,
+    /// Colour of each strand.
+    pub colors: Vec<Vec3>,
+    /// Tip width as a fraction of the root width.
+    pub tip_width: f32,
     /// The fibre (its σ_a is the hair colour's when absorption is per strand).
     pub fibre: ChiangFibre,
     /// σ_a per strand, for colour-driven absorption.
     pub strand_sigma_a: Option<Vec<DVec3>>,
     /// Mesh positions as the frame posed them.
     pub mesh_positions: Vec<Vec3>,
+    /// Mesh normals as the frame posed them (one per position).
+    pub mesh_normals: Vec<Vec3>,
     /// Mesh triangles.
     pub mesh_triangles: Vec<[u32; 3]>,
     /// The mesh's albedo, `pelage_scene::mesh_albedo` of `shade.mesh_color` (`π ·
@@ -145,14 +158,18 @@ impl TracedScene {
             ),
         };
         let mesh = renderer.frame().mesh_buffers();
-        let positions = read_buffer(gpu, &mesh.positions)?;
-        let positions: &[f32] = bytemuck::try_cast_slice(&positions)
-            .map_err(|e| TraceError::Frame(format!("mesh positions: {e}")))?;
-        let mesh_positions: Vec<Vec3> = positions
-            .chunks_exact(3)
-            .take(mesh.vertex_count as usize)
-            .map(Vec3::from_slice)
-            .collect();
+        let read_vec3 = |buffer: &wgpu::Buffer, what: &str| -> Result<Vec<Vec3>, TraceError> {
+            let bytes = read_buffer(gpu, buffer)?;
+            let floats: &[f32] = bytemuck::try_cast_slice(&bytes)
+                .map_err(|e| TraceError::Frame(format!("mesh {what}: {e}")))?;
+            Ok(floats
+                .chunks_exact(3)
+                .take(mesh.vertex_count as usize)
+                .map(Vec3::from_slice)
+                .collect())
+        };
+        let mesh_positions = read_vec3(&mesh.positions, "positions")?;
+        let mesh_normals = read_vec3(&mesh.normals, "normals")?;
         let indices = read_buffer(gpu, &mesh.indices)?;
         let indices: &[u32] = bytemuck::try_cast_slice(&indices)
             .map_err(|e| TraceError::Frame(format!("mesh indices: {e}")))?;
@@ -164,9 +181,15 @@ impl TracedScene {
         Ok(Self {
             segments,
             strands: roots.len(),
+            vertices,
+            segments_per_strand: layout.segments,
+            widths,
+            colors,
+            tip_width: growth.tip_width,
             fibre,
             strand_sigma_a,
             mesh_positions,
+            mesh_normals,
             mesh_triangles,
             mesh_albedo: scene.shade.mesh_albedo().as_dvec3(),
             mesh_note: (scene.shade.mesh_color.max_element() > std::f32::consts::FRAC_1_PI).then(

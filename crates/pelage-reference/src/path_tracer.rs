@@ -88,6 +88,9 @@ pub const MAX_IMAGE_SIDE: u32 = 8192;
 /// A fibre's continuation and shadow rays start this fraction of the radius outside it.
 pub const SPAWN_OFFSET: f64 = 1.0e-3;
 
+/// `(√5 − 1) / 2`: the azimuth step of [`PathTracer::field_at`]'s Fibonacci lattice.
+const GOLDEN_RATIO_CONJUGATE: f64 = 0.618_033_988_749_894_9;
+
 /// Entries into the strand a ray leaves, closer than this many radii, are ignored.
 pub const SELF_SKIP_RADII: f64 = 4.0;
 
@@ -452,6 +455,59 @@ fn ray_triangle(tri: &Triangle, o: DVec3, d: DVec3, max_t: f64) -> Option<f64> {
     (t > 0.0 && t <= max_t).then_some(t)
 }
 
+/// What a scattering vertex on a fibre needs of its segment.
+struct FibreVertex {
+    /// The hit's projection onto the segment's axis.
+    axis_point: DVec3,
+    /// The fibre's frame (x along the axis).
+    frame: FibreFrame,
+    /// The fibre with the strand's σ_a.
+    fibre: PreparedFibre,
+    /// Radius at the hit.
+    radius: f64,
+    /// The strand's entries to ignore for rays leaving it.
+    skip: Option<(u32, f64)>,
+}
+
+impl FibreVertex {
+    /// Where a ray along `w` leaves the fibre: on its surface, on the side `w` goes to (see
+    /// the module docs); `p` (the hit) for a `w` along the axis.
+    fn spawn(&self, w: DVec3, p: DVec3) -> DVec3 {
+        let perp = w - self.frame.x * self.frame.x.dot(w);
+        let len = perp.length();
+        let u = if len > 1.0e-9 {
+            perp / len
+        } else {
+            (p - self.axis_point).normalize_or(self.frame.y)
+        };
+        self.axis_point + u * (self.radius * (1.0 + SPAWN_OFFSET))
+    }
+}
+
+/// The light arriving at a visible fibre that has scattered at least once on the way (off
+/// other fibres or the mesh), or comes from the sky: what a volume method's grid stands for
+/// at that fibre (`pelage_reference::volume`), measured by [`PathTracer::field_at`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FieldSample {
+    /// The hit's point on the fibre's axis (where pelage's shading reads its grid).
+    pub point: DVec3,
+    /// Unit tangent of the fibre.
+    pub tangent: DVec3,
+    /// Unit direction toward the camera.
+    pub view: DVec3,
+    /// The fibre's σ_a.
+    pub sigma_a: DVec3,
+    /// Fluence per channel, `φ = ∫ L(ω) dω` over the sphere of directions `ω` the light
+    /// comes from.
+    pub fluence: DVec3,
+    /// Flux vector per channel, `Φ = ∫ L(ω) (−ω) dω` (the direction the light travels).
+    pub flux: [DVec3; 3],
+    /// The fibre's response to that light, `∫ f(v, ω) cos θ_ω L(ω) dω` with Chiang's BSDF at
+    /// the hit's offset `h`: the radiance toward the camera of every order the field
+    /// carries (orders ≥ 2 of the lights, all of the sky's).
+    pub response: DVec3,
+}
+
 /// A path's next ray after a scattering vertex.
 #[derive(Clone, Copy, Debug)]
 struct Continuation {
@@ -660,6 +716,98 @@ impl PathTracer {
         })
     }
 
+    /// The light arriving at the first fibre a camera ray from `o` along unit `d` hits (see
+    /// [`FieldSample`]), from `directions` rays leaving the fibre, a Fibonacci lattice on the
+    /// sphere turned at random (each ray uniform, jittered in `cos` of the polar angle about
+    /// the world's z); each ray's radiance is a path
+    /// of up to `settings.max_bounces` vertices (Russian roulette as in [`Self::render`])
+    /// seeing `settings.sky` when it escapes, its first vertex's light included (light
+    /// scattered once reaching the fibre) but not the lights' unscattered light, which pelage
+    /// shades apart. `None` when the ray hits nothing or the mesh first. Errors for bad
+    /// settings or `directions` 0.
+    pub fn field_at(
+        &self,
+        o: DVec3,
+        d: DVec3,
+        directions: u32,
+        settings: &PathTracerSettings,
+        rng: &mut Pcg32,
+    ) -> Result<Option<FieldSample>, PathTraceError> {
+        settings.validate()?;
+        if directions == 0 {
+            return Err(PathTraceError::Invalid {
+                what: "directions".into(),
+                reason: "must be at least 1".into(),
+            });
+        }
+        let Some((t_hit, Surface::Hair(sh))) = self.intersect(o, d, f64::INFINITY, None) else {
+            return Ok(None);
+        };
+        let Some(vertex) = self.fibre_vertex(&sh) else {
+            return Ok(None);
+        };
+        let p = o + d * t_hit;
+        let view = -d;
+        let wo_l = vertex.frame.to_local(view);
+        let weight = 4.0 * PI / f64::from(directions);
+        let mut fluence = DVec3::ZERO;
+        let mut flux = [DVec3::ZERO; 3];
+        let mut response = DVec3::ZERO;
+        // A Fibonacci lattice turned at random: each direction uniform on the sphere, the
+        // set of them evenly spread.
+        let turn = rng.next_f64();
+        for k in 0..directions {
+            let z = 1.0 - 2.0 * (f64::from(k) + rng.next_f64()) / f64::from(directions);
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            let azimuth = TAU * (turn + f64::from(k) * GOLDEN_RATIO_CONJUGATE).fract();
+            let w = DVec3::new(r * azimuth.cos(), r * azimuth.sin(), z);
+            let (l, _) = self.trace_from(
+                vertex.spawn(w, p),
+                w,
+                f64::INFINITY,
+                vertex.skip,
+                settings.sky,
+                settings,
+                rng,
+            );
+            fluence += l * weight;
+            for (c, f) in flux.iter_mut().enumerate() {
+                *f -= w * (l[c] * weight);
+            }
+            let f = vertex
+                .fibre
+                .eval_projected(wo_l, vertex.frame.to_local(w), sh.h);
+            response += f * l * weight;
+        }
+        Ok(Some(FieldSample {
+            point: vertex.axis_point,
+            tangent: vertex.frame.x,
+            view,
+            sigma_a: vertex.fibre.fibre().sigma_a,
+            fluence,
+            flux,
+            response,
+        }))
+    }
+
+    /// The fibre a ray hit, as a scattering vertex sees it; `None` for a degenerate segment.
+    fn fibre_vertex(&self, sh: &SegmentHit) -> Option<FibreVertex> {
+        let seg = &sh.segment;
+        let a = seg.a.as_dvec3();
+        let e = seg.b.as_dvec3() - a;
+        let radius = f64::from(seg.radius);
+        Some(FibreVertex {
+            axis_point: a + e * sh.s,
+            frame: FibreFrame::from_tangent(e)?,
+            fibre: match self.strand_sigma_a.get(seg.strand as usize) {
+                Some(s) => self.fibre.with_sigma_a(*s),
+                None => self.fibre,
+            },
+            radius,
+            skip: Some((seg.strand, SELF_SKIP_RADII * radius)),
+        })
+    }
+
     /// The strand BVH (for queries of the same geometry the tracer sees).
     pub fn hair_bvh(&self) -> &SegmentBvh {
         &self.hair
@@ -813,8 +961,25 @@ impl PathTracer {
         settings: &PathTracerSettings,
         rng: &mut Pcg32,
     ) -> (DVec3, bool) {
-        let Some(mut hit) = self.intersect(o, d, max_t, None) else {
-            return (settings.background, false);
+        self.trace_from(o, d, max_t, None, settings.background, settings, rng)
+    }
+
+    /// [`Self::trace`] from a ray that may leave a fibre (`skip`, as a continuation's), seeing
+    /// `miss` if it hits nothing: the background for a camera ray, the sky for a ray that
+    /// stands for light arriving at a scattering vertex.
+    #[allow(clippy::too_many_arguments)]
+    fn trace_from(
+        &self,
+        o: DVec3,
+        d: DVec3,
+        max_t: f64,
+        skip: Option<(u32, f64)>,
+        miss: DVec3,
+        settings: &PathTracerSettings,
+        rng: &mut Pcg32,
+    ) -> (DVec3, bool) {
+        let Some(mut hit) = self.intersect(o, d, max_t, skip) else {
+            return (miss, false);
         };
         let first_hair = matches!(hit.1, Surface::Hair(_));
         let mut origin = o;
@@ -876,28 +1041,10 @@ impl PathTracer {
         radiance: &mut DVec3,
         rng: &mut Pcg32,
     ) -> Option<Continuation> {
-        let seg = &sh.segment;
-        let a = seg.a.as_dvec3();
-        let e = seg.b.as_dvec3() - a;
-        let r = f64::from(seg.radius);
-        let axis_point = a + e * sh.s;
-        let frame = FibreFrame::from_tangent(e)?;
-        let fibre = match self.strand_sigma_a.get(seg.strand as usize) {
-            Some(s) => self.fibre.with_sigma_a(*s),
-            None => self.fibre,
-        };
-        let skip = Some((seg.strand, SELF_SKIP_RADII * r));
+        let vertex = self.fibre_vertex(sh)?;
+        let (frame, fibre, skip) = (vertex.frame, vertex.fibre, vertex.skip);
         let wo_l = frame.to_local(wo);
-        let spawn = |w: DVec3| {
-            let perp = w - frame.x * frame.x.dot(w);
-            let len = perp.length();
-            let u = if len > 1.0e-9 {
-                perp / len
-            } else {
-                (p - axis_point).normalize_or(frame.y)
-            };
-            axis_point + u * (r * (1.0 + SPAWN_OFFSET))
-        };
+        let spawn = |w: DVec3| vertex.spawn(w, p);
         for light in &self.lights {
             let Some((wi, irradiance, position)) = Self::light_at(light, p) else {
                 continue;

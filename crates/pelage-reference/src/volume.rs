@@ -98,6 +98,77 @@ pub struct VolumeGridCpu {
     pub step_arrivals: Vec<f64>,
 }
 
+impl VolumeGridCpu {
+    /// The fluence and flux of the three channels at `p`, as the shading reads them
+    /// (`volume_sample` in `chiang_volume_model.wgsl`): trilinear between cell centres,
+    /// clamped at the grid's border.
+    pub fn sample(&self, p: DVec3) -> [DVec4; 3] {
+        let n = i64::from(self.resolution.max(1));
+        let q = (p - self.origin) / self.cell - DVec3::splat(0.5);
+        let base = q.floor();
+        let f = (q - base).clamp(DVec3::ZERO, DVec3::ONE);
+        let mut out = [DVec4::ZERO; 3];
+        for corner in 0..8i64 {
+            let o = [corner & 1, (corner >> 1) & 1, (corner >> 2) & 1];
+            let mut w = 1.0;
+            let mut c = [0i64; 3];
+            for a in 0..3 {
+                w *= if o[a] == 1 { f[a] } else { 1.0 - f[a] };
+                c[a] = (base[a] as i64 + o[a]).clamp(0, n - 1);
+            }
+            let i = ((c[2] * n + c[1]) * n + c[0]) as usize;
+            if let Some(cell) = self.fluence.get(i) {
+                for (ch, v) in out.iter_mut().enumerate() {
+                    *v += w * cell[ch];
+                }
+            }
+        }
+        out
+    }
+}
+
+/// The volume method's reading of its grid at a fibre (`hair_scattered` in
+/// `chiang_volume_model.wgsl`), with the fibre's energies integrated here
+/// ([`ChiangFibre::lobe_energies`] at the table's texels): the radiance toward `v` is
+/// `A(θ_v) / (4π) (φ + 3 Φ' · q)` per channel, `q = t (t·v) + g(θ_v) (v − t (t·v))`, `Φ'`
+/// the flux shortened to at most `φ / 3`.
+#[derive(Clone, Debug)]
+pub struct FibreResponse {
+    table: EnergyTable,
+}
+
+impl FibreResponse {
+    /// The response of fibres like `fibre` (its σ_a included).
+    pub fn new(fibre: &ChiangFibre) -> Self {
+        Self {
+            table: EnergyTable::new(fibre),
+        }
+    }
+
+    /// The radiance toward unit `v` of a fibre of unit tangent `t` in the light `field`
+    /// (per channel `(φ, Φ)`, as [`VolumeGridCpu::sample`] gives it).
+    pub fn radiance(&self, t: DVec3, v: DVec3, field: &[DVec4; 3]) -> DVec3 {
+        let sin_o = t.dot(v).clamp(-1.0, 1.0);
+        let phase = self.table.at(sin_o.abs().asin());
+        let along = t * sin_o;
+        let across = v - along;
+        let mut out = DVec3::ZERO;
+        for (c, value) in field.iter().enumerate() {
+            let q = along + phase.g[c] * across;
+            let phi = value.x.max(0.0);
+            let flux = DVec3::new(value.y, value.z, value.w);
+            let len = flux.length();
+            let flux = if 3.0 * len > phi {
+                flux * (phi / (3.0 * len))
+            } else {
+                flux
+            };
+            out[c] = phase.albedo[c] * (phi + 3.0 * flux.dot(q)).max(0.0) / (4.0 * PI);
+        }
+        out
+    }
+}
+
 /// Energy `A` and forward bias `g` per channel, as `volume_fibre_at`.
 #[derive(Clone, Copy, Debug)]
 struct Phase {
@@ -106,6 +177,7 @@ struct Phase {
 }
 
 /// `(a_f, a_b)` per channel at the table's `|θ|` texels, for one σ_a.
+#[derive(Clone, Debug)]
 struct EnergyTable {
     af: Vec<DVec3>,
     ab: Vec<DVec3>,

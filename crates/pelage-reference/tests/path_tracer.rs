@@ -7,7 +7,7 @@ use std::f64::consts::PI;
 use glam::{DVec3, DVec4, Vec3, Vec4};
 use pelage_reference::chiang::ChiangFibre;
 use pelage_reference::path_tracer::{
-    HairScene, MAX_SPP, PathTraceError, PathTracedImage, PathTracer, PathTracerSettings,
+    HairScene, MAX_SPP, PathTraceError, PathTracedImage, PathTracer, PathTracerSettings, Pcg32,
 };
 use pelage_reference::transmittance::{Segment, segments_from_strands};
 use pelage_scene::{Camera, DirectionalLight, Light, Mesh, PointLight};
@@ -994,4 +994,88 @@ fn closest_hit_skips_the_inside_and_the_own_strand_close_by() {
             .is_none()
     );
     assert!(!bvh.occluded(DVec3::new(0.2, 0.05, -1.0), DVec3::ZERO, 5.0, None));
+}
+
+#[test]
+fn the_light_at_a_fibre_is_the_sky_and_a_lit_plane() {
+    // One straight fibre along x seen from +z.
+    let segments = straight_strands(&[(0.0, 0.0)], 2.0, 4, 0.01);
+    let camera_ray = (DVec3::new(0.0, 0.0, 2.0), DVec3::new(0.0, 0.0, -1.0));
+    // Alone under a sky of radiance S: every direction sees the sky, φ = 4π S exactly,
+    // and the stratified directions leave almost no flux.
+    let sky = DVec3::new(0.2, 0.3, 0.4);
+    let tracer = PathTracer::new(&scene(&segments, ChiangFibre::default(), &[])).unwrap();
+    let settings = PathTracerSettings {
+        sky,
+        ..Default::default()
+    };
+    let mut rng = Pcg32::new(1, 0);
+    let s = tracer
+        .field_at(camera_ray.0, camera_ray.1, 256, &settings, &mut rng)
+        .unwrap()
+        .expect("the camera ray hits the fibre");
+    assert!((s.tangent.x.abs() - 1.0).abs() < 1e-9, "{:?}", s.tangent);
+    assert!((s.view - DVec3::Z).length() < 1e-9, "{:?}", s.view);
+    for c in 0..3 {
+        let want = 4.0 * PI * sky[c];
+        assert!(
+            (s.fluence[c] - want).abs() < 1e-9 * want,
+            "{} vs {want}",
+            s.fluence[c]
+        );
+        assert!(s.flux[c].length() < 0.05 * want, "{:?}", s.flux[c]);
+        assert!(
+            s.response[c] > 0.0 && s.response[c] < want,
+            "{:?}",
+            s.response
+        );
+    }
+    // Half a unit above a wide Lambertian plane (albedo ρ) lit head-on (irradiance E), no
+    // sky: the plane's radiance ρE/π fills the lower hemisphere, so φ = 2ρE and Φ = ρE
+    // upward, less the plane's edge (0.5 % of the hemisphere's φ beyond 89.4°) and the
+    // fibre's shadow on it (a strip 0.02 rad across: 0.6 %). The fibre's own direct
+    // light is not in the field.
+    let plane = [
+        Vec3::new(-50.0, -50.0, -0.5),
+        Vec3::new(50.0, -50.0, -0.5),
+        Vec3::new(50.0, 50.0, -0.5),
+        Vec3::new(-50.0, 50.0, -0.5),
+    ];
+    let lights = [directional(Vec3::Z, 3.0)];
+    let albedo = DVec3::new(0.8, 0.5, 0.2);
+    let tracer = PathTracer::new(&HairScene {
+        mesh_positions: &plane,
+        mesh_triangles: &[[0, 1, 2], [0, 2, 3]],
+        mesh_albedo: albedo,
+        ..scene(&segments, ChiangFibre::default(), &lights)
+    })
+    .unwrap();
+    let s = tracer
+        .field_at(
+            camera_ray.0,
+            camera_ray.1,
+            1024,
+            &PathTracerSettings::default(),
+            &mut rng,
+        )
+        .unwrap()
+        .expect("the camera ray hits the fibre");
+    for c in 0..3 {
+        let e = albedo[c] * 3.0;
+        let phi = s.fluence[c] / (2.0 * e);
+        assert!((phi - 0.985).abs() < 0.02, "channel {c}: φ / 2ρE = {phi}");
+        let up = s.flux[c].z / e;
+        assert!((up - 1.0).abs() < 0.03, "channel {c}: Φ_z / ρE = {up}");
+        let aside = s.flux[c].truncate().length() / e;
+        assert!(aside < 0.03, "channel {c}: |Φ_xy| / ρE = {aside}");
+    }
+    // A ray that misses has no fibre; no directions is an error.
+    let miss = tracer
+        .field_at(DVec3::new(0.0, 5.0, 2.0), DVec3::Z, 16, &settings, &mut rng)
+        .unwrap();
+    assert!(miss.is_none());
+    assert!(matches!(
+        tracer.field_at(camera_ray.0, camera_ray.1, 0, &settings, &mut rng),
+        Err(PathTraceError::Invalid { .. })
+    ));
 }

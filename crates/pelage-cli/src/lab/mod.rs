@@ -98,8 +98,10 @@ pub enum Lab {
                       by bounce order and says which orders each method carries.\n\n\
                       Writes DIR/scattering.csv (mean FLIP over the image and over the hair, the \
                       hair's luminance against the reference's and against orders 1..K, the shade \
-                      stage's wall clock, the noise floor), DIR/scattering.png|svg (FLIP against \
-                      time), DIR/scattering_sheet.png (path tracer | single | dual | FLIP) and the \
+                      stage's wall clock, the noise floor), DIR/scattering_field.csv (the volume \
+                      grid's light at the visible fibres and the fibres' reading of it against the \
+                      path tracer's), DIR/scattering_fibre_counts.csv, DIR/scattering.png|svg (FLIP \
+                      against time), DIR/scattering_sheet.png (path tracer | single | dual | FLIP) and the \
                       path-traced images (HDR and PNG) in DIR/scattering/. Most of an hour on 2 \
                       CPU cores at 64 spp; --quick: 64x64, fur and the curly groom, brown and \
                       blond, 16 spp (under 2 minutes)."

@@ -23,6 +23,11 @@
 //! `path_tracer_le_K` rows, and per method the columns `lum_vs_le_K` (the method's hair
 //! luminance over that of orders 1..K) and a printed line saying which orders it carries.
 //!
+//! **The light at the visible fibres**: camera rays followed to the first fibre they hit;
+//! there the volume grid's light (its CPU mirror) against the path tracer's
+//! ([`PathTracer::field_at`]), and the fibre's reading of each against the exact response
+//! (`DIR/scattering_field.csv` and a printed line per scene).
+//!
 //! Writes `DIR/scattering.csv` (mean FLIP over the image and over the hair pixels, the
 //! hair's luminance against the reference's, the shade stage's wall clock and the
 //! reference's noise floor), `DIR/scattering.png|svg` (FLIP over the hair against time),
@@ -31,7 +36,7 @@
 
 use std::time::Instant;
 
-use glam::{DVec3, Vec3};
+use glam::{DVec3, DVec4, Vec3, Vec4Swizzles};
 use image::RgbaImage;
 use pelage::gpu::Gpu;
 use pelage::gpu::read_buffer;
@@ -43,8 +48,14 @@ use pelage::scene::{
 use pelage::{Renderer, Scene};
 use pelage_lab::{ScatterChart, ScatterPoint, Table, contact_sheet};
 use pelage_reference::flip::{DEFAULT_PIXELS_PER_DEGREE, LinearImage, flip};
-use pelage_reference::path_tracer::{PathTracedImage, PathTracerSettings};
+use pelage_reference::path_tracer::{
+    FieldSample, PathTraceError, PathTracedImage, PathTracer, PathTracerSettings, Pcg32,
+};
 use pelage_reference::transmittance::SegmentBvh;
+use pelage_reference::volume::{
+    FibreResponse, VolumeGridCpu, VolumeInput, VolumeMesh, volume_grid,
+};
+use rayon::prelude::*;
 
 use super::LabOpts;
 use crate::path_trace::{TracedScene, hair_luminance, heat, masked_mean};
@@ -249,21 +260,16 @@ struct Traced {
     deep: PathTracedImage,
 }
 
-/// Path-traces the strands `renderer` drew for `scene`: twice (seeds 1 and 2) with 16
+/// Path-traces `scene` (the strands its renderer drew, in `tracer`): twice (seeds 1 and 2) with 16
 /// bounces, once per bounce cap of [`BOUNCE_CAPS`] and once with [`DEEP_BOUNCES`] (seed 1). The sky that lights the hair and the background camera rays see are both the
 /// variant's sky ([`SKY`], or 0 with `--no-sky`).
 fn path_trace(
     scene: &Scene,
-    renderer: &Renderer,
-    gpu: &Gpu,
+    tracer: &PathTracer,
     size: u32,
     spp: u32,
     variant: Variant,
 ) -> Result<Traced, Box<dyn std::error::Error>> {
-    if !matches!(scene.shade.model, ShadingModel::Chiang(_)) {
-        return Err("the scattering lab's scenes use the Chiang model".into());
-    }
-    let tracer = TracedScene::from_renderer(scene, renderer, gpu)?.tracer()?;
     let render = |seed, max_bounces| {
         tracer.render(
             &scene.camera,
@@ -562,6 +568,8 @@ pub fn run(
     counts.write_csv(&opts.out.join("scattering_fibre_counts.csv"))?;
     println!("fibre counts (dual scattering's n) against the path tracer's shadow rays:");
     print!("{counts_text}");
+    let mut fields = Table::new(&FieldStats::COLUMNS);
+    let mut field_text = String::new();
     let bar = progress::bar((grooms.len() * hair.len()) as u64, "scenes")?;
     for &groom in grooms {
         for &(name, eu, pheo) in hair {
@@ -578,7 +586,9 @@ pub fn run(
             }
             let (first_scene, renderer, gpu) = first.ok_or("no methods")?;
             let traced = Instant::now();
-            let t = path_trace(&first_scene, &renderer, &gpu, size, spp, variant)?;
+            let strands = TracedScene::from_renderer(&first_scene, &renderer, &gpu)?;
+            let tracer = strands.tracer()?;
+            let t = path_trace(&first_scene, &tracer, size, spp, variant)?;
             let reference_s = traced.elapsed().as_secs_f64() / (3 + BOUNCE_CAPS.len()) as f64;
             let [a, b] = &t.reference;
             let stem = format!("{groom}_{name}");
@@ -697,6 +707,13 @@ pub fn run(
                 ));
                 flips.push((*method, map));
             }
+            // The volume method's grid at the visible fibres against the path tracer's light
+            // there (the default volume row's parameters).
+            let (_, volume_method) = METHODS[METHODS.len() - 1];
+            let volume_scene = scene(groom, eu, pheo, quick, volume_method, variant)?;
+            let field = field_at_fibres(&volume_scene, &strands, &tracer, quick, variant)?;
+            fields.push(field.row(groom, name))?;
+            field_text.push_str(&format!("{groom:<9} {name:<6} {}\n", field.line()));
             let label = |what: &str| format!("{groom} {name}: {what}");
             cells.push((
                 label(&format!("path tracer {} spp", 2 * spp)),
@@ -713,6 +730,7 @@ pub fn run(
     }
     bar.finish_and_clear();
     table.write_csv(&opts.out.join("scattering.csv"))?;
+    fields.write_csv(&opts.out.join("scattering_field.csv"))?;
     let chart = ScatterChart {
         title: "Chiang fibres against the path tracer".into(),
         x_label: "shade stage wall clock (ms)".into(),
@@ -731,9 +749,243 @@ pub fn run(
     println!("where the light comes from (hair luminance over the reference's, by bounce order):");
     print!("{orders_text}");
     println!(
-        "wrote {}/scattering.csv, scattering.png|svg, scattering_sheet.png in {:.0} s",
+        "the volume grid's light at the visible fibres against the path tracer's (luminance \
+         sums over the fibres; the response is the radiance the fibre sends to the camera):"
+    );
+    print!("{field_text}");
+    println!(
+        "wrote {}/scattering.csv, scattering_field.csv, scattering.png|svg, scattering_sheet.png in {:.0} s",
         opts.out.display(),
         started.elapsed().as_secs_f64()
     );
     Ok(())
+}
+
+/// Pixels per side of the grid of camera rays [`field_at_fibres`] follows to the fibres
+/// (quick, full).
+const FIELD_PIXELS: (u32, u32) = (32, 48);
+
+/// Directions of the path tracer's light at each fibre (quick, full).
+const FIELD_DIRECTIONS: (u32, u32) = (512, 1024);
+
+/// The volume method's grid against the path tracer's light at the fibres the camera
+/// sees: where its error comes from, the grid's light or the fibre's reading of it.
+#[derive(Clone, Copy, Debug, Default)]
+struct FieldStats {
+    /// Fibres measured (camera rays whose first hit is hair).
+    fibres: usize,
+    /// Σ fluence of the grid over Σ the path tracer's (luminance).
+    fluence_ratio: f64,
+    /// Σ |Φ| over Σ φ (green), the path tracer's and the grid's: how directional the light is.
+    flux_share_reference: f64,
+    flux_share_grid: f64,
+    /// The cosine between the two flux vectors (luminance), weighted by the path tracer's
+    /// flux.
+    flux_cosine: f64,
+    /// Σ luminance of the exact response (orders >= 2 of the lights and all of the sky's
+    /// at those fibres), per fibre.
+    response: f64,
+    /// The shading's reading applied to the path tracer's light, over the exact response.
+    reading_ratio: f64,
+    /// The shading's reading of the grid (what pelage draws), over the exact response.
+    grid_ratio: f64,
+    /// The difference between two independent halves of the path tracer's directions, of
+    /// `fluence_ratio`, `reading_ratio` and `grid_ratio`: the reference's noise.
+    noise: [f64; 3],
+}
+
+impl FieldStats {
+    const COLUMNS: [&'static str; 13] = [
+        "groom",
+        "hair",
+        "fibres",
+        "fluence_grid_over_reference",
+        "flux_share_reference",
+        "flux_share_grid",
+        "flux_cosine",
+        "response_reference",
+        "reading_of_reference_over_reference",
+        "reading_of_grid_over_reference",
+        "noise_fluence",
+        "noise_reading",
+        "noise_grid",
+    ];
+
+    fn row(&self, groom: &str, hair: &str) -> Vec<String> {
+        vec![
+            groom.into(),
+            hair.into(),
+            self.fibres.to_string(),
+            format!("{:.3}", self.fluence_ratio),
+            format!("{:.3}", self.flux_share_reference),
+            format!("{:.3}", self.flux_share_grid),
+            format!("{:.3}", self.flux_cosine),
+            format!("{:.5}", self.response),
+            format!("{:.3}", self.reading_ratio),
+            format!("{:.3}", self.grid_ratio),
+            format!("{:.3}", self.noise[0]),
+            format!("{:.3}", self.noise[1]),
+            format!("{:.3}", self.noise[2]),
+        ]
+    }
+
+    fn line(&self) -> String {
+        format!(
+            "{} fibres: fluence x{:.2} (±{:.2}); |flux| / fluence {:.2} (path tracer {:.2}), \
+             cos {:.2}; response x{:.2} (±{:.2}) read from the path tracer's light, x{:.2} \
+             (±{:.2}) from the grid's",
+            self.fibres,
+            self.fluence_ratio,
+            self.noise[0],
+            self.flux_share_grid,
+            self.flux_share_reference,
+            self.flux_cosine,
+            self.reading_ratio,
+            self.noise[1],
+            self.grid_ratio,
+            self.noise[2]
+        )
+    }
+}
+
+/// Follows a grid of camera rays of `scene` (shaded by the volume method) to the fibres
+/// they hit first, and there compares the light of the volume grid (its CPU mirror,
+/// `pelage_reference::volume`, on the strands and posed mesh the renderer drew) with the
+/// path tracer's ([`PathTracer::field_at`]: the light that scattered at least once or comes
+/// from the sky, as the grid holds it), and the fibre's response to each as the shading
+/// reads it (`FibreResponse`) with the exact response.
+fn field_at_fibres(
+    scene: &Scene,
+    strands: &TracedScene,
+    tracer: &PathTracer,
+    quick: bool,
+    variant: Variant,
+) -> Result<FieldStats, Box<dyn std::error::Error>> {
+    let ShadingModel::Chiang(params) = &scene.shade.model else {
+        return Err("the scattering lab's scenes use the Chiang model".into());
+    };
+    let grid = volume_grid(&VolumeInput {
+        vertices: &strands.vertices,
+        segments: strands.segments_per_strand,
+        widths: &strands.widths,
+        colors: &strands.colors,
+        tip_width: strands.tip_width,
+        lights: &scene.lights,
+        ambient: scene.shade.ambient,
+        params,
+        mesh: (!strands.mesh_triangles.is_empty()).then(|| VolumeMesh {
+            positions: &strands.mesh_positions,
+            normals: &strands.mesh_normals,
+            indices: bytemuck::cast_slice(&strands.mesh_triangles),
+            color: scene.shade.mesh_color,
+        }),
+    });
+    // Every strand has the lab's one colour: one response.
+    let reading = FibreResponse::new(&strands.fibre);
+    let (k, directions) = if quick {
+        (FIELD_PIXELS.0, FIELD_DIRECTIONS.0)
+    } else {
+        (FIELD_PIXELS.1, FIELD_DIRECTIONS.1)
+    };
+    let settings = PathTracerSettings {
+        // The fibre is the path's first vertex.
+        max_bounces: REFERENCE_BOUNCES - 1,
+        sky: DVec3::splat(f64::from(variant.sky())),
+        ..Default::default()
+    };
+    let inv = scene.camera.view_projection(1.0).as_dmat4().inverse();
+    // Two independent estimates per fibre (seeds 3 and 4, half the directions each): their
+    // difference is the reference's own noise.
+    let samples: Vec<Option<[FieldSample; 2]>> = (0..k * k)
+        .into_par_iter()
+        .map(|i| {
+            let (x, y) = (i % k, i / k);
+            let nx = 2.0 * (f64::from(x) + 0.5) / f64::from(k) - 1.0;
+            let ny = 1.0 - 2.0 * (f64::from(y) + 0.5) / f64::from(k);
+            let near = inv * DVec4::new(nx, ny, 0.0, 1.0);
+            let far = inv * DVec4::new(nx, ny, 1.0, 1.0);
+            let near = near.truncate() / near.w;
+            let d = (far.truncate() / far.w - near).normalize_or_zero();
+            let mut a = Pcg32::new(3, u64::from(i));
+            let mut b = Pcg32::new(4, u64::from(i));
+            let half = (directions / 2).max(1);
+            Ok(
+                match (
+                    tracer.field_at(near, d, half, &settings, &mut a)?,
+                    tracer.field_at(near, d, half, &settings, &mut b)?,
+                ) {
+                    (Some(a), Some(b)) => Some([a, b]),
+                    _ => None,
+                },
+            )
+        })
+        .collect::<Result<_, PathTraceError>>()?;
+    let samples: Vec<[FieldSample; 2]> = samples.into_iter().flatten().collect();
+    let mean = |[a, b]: &[FieldSample; 2]| FieldSample {
+        fluence: 0.5 * (a.fluence + b.fluence),
+        flux: [0, 1, 2].map(|c| 0.5 * (a.flux[c] + b.flux[c])),
+        response: 0.5 * (a.response + b.response),
+        ..*a
+    };
+    let both: Vec<FieldSample> = samples.iter().map(mean).collect();
+    let first: Vec<FieldSample> = samples.iter().map(|s| s[0]).collect();
+    let second: Vec<FieldSample> = samples.iter().map(|s| s[1]).collect();
+    let mut stats = field_stats(&both, &grid, &reading);
+    let (a, b) = (
+        field_stats(&first, &grid, &reading),
+        field_stats(&second, &grid, &reading),
+    );
+    stats.noise = [
+        (a.fluence_ratio - b.fluence_ratio).abs(),
+        (a.reading_ratio - b.reading_ratio).abs(),
+        (a.grid_ratio - b.grid_ratio).abs(),
+    ];
+    Ok(stats)
+}
+
+/// [`FieldStats`] of the path tracer's `samples` against `grid` read by `reading`.
+fn field_stats(
+    samples: &[FieldSample],
+    grid: &VolumeGridCpu,
+    reading: &FibreResponse,
+) -> FieldStats {
+    let lum = |c: DVec3| c.dot(DVec3::new(0.2126, 0.7152, 0.0722));
+    let luma_flux = |f: [DVec3; 3]| 0.2126 * f[0] + 0.7152 * f[1] + 0.0722 * f[2];
+    let mut stats = FieldStats::default();
+    let (mut phi_ref, mut phi_grid) = (0.0, 0.0);
+    let (mut flux_ref, mut flux_grid, mut green_ref, mut green_grid) = (0.0, 0.0, 0.0, 0.0);
+    let (mut cos_sum, mut cos_weight) = (0.0, 0.0);
+    let (mut exact, mut of_reference, mut of_grid) = (0.0, 0.0, 0.0);
+    for sample in samples {
+        stats.fibres += 1;
+        let cell = grid.sample(sample.point);
+        let reference = [0, 1, 2].map(|c| {
+            let f = sample.flux[c];
+            DVec4::new(sample.fluence[c], f.x, f.y, f.z)
+        });
+        phi_ref += lum(sample.fluence);
+        phi_grid += lum(DVec3::new(cell[0].x, cell[1].x, cell[2].x));
+        green_ref += sample.fluence.y;
+        green_grid += cell[1].x;
+        flux_ref += sample.flux[1].length();
+        flux_grid += cell[1].yzw().length();
+        let a = luma_flux(sample.flux);
+        let b = luma_flux([cell[0].yzw(), cell[1].yzw(), cell[2].yzw()]);
+        if a.length() > 0.0 && b.length() > 0.0 {
+            cos_sum += a.normalize().dot(b.normalize()) * a.length();
+            cos_weight += a.length();
+        }
+        exact += lum(sample.response);
+        of_reference += lum(reading.radiance(sample.tangent, sample.view, &reference));
+        of_grid += lum(reading.radiance(sample.tangent, sample.view, &cell));
+    }
+    let ratio = |a: f64, b: f64| if b > 0.0 { a / b } else { f64::NAN };
+    stats.fluence_ratio = ratio(phi_grid, phi_ref);
+    stats.flux_share_reference = ratio(flux_ref, green_ref);
+    stats.flux_share_grid = ratio(flux_grid, green_grid);
+    stats.flux_cosine = ratio(cos_sum, cos_weight);
+    stats.response = ratio(exact, stats.fibres as f64);
+    stats.reading_ratio = ratio(of_reference, exact);
+    stats.grid_ratio = ratio(of_grid, exact);
+    stats
 }
