@@ -1099,6 +1099,29 @@ fn lab_dynamics_refuses_a_scene_without_dynamics() {
     assert!(!stderr.contains("adapter"), "{stderr}");
 }
 
+/// The scattering lab with every light and the sky switched off has nothing to measure:
+/// refused naming the options, before it opens an adapter.
+#[test]
+fn lab_scattering_refuses_an_unlit_scene() {
+    let dir = Scratch::new("unlit_lab");
+    let out = dir.0.to_string_lossy();
+    let stderr = fails(&[
+        "lab",
+        "scattering",
+        "--quick",
+        "--no-key-light",
+        "--no-back-light",
+        "--no-sky",
+        "--out",
+        &out,
+    ]);
+    assert!(
+        stderr.contains("--no-key-light") && stderr.contains("unlit"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("adapter"), "{stderr}");
+}
+
 /// Every negative number on the command line is a value: taken where it is valid
 /// (`--time -5`), refused naming the option and its range where it is not; never clap's
 /// "unexpected argument '-1' found".
@@ -1125,6 +1148,14 @@ fn negative_numbers_name_the_option() {
         (
             &["lab", "scattering", "--spp", "4294967295"],
             &["--spp", "1..=65536"],
+        ),
+        (
+            &["lab", "scattering", "--size", "-5"],
+            &["--size", "16..=1024"],
+        ),
+        (
+            &["lab", "scattering", "--size", "8"],
+            &["--size", "16..=1024"],
         ),
     ] {
         let stderr = exits_2(args, words);

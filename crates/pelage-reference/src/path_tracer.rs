@@ -719,12 +719,11 @@ impl PathTracer {
     /// The light arriving at the first fibre a camera ray from `o` along unit `d` hits (see
     /// [`FieldSample`]), from `directions` rays leaving the fibre, a Fibonacci lattice on the
     /// sphere turned at random (each ray uniform, jittered in `cos` of the polar angle about
-    /// the world's z); each ray's radiance is a path
-    /// of up to `settings.max_bounces` vertices (Russian roulette as in [`Self::render`])
-    /// seeing `settings.sky` when it escapes, its first vertex's light included (light
-    /// scattered once reaching the fibre) but not the lights' unscattered light, which pelage
-    /// shades apart. `None` when the ray hits nothing or the mesh first. Errors for bad
-    /// settings or `directions` 0.
+    /// the world's z). Each ray's radiance is a path of up to `settings.max_bounces`
+    /// vertices (Russian roulette as in [`Self::render`]) that sees `settings.sky` when it
+    /// escapes; its first vertex's light is included (light scattered once reaching the
+    /// fibre), the lights' unscattered light is not (pelage shades it apart). `None` when
+    /// the ray hits nothing or the mesh first. Errors for bad settings or `directions` 0.
     pub fn field_at(
         &self,
         o: DVec3,

@@ -173,6 +173,20 @@ pub struct ScatteringOpts {
     /// of issue 36's causes were measured so).
     #[arg(long)]
     pub no_back_light: bool,
+    /// Measure a cause apart: the back light and the sky only (the key light off in both
+    /// renderers). With --no-back-light and --no-sky too it is an error (nothing lit).
+    #[arg(long)]
+    pub no_key_light: bool,
+    /// Side of the square images in pixels, in 16..=1024 (default 256; 64 with --quick).
+    /// Strands are a fraction of a pixel wide at 64: the silhouettes' coverage then weighs
+    /// in the luminance (see docs/src/path-tracer.md).
+    #[arg(
+        long,
+        value_name = "N",
+        value_parser = clap::value_parser!(u32).range(16..=1024),
+        allow_hyphen_values = true
+    )]
+    pub size: Option<u32>,
 }
 
 impl Lab {
@@ -194,10 +208,12 @@ impl Lab {
             Lab::Scattering(opts) => scattering::run(
                 &opts.lab,
                 opts.spp,
+                opts.size,
                 scattering::Variant {
                     black_mesh: opts.black_mesh,
                     no_sky: opts.no_sky,
                     no_back_light: opts.no_back_light,
+                    no_key_light: opts.no_key_light,
                 },
             ),
             Lab::Dynamics(opts) => dynamics::run(&opts.lab, opts.scene.as_deref()),

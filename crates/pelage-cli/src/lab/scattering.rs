@@ -74,6 +74,8 @@ pub struct Variant {
     pub no_sky: bool,
     /// No back light: the key light and the sky only.
     pub no_back_light: bool,
+    /// No key light: the back light and the sky only.
+    pub no_key_light: bool,
 }
 
 impl Variant {
@@ -227,6 +229,9 @@ fn scene(
     ];
     if variant.no_back_light {
         scene.lights.truncate(1);
+    }
+    if variant.no_key_light {
+        scene.lights.remove(0);
     }
     Ok(scene)
 }
@@ -504,16 +509,25 @@ fn fibre_counts(
     Ok(text)
 }
 
-/// Runs the lab (see the module docs); `spp` overrides the path tracer's samples per pixel;
-/// `variant` takes the skin's bounce or the sky out of both renderers.
+/// Runs the lab (see the module docs); `spp` overrides the path tracer's samples per pixel,
+/// `size` the images' side; `variant` takes the skin's bounce, the sky or a light out of
+/// both renderers.
 pub fn run(
     opts: &LabOpts,
     spp: Option<u32>,
+    size: Option<u32>,
     variant: Variant,
 ) -> Result<(), Box<dyn std::error::Error>> {
+    if variant.no_key_light && variant.no_back_light && variant.no_sky {
+        return Err(
+            "--no-key-light with --no-back-light and --no-sky leaves the scenes \
+                    unlit: keep at least one of the key light, the back light or the sky"
+                .into(),
+        );
+    }
     let started = Instant::now();
     let quick = opts.quick;
-    let size = if quick { 64 } else { 256 };
+    let size = size.unwrap_or(if quick { 64 } else { 256 });
     let spp = spp.unwrap_or(if quick { 16 } else { 64 });
     let frames = if quick { 2 } else { 5 };
     let grooms: &[&str] = if quick {
