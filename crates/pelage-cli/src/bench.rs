@@ -742,6 +742,13 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
             }),
         ),
         (
+            "chiang dual scattering + volume",
+            ShadingModel::Chiang(ChiangParams {
+                multiple_scattering: MultipleScattering::DualVolume,
+                ..ChiangParams::default()
+            }),
+        ),
+        (
             "chiang volume scattering",
             ShadingModel::Chiang(ChiangParams {
                 multiple_scattering: MultipleScattering::Volume,
@@ -754,7 +761,7 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
         let gpu = Gpu::headless()?;
         let mut s = scene(seed_strands, 15);
         let grid_bytes = match &model {
-            ShadingModel::Chiang(p) if p.multiple_scattering == MultipleScattering::Volume => {
+            ShadingModel::Chiang(p) if p.multiple_scattering.uses_grid() => {
                 pelage::shade::VolumeGrid::bytes_for(p.volume_grid)
             }
             _ => 0,

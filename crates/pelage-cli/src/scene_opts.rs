@@ -190,9 +190,10 @@ pub struct SceneOpts {
     /// otherwise). Refused when the model is not chiang.
     #[arg(long, value_name = "on|off", conflicts_with = "multiple_scattering")]
     pub dual_scattering: Option<OnOff>,
-    /// Multiple scattering of the chiang model: none, dual, or volume (a radiance grid
-    /// over the hair). Default: the scene's (volume unless it says otherwise). Refused when
-    /// the model is not chiang.
+    /// Multiple scattering of the chiang model: none, dual, volume (a radiance grid over
+    /// the hair) or dual_volume (dual scattering for the lights, the grid for the sky and
+    /// the body's bounce). Default: the scene's (volume unless it says otherwise). Refused
+    /// when the model is not chiang.
     #[arg(long, value_name = "METHOD", value_parser = method::<MultipleScattering>())]
     pub multiple_scattering: Option<MultipleScattering>,
     /// Lights (the scene's by default: one key light).

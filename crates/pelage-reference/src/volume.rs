@@ -593,7 +593,13 @@ pub fn volume_grid(input: &VolumeInput<'_>) -> VolumeGridCpu {
             let theta = t.dot(l).abs().min(1.0).asin();
             let aligned = table.at(theta);
             let albedo = s * aligned.albedo + (1.0 - s) * iso[c].albedo;
-            let scattered = irradiance * (seen * meet_of(kappa, l).0) * albedo;
+            // `u.light_fibres`: 0 where dual scattering carries the lights' scattering.
+            let light_fibres = if p.multiple_scattering.grid_carries_lights() {
+                1.0
+            } else {
+                0.0
+            };
+            let scattered = irradiance * (seen * meet_of(kappa, l).0 * light_fibres) * albedo;
             for ch in 0..3 {
                 let dir = scatter_direction(-l, t, s, aligned.g[ch], iso[c].g[ch]);
                 let f = scattered[ch] * dir;

@@ -259,6 +259,12 @@ impl Named for MultipleScattering {
             summary: "a radiance grid over the hair (Moon 2008): orders >= 2 propagated cell to \
                       cell with Chiang's fibre energies and the body's bounce (16³ by default, 0.98 MB)",
         },
+        MethodName {
+            name: "dual_volume",
+            aliases: &[],
+            summary: "dual scattering for the lights, the radiance grid for the sky and the \
+                      body's bounce",
+        },
     ];
 
     fn row(&self) -> usize {
@@ -266,6 +272,7 @@ impl Named for MultipleScattering {
             Self::None => 0,
             Self::Dual => 1,
             Self::Volume => 2,
+            Self::DualVolume => 3,
         }
     }
 
@@ -274,6 +281,7 @@ impl Named for MultipleScattering {
             0 => Self::None,
             1 => Self::Dual,
             2 => Self::Volume,
+            3 => Self::DualVolume,
             _ => return None,
         })
     }

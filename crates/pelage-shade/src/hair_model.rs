@@ -96,14 +96,15 @@ impl HairModel {
                 let mut encoder = gpu.device.create_command_encoder(&Default::default());
                 tables.encode(&mut encoder);
                 gpu.submit_and_wait([encoder.finish()])?;
-                // chiang.wgsl: the model uniform, then the two tables; with the volume
-                // method, the grid's uniform and fluence (chiang_volume_model.wgsl).
+                // chiang.wgsl: the model uniform, then the two tables; with a method
+                // that reads the grid, its uniform and fluence
+                // (chiang_volume_common_model.wgsl).
                 let mut resources = vec![
                     BoundResource::Uniform(tables.model_buffer().clone()),
                     BoundResource::Storage(tables.n_buffer().clone()),
                     BoundResource::Storage(tables.dual_buffer().clone()),
                 ];
-                if p.multiple_scattering == MultipleScattering::Volume {
+                if p.multiple_scattering.uses_grid() {
                     let field = VolumeField::new(gpu, p)?;
                     resources.push(BoundResource::Uniform(field.uniform_buffer().clone()));
                     resources.push(BoundResource::Storage(field.fluence_buffer().clone()));
@@ -286,6 +287,9 @@ fn model_module(model: &ShadingModel) -> &'static str {
         ShadingModel::Sadeghi(_) => "shade/models/sadeghi_model.wgsl",
         ShadingModel::Chiang(p) if p.multiple_scattering == MultipleScattering::Volume => {
             "shade/models/chiang_volume_model.wgsl"
+        }
+        ShadingModel::Chiang(p) if p.multiple_scattering == MultipleScattering::DualVolume => {
+            "shade/models/chiang_dual_volume_model.wgsl"
         }
         ShadingModel::Chiang(p) if p.multiple_scattering == MultipleScattering::Dual => {
             "shade/models/chiang_dual_model.wgsl"

@@ -51,8 +51,9 @@ pub struct VolumeUniforms {
     pub min_cell: f32,
     /// Triangles of the mesh under the hair (0: none).
     pub triangle_count: u32,
-    /// Padding.
-    pub _pad1: u32,
+    /// 1 when the grid carries the light the fibres scatter of the lights (`volume`), 0
+    /// when dual scattering carries it (`dual_volume`): the injection's weight.
+    pub light_fibres: f32,
     /// The mesh's Lambertian albedo per channel (π times `shade.mesh_color`, at most 1).
     pub mesh_albedo: glam::Vec3,
     /// Padding.
@@ -131,7 +132,11 @@ impl VolumeField {
             inv_fixed_scale: 1.0 / VOLUME_FIXED_SCALE,
             min_cell: 1e-6,
             triangle_count: 0,
-            _pad1: 0,
+            light_fibres: if params.multiple_scattering.grid_carries_lights() {
+                1.0
+            } else {
+                0.0
+            },
             mesh_albedo: glam::Vec3::ZERO,
             _pad2: 0.0,
         };

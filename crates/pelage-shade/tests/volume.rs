@@ -438,6 +438,61 @@ fn volume_grid_with_mesh_matches_cpu_mirror() {
     assert!(max < 2e-3, "max {max}");
 }
 
+/// `dual_volume`: the grid without the fibres' scattering of the lights (dual scattering
+/// carries it) matches the mirror, and lit by the lights alone over a black body it holds
+/// no light at all, where `volume`'s grid does.
+#[test]
+fn dual_volume_grid_leaves_the_lights_to_dual_scattering() {
+    let gpu = gpu();
+    let hair = wavy(300, 12, 1.0, 0.004);
+    let lights = lights();
+    let body = Body {
+        mesh: Mesh::icosphere(0.3, 2).unwrap(),
+        color: Vec3::new(0.25, 0.16, 0.11),
+    };
+    let params = ChiangParams {
+        multiple_scattering: MultipleScattering::DualVolume,
+        ..volume_params(16, 8, Vec3::new(0.12, 0.2, 0.4))
+    };
+    let (fluence, _) = run_gpu(
+        &gpu,
+        &hair,
+        hair.strands(),
+        &params,
+        &lights,
+        AMBIENT,
+        Some(&body),
+    );
+    let cpu = mirror(&hair, &params, &lights, AMBIENT, 0.5, Some(&body));
+    let (median, p99, max) = compare(&fluence, &cpu);
+    println!(
+        "dual_volume: GPU - mirror over the largest fluence: median {median:.2e}, p99 {p99:.2e}, max {max:.2e}"
+    );
+    assert!(max < 2e-3, "max {max}");
+    // The lights alone over a black body: nothing for the grid with dual_volume.
+    let black = Body {
+        color: Vec3::ZERO,
+        ..body
+    };
+    let total = |p: &ChiangParams| -> f64 {
+        let (fluence, _) = run_gpu(&gpu, &hair, hair.strands(), p, &lights, 0.0, Some(&black));
+        fluence[4..]
+            .chunks_exact(4)
+            .map(|c| f64::from(c[0].abs()))
+            .sum()
+    };
+    let with_grid = total(&volume_params(16, 8, Vec3::new(0.12, 0.2, 0.4)));
+    let without = total(&params);
+    println!(
+        "lights alone, black body: fluence summed {with_grid:.3e} (volume), {without:.3e} (dual_volume)"
+    );
+    assert!(
+        with_grid > 0.0,
+        "volume's grid holds the lights' scattering"
+    );
+    assert!(without <= 1e-6 * with_grid, "{without} vs {with_grid}");
+}
+
 /// The sky alone (no lights) over hair around a body: the GPU's injection of the sky
 /// (its unscattered fluence through the grid's hair and body, and what the fibres and the
 /// body scatter of it, propagated) is the mirror's.

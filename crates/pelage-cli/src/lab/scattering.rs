@@ -14,7 +14,7 @@
 //! two path-traced images with different seeds (16 bounces); their own difference (FLIP of
 //! one seed against the other) is the noise floor each row reports. pelage renders the
 //! same scene with the k-buffer (k = 8) and the voxel shadow, once per row of [`METHODS`]
-//! (the Chiang model with multiple scattering none, dual and volume).
+//! (the Chiang model with multiple scattering none, dual, volume and dual_volume).
 //!
 //! **Where the light comes from**: more path-traced images of seed 1 cap the bounces at 1,
 //! 2, 4 and 8, and one at 64 shows how much 16 truncates (the same paths stopped earlier or
@@ -101,7 +101,7 @@ type Method = (&'static str, fn(&mut ChiangParams));
 
 /// The pelage variants measured against the path tracer: name, and how the variant sets
 /// up the scene's Chiang parameters. A new multiple-scattering method adds a row.
-const METHODS: [Method; 5] = [
+const METHODS: [Method; 6] = [
     ("single", |p| {
         p.multiple_scattering = MultipleScattering::None
     }),
@@ -117,6 +117,10 @@ const METHODS: [Method; 5] = [
     ("volume_s64", |p| {
         p.multiple_scattering = MultipleScattering::Volume;
         p.volume_iterations = 64;
+    }),
+    // Dual scattering for the lights, the grid for the sky and the body's bounce.
+    ("dual_volume", |p| {
+        p.multiple_scattering = MultipleScattering::DualVolume
     }),
     // The defaults last: the sheet shows its FLIP.
     ("volume", |p| {

@@ -31,7 +31,8 @@
 // crossing of a fibre counts, as in the path tracer), sampled at most half a cell apart;
 // its tangent (sign chosen so the largest component is positive) and its colour weighted
 // by that depth. Fixed point, u32 atomics only (saturating; the tangent as wrapping i32).
-// Inject: per cell and light, the light reaching the cell unscattered, exp(-tau) with tau
+// Inject (the fibres' part weighted by u.light_fibres: 0 when dual scattering carries
+// the lights' scattering, `dual_volume`): per cell and light, the light reaching the cell unscattered, exp(-tau) with tau
 // the optical depth from the cell's face toward the light (the cells crossed, each for
 // the length of the ray in it: volume_clear_toward), times the share that meets the
 // cell's fibres over its projected area (volume_meet), scattered once: E = irradiance
@@ -438,7 +439,7 @@ fn inject(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups
             let theta = fibre_angle(abs(dot(t, l)), min(cos_i, 1.0));
             let aligned = volume_fibre_at(theta, x);
             let albedo = s * aligned.albedo + (1.0 - s) * iso.albedo;
-            let scattered = irradiance * (seen * volume_meet(kappa, l).x) * albedo;
+            let scattered = irradiance * (seen * volume_meet(kappa, l).x * u.light_fibres) * albedo;
             let travel = mat3x3<f32>(-l * scattered.x, -l * scattered.y, -l * scattered.z);
             e += scattered;
             f += volume_scatter_flux(travel, t, s, aligned.g, iso.g);

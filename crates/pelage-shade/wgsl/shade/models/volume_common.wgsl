@@ -46,7 +46,9 @@ struct VolumeUniforms {
     min_cell: f32,
     // Triangles of the mesh (the body under the hair), 0 for none.
     triangle_count: u32,
-    _pad1: u32,
+    // The injection's weight of the light the fibres scatter of the lights: 1 (`volume`),
+    // or 0 where dual scattering carries it (`dual_volume`).
+    light_fibres: f32,
     // The mesh's Lambertian albedo per channel (pi times shade.mesh_color, as the path
     // tracer's, at most 1: a brighter body would make light every propagation step).
     mesh_albedo: vec3<f32>,
