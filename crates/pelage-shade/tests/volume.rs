@@ -409,32 +409,44 @@ fn volume_bad_sizes_are_refused() {
     );
 }
 
+/// A body under the hair: an icosphere of radius 0.3 inside the hanging strands, skin
+/// coloured.
+fn skin_body() -> Body {
+    Body {
+        mesh: Mesh::icosphere(0.3, 2).unwrap(),
+        color: Vec3::new(0.25, 0.16, 0.11),
+    }
+}
+
+/// The GPU's grid of `params` over `wavy(300, 12, 1.0, 0.004)` around `body`, lit by
+/// [`lights`] and the sky, against the mirror's: prints the differences (labelled `what`)
+/// over the largest fluence and returns the largest.
+fn body_against_mirror(gpu: &Gpu, params: &ChiangParams, body: &Body, what: &str) -> f64 {
+    let hair = wavy(300, 12, 1.0, 0.004);
+    let lights = lights();
+    let (fluence, _) = run_gpu(
+        gpu,
+        &hair,
+        hair.strands(),
+        params,
+        &lights,
+        AMBIENT,
+        Some(body),
+    );
+    let cpu = mirror(&hair, params, &lights, AMBIENT, 0.5, Some(body));
+    let (median, p99, max) = compare(&fluence, &cpu);
+    println!(
+        "{what}: GPU - mirror over the largest fluence: median {median:.2e}, p99 {p99:.2e}, max {max:.2e}"
+    );
+    max
+}
+
 /// A body under the hair (an icosphere of radius 0.3 inside the hanging strands): the
 /// GPU's mesh splat, occupancy, shadowing and Lambertian bounce are the mirror's.
 #[test]
 fn volume_grid_with_mesh_matches_cpu_mirror() {
-    let gpu = gpu();
-    let hair = wavy(300, 12, 1.0, 0.004);
-    let lights = lights();
-    let body = Body {
-        mesh: Mesh::icosphere(0.3, 2).unwrap(),
-        color: Vec3::new(0.25, 0.16, 0.11),
-    };
     let params = volume_params(16, 8, Vec3::new(0.12, 0.2, 0.4));
-    let (fluence, _) = run_gpu(
-        &gpu,
-        &hair,
-        hair.strands(),
-        &params,
-        &lights,
-        AMBIENT,
-        Some(&body),
-    );
-    let cpu = mirror(&hair, &params, &lights, AMBIENT, 0.5, Some(&body));
-    let (median, p99, max) = compare(&fluence, &cpu);
-    println!(
-        "with a body: GPU - mirror over the largest fluence: median {median:.2e}, p99 {p99:.2e}, max {max:.2e}"
-    );
+    let max = body_against_mirror(&gpu(), &params, &skin_body(), "with a body");
     assert!(max < 2e-3, "max {max}");
 }
 
@@ -444,35 +456,18 @@ fn volume_grid_with_mesh_matches_cpu_mirror() {
 #[test]
 fn dual_volume_grid_leaves_the_lights_to_dual_scattering() {
     let gpu = gpu();
-    let hair = wavy(300, 12, 1.0, 0.004);
-    let lights = lights();
-    let body = Body {
-        mesh: Mesh::icosphere(0.3, 2).unwrap(),
-        color: Vec3::new(0.25, 0.16, 0.11),
-    };
     let params = ChiangParams {
         multiple_scattering: MultipleScattering::DualVolume,
         ..volume_params(16, 8, Vec3::new(0.12, 0.2, 0.4))
     };
-    let (fluence, _) = run_gpu(
-        &gpu,
-        &hair,
-        hair.strands(),
-        &params,
-        &lights,
-        AMBIENT,
-        Some(&body),
-    );
-    let cpu = mirror(&hair, &params, &lights, AMBIENT, 0.5, Some(&body));
-    let (median, p99, max) = compare(&fluence, &cpu);
-    println!(
-        "dual_volume: GPU - mirror over the largest fluence: median {median:.2e}, p99 {p99:.2e}, max {max:.2e}"
-    );
+    let max = body_against_mirror(&gpu, &params, &skin_body(), "dual_volume");
     assert!(max < 2e-3, "max {max}");
+    let hair = wavy(300, 12, 1.0, 0.004);
+    let lights = lights();
     // The lights alone over a black body: nothing for the grid with dual_volume.
     let black = Body {
         color: Vec3::ZERO,
-        ..body
+        ..skin_body()
     };
     let total = |p: &ChiangParams| -> f64 {
         let (fluence, _) = run_gpu(&gpu, &hair, hair.strands(), p, &lights, 0.0, Some(&black));

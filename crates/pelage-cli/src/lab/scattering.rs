@@ -235,7 +235,11 @@ fn scene(
         scene.lights.truncate(1);
     }
     if variant.no_key_light {
-        scene.lights.remove(0);
+        // Off rather than removed: a frame needs a light (the sky alone, with
+        // --no-back-light too, keeps one of no intensity).
+        if let Some(Light::Directional(key)) = scene.lights.first_mut() {
+            key.intensity = 0.0;
+        }
     }
     Ok(scene)
 }
@@ -269,9 +273,10 @@ struct Traced {
     deep: PathTracedImage,
 }
 
-/// Path-traces `scene` (the strands its renderer drew, in `tracer`): twice (seeds 1 and 2) with 16
-/// bounces, once per bounce cap of [`BOUNCE_CAPS`] and once with [`DEEP_BOUNCES`] (seed 1). The sky that lights the hair and the background camera rays see are both the
-/// variant's sky ([`SKY`], or 0 with `--no-sky`).
+/// Path-traces `scene` (the strands its renderer drew, in `tracer`): twice (seeds 1 and 2)
+/// with 16 bounces, once per bounce cap of [`BOUNCE_CAPS`] and once with
+/// [`DEEP_BOUNCES`] (seed 1). The sky that lights the hair and the background camera rays
+/// see are both the variant's sky ([`SKY`], or 0 with `--no-sky`).
 fn path_trace(
     scene: &Scene,
     tracer: &PathTracer,
