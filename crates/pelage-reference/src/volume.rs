@@ -100,7 +100,7 @@ pub struct VolumeGridCpu {
 
 impl VolumeGridCpu {
     /// The fluence and flux of the three channels at `p`, as the shading reads them
-    /// (`volume_sample` in `chiang_volume_model.wgsl`): trilinear between cell centres,
+    /// (`volume_sample` in `chiang_volume_common_model.wgsl`): trilinear between cell centres,
     /// clamped at the grid's border.
     pub fn sample(&self, p: DVec3) -> [DVec4; 3] {
         let n = i64::from(self.resolution.max(1));
@@ -128,7 +128,7 @@ impl VolumeGridCpu {
 }
 
 /// The volume method's reading of its grid at a fibre (`hair_scattered` in
-/// `chiang_volume_model.wgsl`), with the fibre's energies integrated here
+/// `chiang_volume_common_model.wgsl`), with the fibre's energies integrated here
 /// ([`ChiangFibre::lobe_energies`] at the table's texels): the radiance toward `v` is
 /// `A(θ_v) / (4π) (φ + 3 Φ' · q)` per channel, `q = t (t·v) + g(θ_v) (v − t (t·v))`, `Φ'`
 /// the flux shortened to at most `φ / 3`.

@@ -1,6 +1,7 @@
 //! The volume method of multiple scattering (after Moon, Walter and Marschner 2008): a
 //! radiance grid over the hair, filled every frame by the compute passes of
-//! `wgsl/shade/volume.wgsl` and read by `wgsl/shade/models/chiang_volume_model.wgsl`.
+//! `wgsl/shade/volume.wgsl` and read by `wgsl/shade/models/chiang_volume_common_model.wgsl`
+//! (the `volume` and `dual_volume` models).
 //! The grid, the phase function and the approximations are described in
 //! `wgsl/shade/models/volume_common.wgsl`; the CPU mirror is `pelage_reference::volume`.
 //!
