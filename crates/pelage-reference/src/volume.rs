@@ -525,6 +525,12 @@ pub fn volume_grid(input: &VolumeInput<'_>) -> VolumeGridCpu {
         (-l1 * (-kappa / l1).exp_m1(), escape(kappa / l1).0)
     };
     let ambient = f64::from(input.ambient);
+    // `u.light_fibres`: 0 where dual scattering carries the lights' scattering.
+    let light_fibres = if p.multiple_scattering.grid_carries_lights() {
+        1.0
+    } else {
+        0.0
+    };
     for c in 0..cells {
         let kappa = depth[c];
         let lit_mesh = surface[c].length();
@@ -567,8 +573,10 @@ pub fn volume_grid(input: &VolumeInput<'_>) -> VolumeGridCpu {
                 }
             }
         }
-        sky_fluence[c] = sky;
-        if kappa <= 0.0 && lit_mesh <= 0.0 {
+        // The fluence is the mean over the whole cell (`settle` divides by the clear
+        // share): the sky's light is only in the clear share.
+        sky_fluence[c] = sky * (1.0 - solid[c]);
+        if (kappa <= 0.0 || light_fibres == 0.0) && lit_mesh <= 0.0 {
             continue;
         }
         for light in input.lights.iter().take(pelage_scene::MAX_LIGHTS) {
@@ -593,12 +601,6 @@ pub fn volume_grid(input: &VolumeInput<'_>) -> VolumeGridCpu {
             let theta = t.dot(l).abs().min(1.0).asin();
             let aligned = table.at(theta);
             let albedo = s * aligned.albedo + (1.0 - s) * iso[c].albedo;
-            // `u.light_fibres`: 0 where dual scattering carries the lights' scattering.
-            let light_fibres = if p.multiple_scattering.grid_carries_lights() {
-                1.0
-            } else {
-                0.0
-            };
             let scattered = irradiance * (seen * meet_of(kappa, l).0 * light_fibres) * albedo;
             for ch in 0..3 {
                 let dir = scatter_direction(-l, t, s, aligned.g[ch], iso[c].g[ch]);

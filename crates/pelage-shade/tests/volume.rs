@@ -618,6 +618,83 @@ fn volume_mesh_occupancy_is_the_sphere() {
     assert!((volume / sphere - 1.0).abs() < 0.05, "{}", volume / sphere);
 }
 
+/// The sky beside a black body: in a cell the body partly fills, the hair (all in the
+/// cell's clear part) sees the sky the body leaves it. The GPU's fluence in cells at
+/// most half solid against the sky a point at distance r from the centre of a sphere of
+/// radius R sees, 1 - (1 - sqrt(1 - R²/r²)) / 2 of it, averaged over the cell's points
+/// outside the sphere (a reference that knows the sphere, not the grid's cells), with
+/// hair too thin to hide anything. (The sky's fluence was once not weighed by the clear
+/// share before `settle` divided by it: such cells read up to twice the sky.)
+#[test]
+fn volume_sky_beside_a_body_is_what_the_body_leaves() {
+    let gpu = gpu();
+    let radius = 0.3f64;
+    let body = Body {
+        mesh: Mesh::icosphere(radius as f32, 3).unwrap(),
+        color: Vec3::ZERO,
+    };
+    let hair = wavy(300, 12, 1.0, 1e-5);
+    let params = volume_params(16, 12, Vec3::ONE);
+    let (fluence, _) = run_gpu(
+        &gpu,
+        &hair,
+        hair.strands(),
+        &params,
+        &dark(),
+        AMBIENT,
+        Some(&body),
+    );
+    // The mirror's grid: the cells' solid shares and places (the GPU's, within 2e-3).
+    let cpu = mirror(&hair, &params, &dark(), AMBIENT, 0.5, Some(&body));
+    let sky = 4.0 * f64::from(AMBIENT);
+    let n = cpu.resolution as usize;
+    let k = 6;
+    let mut ratios = Vec::new();
+    for (i, &solid) in cpu.solid.iter().enumerate() {
+        if !(0.05..0.5).contains(&solid) {
+            continue;
+        }
+        let c = glam::DVec3::new((i % n) as f64, ((i / n) % n) as f64, (i / (n * n)) as f64);
+        let (mut seen, mut points) = (0.0, 0);
+        for s in 0..k * k * k {
+            let f = glam::DVec3::new((s % k) as f64, ((s / k) % k) as f64, (s / (k * k)) as f64);
+            let p = cpu.origin + (c + (f + 0.5) / k as f64) * cpu.cell;
+            let r = p.length();
+            if r > radius {
+                seen += 1.0 - 0.5 * (1.0 - (1.0 - (radius / r).powi(2)).sqrt());
+                points += 1;
+            }
+        }
+        if points == 0 {
+            continue;
+        }
+        let got = f64::from(fluence[4 * (1 + 3 * i)]) / sky;
+        ratios.push(got / (seen / f64::from(points)));
+    }
+    ratios.sort_by(f64::total_cmp);
+    let mean = ratios.iter().sum::<f64>() / ratios.len() as f64;
+    println!(
+        "the sky beside a black sphere, {} cells 5% to 50% solid: the grid over the sphere's \
+         own: least {:.3}, median {:.3}, mean {mean:.3}, most {:.3}",
+        ratios.len(),
+        ratios[0],
+        ratios[ratios.len() / 2],
+        ratios[ratios.len() - 1]
+    );
+    // Measured: 115 cells, 0.688 to 0.947, mean 0.825: the grid's blocky body (the march
+    // from the cell's centre, near the surface, crosses other partly solid cells at
+    // grazing directions) hides a sixth too much. Before the clear share, a cell half
+    // solid read twice its sky: the bound above 1 catches that.
+    assert!(ratios.len() > 50, "{} cells", ratios.len());
+    assert!((0.75..0.92).contains(&mean), "mean {mean}");
+    assert!(
+        ratios[0] > 0.6 && ratios[ratios.len() - 1] < 1.05,
+        "{} to {}",
+        ratios[0],
+        ratios[ratios.len() - 1]
+    );
+}
+
 /// A white body (albedo 1) under white fibres neither gains nor loses energy in a step,
 /// and a black one only absorbs: the grid holds less light than with no body.
 #[test]

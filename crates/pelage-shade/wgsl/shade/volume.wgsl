@@ -31,17 +31,19 @@
 // crossing of a fibre counts, as in the path tracer), sampled at most half a cell apart;
 // its tangent (sign chosen so the largest component is positive) and its colour weighted
 // by that depth. Fixed point, u32 atomics only (saturating; the tangent as wrapping i32).
-// Inject (the fibres' part weighted by u.light_fibres: 0 when dual scattering carries
-// the lights' scattering, `dual_volume`): per cell and light, the light reaching the cell unscattered, exp(-tau) with tau
-// the optical depth from the cell's face toward the light (the cells crossed, each for
-// the length of the ray in it: volume_clear_toward), times the share that meets the
+// Inject: per cell and light, the light reaching the cell unscattered, exp(-tau) with
+// tau the optical depth from the cell's face toward the light (the cells crossed, each
+// for the length of the ray in it: volume_clear_toward), times the share that meets the
 // cell's fibres over its projected area (volume_meet), scattered once: E = irradiance
-// exp(-tau) meet A(theta_l), its flux E times the scattered mean direction. The sky
-// (radiance frame.ambient / pi from every direction, the path tracer's `sky`) likewise,
-// as VOLUME_SKY_DIRECTIONS directional lights marched to the grid's border; the sky's
-// unscattered light (fluence and flux, times the cell's own mean transmittance along each
-// direction) is added to the cell's fluence: the hair reads its single scattering of the
-// sky from the grid (orders: lights 1 explicit, >= 2 grid; sky all grid).
+// exp(-tau) meet A(theta_l), its flux E times the scattered mean direction; weighted by
+// u.light_fibres (0 when dual scattering carries the lights' scattering, `dual_volume`).
+// The sky (radiance frame.ambient / pi from every direction, the path tracer's `sky`)
+// likewise, as VOLUME_SKY_DIRECTIONS directional lights marched to the grid's border;
+// the sky's unscattered light (fluence and flux, times the cell's own mean transmittance
+// along each direction and its clear share) is added to the cell's fluence: the hair
+// reads its single scattering of the sky from the grid (orders: lights 1 explicit, >= 2
+// grid; sky all grid). The mesh pass reads the grid too, for the body's sky
+// (shade/body_sky_volume.wgsl).
 // The mesh (the body under the hair, a Lambertian of albedo pi mesh_color, as the path
 // tracer's): `splat_mesh` adds its area-weighted outward normal to the cells, `occupy`
 // derives the share of each cell inside it; the march toward a light is stopped by the
@@ -423,7 +425,8 @@ fn inject(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups
     var f = mat3x3<f32>(vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0));
     // The body's reflection leaves along 2/3 of its normal.
     let lambert = select(vec3<f32>(0.0), (2.0 / 3.0) * surface / lit_mesh, lit_mesh > 0.0);
-    if kappa > 0.0 || lit_mesh > 0.0 {
+    // The march toward each light serves the fibres' part and the body's reflection.
+    if (kappa > 0.0 && u.light_fibres > 0.0) || lit_mesh > 0.0 {
         for (var li = 0u; li < min(frame.light_count, MAX_LIGHTS); li += 1u) {
             let light = frame.lights[li];
             let l = frame_to_light(light, p);
@@ -435,14 +438,17 @@ fn inject(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups
                 reach = min(reach, length(light.position.xyz - p));
             }
             let seen = volume_clear_toward(c, p, l, origin, cell, reach);
-            let cos_i = length(cross(t, l));
-            let theta = fibre_angle(abs(dot(t, l)), min(cos_i, 1.0));
-            let aligned = volume_fibre_at(theta, x);
-            let albedo = s * aligned.albedo + (1.0 - s) * iso.albedo;
-            let scattered = irradiance * (seen * volume_meet(kappa, l).x * u.light_fibres) * albedo;
-            let travel = mat3x3<f32>(-l * scattered.x, -l * scattered.y, -l * scattered.z);
-            e += scattered;
-            f += volume_scatter_flux(travel, t, s, aligned.g, iso.g);
+            // A uniform branch: `dual_volume` leaves the fibres' part to dual scattering.
+            if u.light_fibres > 0.0 {
+                let cos_i = length(cross(t, l));
+                let theta = fibre_angle(abs(dot(t, l)), min(cos_i, 1.0));
+                let aligned = volume_fibre_at(theta, x);
+                let albedo = s * aligned.albedo + (1.0 - s) * iso.albedo;
+                let scattered = irradiance * (seen * volume_meet(kappa, l).x * u.light_fibres) * albedo;
+                let travel = mat3x3<f32>(-l * scattered.x, -l * scattered.y, -l * scattered.z);
+                e += scattered;
+                f += volume_scatter_flux(travel, t, s, aligned.g, iso.g);
+            }
             if lit_mesh > 0.0 {
                 // The mesh's lit area in the cell, under the cell's own fibres, reflected
                 // as a Lambertian (mean direction 2/3 of its normal).
@@ -483,6 +489,9 @@ fn inject(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups
             f += mat3x3<f32>(lambert * bounce.x, lambert * bounce.y, lambert * bounce.z);
         }
     }
+    // The fluence is the mean over the whole cell (`settle` divides by the clear share):
+    // the sky's light is only in the clear share.
+    sky *= 1.0 - medium[3u * i + 2u].w;
     let born = volume_born(e, f, kappa, iso.albedo);
     let none = vec3<f32>(0.0);
     write_state(i, born.e, born.f, 0.0, VolumeDirections(none, none, none, none, none, none));
