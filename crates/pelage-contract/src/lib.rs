@@ -13,9 +13,10 @@
 //!   with it and refuses another ([`FrameOrderError`], [`PreparedFrame`]).
 //! - [`Visibility`] ([`VISIBILITY`]): each light's visibility at every strand vertex,
 //!   which stage 2 writes and the shading stage reads.
-//! - The shadow contract, `wgsl/shadow/none.wgsl`: `light_visibility(p)`, which every
-//!   shading pass imports and every shadow method implements in its own file (the
-//!   shading pass redirects the import, [`pelage_gpu::ShaderBinding`]).
+//! - The shadow contract, `wgsl/shadow/none.wgsl`: `light_visibility(p)` at a fibre and
+//!   `surface_visibility(p)` on the body, which every shading pass imports and every
+//!   shadow method implements in its own file (the shading pass redirects the import,
+//!   [`pelage_gpu::ShaderBinding`]).
 //! - `wgsl/shared/ribbon.wgsl`: which strand vertex, and which side of it, each vertex
 //!   of a ribbon draw stands for (the camera's passes and the light's).
 //!

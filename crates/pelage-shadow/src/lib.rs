@@ -4,8 +4,8 @@
 //! [`StrandFrame`], records its passes into the caller's encoder with `encode` for the
 //! same frame (no readback), and hands the
 //! shading stage a [`ShaderBinding`] implementing the shadow contract
-//! (pelage-contract's `wgsl/shadow/none.wgsl`: `light_visibility(p)`), so the shading pass never
-//! knows which method it got. The mesh casts its own shadow through a
+//! (pelage-contract's `wgsl/shadow/none.wgsl`: `light_visibility(p)` and
+//! `surface_visibility(p)`), so the shading pass never knows which method it got. The mesh casts its own shadow through a
 //! [`MeshShadowMap`] with PCF in every method.
 //!
 //! - [`VoxelShadow`] (seed 001, corrected): a light-space grid fitted to the hair
@@ -74,7 +74,8 @@ pub const SHADOW_MESH_MAP: &str = "shadow.mesh_map";
 /// ([`LightVisibility`]) writes and the hair pass reads (the contract's name).
 pub use pelage_contract::VISIBILITY;
 
-/// The WGSL file every shading pass imports for `light_visibility(p)`; a method's
+/// The WGSL file every shading pass imports for `light_visibility(p)` (and the mesh pass
+/// for `surface_visibility(p)`); a method's
 /// [`ShaderBinding`] redirects it to the method's lookup. It is one of
 /// [`pelage_contract::SHADERS`], so the shading stage finds it without this crate.
 pub use pelage_contract::SHADOW_CONTRACT as CONTRACT;

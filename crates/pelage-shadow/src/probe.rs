@@ -1,4 +1,5 @@
-//! Measuring a shadow method: its `light_visibility` at given points (`wgsl/shadow/probe.wgsl`).
+//! Measuring a shadow method: its `light_visibility` (or `surface_visibility`) at given
+//! points (`wgsl/shadow/probe.wgsl`).
 
 use pelage_gpu::{
     BindLayout, Gpu, ShaderBinding, bind_buffers, compute_pipeline_with_layouts, dispatch_size,
@@ -18,8 +19,18 @@ pub struct TransmittanceProbe {
 }
 
 impl TransmittanceProbe {
-    /// A probe of the method behind `binding`.
+    /// A probe of the method behind `binding`: `light_visibility` (at a fibre).
     pub fn new(gpu: &Gpu, binding: &ShaderBinding) -> crate::Result<Self> {
+        Self::with_entry(gpu, binding, "main")
+    }
+
+    /// A probe of `surface_visibility` (a point on the body) of the method behind
+    /// `binding`.
+    pub fn surface(gpu: &Gpu, binding: &ShaderBinding) -> crate::Result<Self> {
+        Self::with_entry(gpu, binding, "surface")
+    }
+
+    fn with_entry(gpu: &Gpu, binding: &ShaderBinding, entry: &str) -> crate::Result<Self> {
         let module = crate::SHADERS.library().module_redirected(
             gpu,
             "shadow/probe.wgsl",
@@ -35,7 +46,7 @@ impl TransmittanceProbe {
             let shadow_layout = binding.layout(device, shadow_label, wgpu::ShaderStages::COMPUTE);
             let mut layouts = vec![Some(&layout)];
             binding.place(&mut layouts, shadow_layout.as_ref());
-            let pipeline = compute_pipeline_with_layouts(device, label, &module, "main", &layouts);
+            let pipeline = compute_pipeline_with_layouts(device, label, &module, entry, &layouts);
             let group = shadow_layout
                 .as_ref()
                 .and_then(|l| binding.bind_group(device, shadow_label, l));

@@ -5,10 +5,10 @@ mod common;
 
 use common::*;
 use glam::Vec3;
-use pelage_gpu::{Gpu, read_buffer};
+use pelage_gpu::{Gpu, read_buffer, wgpu};
 use pelage_reference::voxel::exclusive_scan_column;
 use pelage_scene::{GrowthParams, HairParams, Mesh, Splat, VoxelParams, WindParams};
-use pelage_shadow::{ShadowMethod, VoxelShadow};
+use pelage_shadow::{ShadowMethod, TransmittanceProbe, VoxelShadow};
 use pelage_strands::{GrowStrands, StrandBuffers, StrandStage};
 
 /// The voxel method on `strands` alone (a dummy mesh, no mesh map needed), reach box `reach`.
@@ -188,6 +188,93 @@ fn an_isolated_strand_does_not_shadow_itself() {
             );
         }
     }
+}
+
+/// The body under a thin layer of hair (three rows of strands across the light, 0.04
+/// deep, within the lookup's 1.5-voxel bias at 32³): `surface_visibility`, the mesh
+/// pass's, counts the whole layer right behind it, as far behind it; `light_visibility`
+/// (a fibre's, read 1.5 voxels toward the light so a strand does not shadow itself)
+/// skips most of it there.
+#[test]
+fn the_body_right_behind_the_hair_is_shadowed_by_all_of_it() {
+    let gpu = gpu();
+    let to_light = light().to_light().unwrap();
+    let across = to_light.cross(Vec3::Z).normalize();
+    let side = to_light.cross(across).normalize();
+    let mut strands = Vec::new();
+    for row in 0..3 {
+        for k in 0..40 {
+            let offset = side * (k as f32 * 0.025 - 0.5) - to_light * (row as f32 * 0.02);
+            let strand: Vec<Vec3> = (0..=16)
+                .map(|i| offset + across * (i as f32 / 16.0 - 0.5))
+                .collect();
+            strands.push(strand);
+        }
+    }
+    let buffers = strand_buffers(&gpu, &strands, 0.005);
+    let shadow = isolated(
+        &gpu,
+        &voxel_params(32),
+        &growth(0.005, 0.8),
+        &buffers,
+        (Vec3::splat(-1.0), Vec3::splat(1.0)),
+    )
+    .unwrap();
+    // Points behind the layer (away from the light), over its middle: 0.01 behind the
+    // last row, and 0.5 behind it.
+    let points = |behind: f32| -> Vec<glam::Vec4> {
+        (0..100)
+            .map(|i| {
+                let (u, v) = ((i % 10) as f32 / 10.0 - 0.45, (i / 10) as f32 / 10.0 - 0.45);
+                (across * u * 0.6 + side * v * 0.6 - to_light * (0.04 + behind)).extend(0.0)
+            })
+            .collect()
+    };
+    let probe = |surface: bool, p: &[glam::Vec4]| -> f32 {
+        let points =
+            pelage_gpu::storage_buffer(&gpu, "points", p, wgpu::BufferUsages::STORAGE).unwrap();
+        let out = pelage_gpu::zeroed_storage(
+            &gpu,
+            "visibility",
+            4 * p.len() as u64,
+            wgpu::BufferUsages::STORAGE,
+        )
+        .unwrap();
+        let probe = if surface {
+            TransmittanceProbe::surface(&gpu, &shadow.binding())
+        } else {
+            TransmittanceProbe::new(&gpu, &shadow.binding())
+        }
+        .unwrap();
+        let frame = full_frame(&buffers);
+        shadow.prepare(&gpu.queue, &frame, &light()).unwrap();
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        shadow.encode(&mut encoder, &frame, None).unwrap();
+        probe.encode(&gpu, &mut encoder, &points, &out).unwrap();
+        gpu.submit_and_wait([encoder.finish()]).unwrap();
+        let v: Vec<f32> = bytemuck::cast_slice(&read_buffer(&gpu, &out).unwrap()).to_vec();
+        v.iter().sum::<f32>() / v.len() as f32
+    };
+    let (near, far) = (points(0.01), points(0.5));
+    let (surface_near, surface_far) = (probe(true, &near), probe(true, &far));
+    let (light_near, light_far) = (probe(false, &near), probe(false, &far));
+    println!(
+        "behind a layer of hair 0.04 deep (32³): surface_visibility {surface_near:.3} right \
+         behind, {surface_far:.3} 0.5 behind; light_visibility {light_near:.3} and {light_far:.3}"
+    );
+    assert!(surface_far < 0.9, "the layer hides little: {surface_far}");
+    assert!(
+        (surface_near - surface_far).abs() < 0.05,
+        "{surface_near} vs {surface_far}"
+    );
+    assert!(
+        (light_far - surface_far).abs() < 0.02,
+        "{light_far} vs {surface_far}"
+    );
+    assert!(
+        light_near > surface_near + 0.05,
+        "{light_near} vs {surface_near}"
+    );
 }
 
 #[test]

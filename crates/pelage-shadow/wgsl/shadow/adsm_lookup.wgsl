@@ -31,3 +31,8 @@ fn hair_visibility(p: vec3<f32>) -> f32 {
 fn light_visibility(p: vec3<f32>) -> f32 {
     return hair_visibility(p) * mesh_visibility(p);
 }
+
+// A point on the body: the same lookup.
+fn surface_visibility(p: vec3<f32>) -> f32 {
+    return light_visibility(p);
+}

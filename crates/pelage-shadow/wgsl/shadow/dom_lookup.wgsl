@@ -67,3 +67,9 @@ fn hair_visibility(p: vec3<f32>) -> f32 {
 fn light_visibility(p: vec3<f32>) -> f32 {
     return hair_visibility(p) * mesh_visibility(p);
 }
+
+// A point on the body: the same lookup (the layers hold the opacity in front of any
+// depth; nothing is skipped).
+fn surface_visibility(p: vec3<f32>) -> f32 {
+    return light_visibility(p);
+}

@@ -29,3 +29,8 @@ fn hair_visibility(p: vec3<f32>) -> f32 {
 fn light_visibility(p: vec3<f32>) -> f32 {
     return hair_visibility(p) * mesh_visibility(p);
 }
+
+// A point on the body: the same test (the body lies behind the front-most hair).
+fn surface_visibility(p: vec3<f32>) -> f32 {
+    return light_visibility(p);
+}

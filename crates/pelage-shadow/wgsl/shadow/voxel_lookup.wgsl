@@ -5,7 +5,8 @@
 //         volume as f32 (2), and the mesh shadow map (3 to 5, shadow/mesh_shadow.wgsl).
 // Writes: nothing.
 //
-// light_visibility(p) = exp(-optical depth of the hair toward the light) x mesh visibility.
+// light_visibility(p) = exp(-optical depth of the hair toward the light) x mesh visibility;
+// surface_visibility(p) the same without the bias below.
 // The optical depth is interpolated trilinearly: bilinear across the light between
 // column centres, linear along it between layer faces, read `bias_voxels` voxels toward
 // the light so a strand does not shadow itself. Outside the grid's columns it is 0;
@@ -27,10 +28,11 @@ fn voxel_face(x: i32, y: i32, z: i32) -> f32 {
     return voxel_depth[voxel_index(voxel, u32(x), u32(y), u32(zc))];
 }
 
-// Optical depth of the hair between world point p and the light.
-fn voxel_optical_depth(p: vec3<f32>) -> f32 {
+// Optical depth of the hair between the light and world point p moved `bias` voxels
+// toward the light.
+fn voxel_optical_depth(p: vec3<f32>, bias: f32) -> f32 {
     let g = (to_light_space(voxel, p) - voxel_grid.origin) * voxel_grid.inv_cell;
-    let c = vec3<f32>(g.x - 0.5, g.y - 0.5, g.z - voxel.bias_voxels);
+    let c = vec3<f32>(g.x - 0.5, g.y - 0.5, g.z - bias);
     let base = vec3<i32>(floor(c));
     let f = c - floor(c);
     var tau = 0.0;
@@ -43,5 +45,12 @@ fn voxel_optical_depth(p: vec3<f32>) -> f32 {
 }
 
 fn light_visibility(p: vec3<f32>) -> f32 {
-    return exp(-voxel_optical_depth(p)) * mesh_visibility(p);
+    return exp(-voxel_optical_depth(p, voxel.bias_voxels)) * mesh_visibility(p);
+}
+
+// A point on the body: no strand of its own to skip, all the hair in front counts (with
+// the bias, the skin under a layer of hair `bias_voxels` thick would see the light
+// unshadowed).
+fn surface_visibility(p: vec3<f32>) -> f32 {
+    return exp(-voxel_optical_depth(p, 0.0)) * mesh_visibility(p);
 }
