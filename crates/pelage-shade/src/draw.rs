@@ -18,6 +18,8 @@ use crate::ribbons::{FrameUniforms, MeshStyle, RibbonStyle};
 use crate::targets::TargetFormat;
 use crate::volume::{VOLUME_FLUENCE, VolumeGrid};
 
+/// The body's sky contract `shade/mesh.wgsl` imports (`shade/body_sky.wgsl`).
+const BODY_SKY: &str = "shade/body_sky.wgsl";
 /// The frame resource naming the colour target a method draws into.
 pub const TARGET_COLOR: &str = "target.color";
 /// The frame resource naming the depth target a method draws into and tests against.
@@ -294,17 +296,24 @@ impl Common {
             )?),
             _ => None,
         };
+        // The body's sky: unoccluded, or with the volume method through the hair, read
+        // from its grid in the model's group 2 (shade/body_sky_volume.wgsl).
+        let body_sky = volume
+            .is_some()
+            .then_some(Redirect::new(BODY_SKY, "shade/body_sky_volume.wgsl"));
         let redirects: Vec<Redirect> = shadow
             .iter()
             .map(|b| b.redirect())
             .chain(model.redirect())
+            .chain(body_sky)
             .collect();
         let mesh_module =
             crate::SHADERS
                 .library()
                 .module_redirected(gpu, "shade/mesh.wgsl", &redirects)?;
         let mesh_draw = gpu.scoped(|device| {
-            // mesh.wgsl: frame, positions, normals, indices, style; group 1 the shadow method's.
+            // mesh.wgsl: frame, positions, normals, indices, style; group 1 the shadow
+            // method's; group 2 the hair model's when the body's sky reads the grid.
             let layout = BindLayout::new("pelage mesh", wgpu::ShaderStages::VERTEX_FRAGMENT)
                 .uniform(0)
                 .storage(1)
@@ -319,9 +328,17 @@ impl Common {
                     wgpu::ShaderStages::VERTEX_FRAGMENT,
                 )
             });
+            let sky_layout = body_sky.and_then(|_| {
+                model
+                    .binding()
+                    .layout(device, "pelage mesh sky", wgpu::ShaderStages::FRAGMENT)
+            });
             let mut layouts = vec![Some(&layout)];
             if let Some(b) = shadow {
                 b.place(&mut layouts, shadow_layout.as_ref());
+            }
+            if sky_layout.is_some() {
+                model.binding().place(&mut layouts, sky_layout.as_ref());
             }
             let pipeline = raster_pipeline(
                 device,
@@ -352,10 +369,13 @@ impl Common {
             let shadow_group = shadow
                 .zip(shadow_layout.as_ref())
                 .and_then(|(b, l)| b.bind_group(device, "pelage mesh shadow", l));
+            let sky_group = sky_layout
+                .as_ref()
+                .and_then(|l| model.binding().bind_group(device, "pelage mesh sky", l));
             Draw {
                 label: "shade: mesh",
                 pipeline,
-                groups: vec![Some(group0), shadow_group],
+                groups: vec![Some(group0), shadow_group, sky_group],
                 vertices: Vertices::Fixed(mesh.triangle_count.saturating_mul(3)),
             }
         })?;
@@ -563,14 +583,20 @@ impl Common {
     }
 
     /// The mesh pass as `encode_mesh` records it when the method draws the mesh (reads
-    /// the mesh and the key light's shadow `lookup`, clears and writes the targets);
-    /// `None` when the engine draws its own.
+    /// the mesh, the key light's shadow `lookup` and, with the volume method, the grid's
+    /// fluence for the body's sky; clears and writes the targets); `None` when the
+    /// engine draws its own.
     pub fn mesh_pass(&self, lookup: &[String]) -> Option<PassInfo> {
         self.draw_mesh.then(|| {
-            PassInfo::new(self.mesh_draw.label)
+            let pass = PassInfo::new(self.mesh_draw.label)
                 .reads([pelage_contract::MESH.to_string()])
-                .reads(lookup.iter().cloned())
-                .writes([TARGET_COLOR, TARGET_DEPTH])
+                .reads(lookup.iter().cloned());
+            let pass = if self.volume.is_some() {
+                pass.reads([VOLUME_FLUENCE])
+            } else {
+                pass
+            };
+            pass.writes([TARGET_COLOR, TARGET_DEPTH])
         })
     }
 

@@ -42,6 +42,8 @@ pub use volume::{VOLUME_FIXED_SCALE, VOLUME_FLUENCE, VolumeField, VolumeGrid, Vo
 /// [`ShaderBinding`](pelage_gpu::ShaderBinding), with its own crate's sources.
 pub static SHADERS: pelage_gpu::ShaderSources = pelage_gpu::wgsl_sources!(
     uses [&pelage_contract::SHADERS];
+    "shade/body_sky.wgsl",
+    "shade/body_sky_volume.wgsl",
     "shade/frame.wgsl",
     "shade/hair.wgsl",
     "shade/hair_model.wgsl",
@@ -66,6 +68,7 @@ pub static SHADERS: pelage_gpu::ShaderSources = pelage_gpu::wgsl_sources!(
     "shade/models/sadeghi.wgsl",
     "shade/models/sadeghi_model.wgsl",
     "shade/models/volume_common.wgsl",
+    "shade/models/volume_field.wgsl",
     "shade/oit/a_buffer.wgsl",
     "shade/oit/bindings.wgsl",
     "shade/oit/common.wgsl",

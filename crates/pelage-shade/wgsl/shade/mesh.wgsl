@@ -1,13 +1,16 @@
 // Stage 3, opaque mesh: the surface the hair grows from, Lambert shaded by every light,
-// the key light (light 0) shadowed through the shadow contract (light_visibility,
-// shadow/none.wgsl or its redirect).
+// the key light (light 0) shadowed through the shadow contract (surface_visibility,
+// shadow/none.wgsl or its redirect), and by the sky through the body's sky contract
+// (body_sky, shade/body_sky.wgsl or its redirect: the volume method's grid).
 //
 // Reads:  Frame (uniform), mesh positions and normals (f32 x3 storage), the u32
-//         triangle list (storage), MeshStyle (uniform).
+//         triangle list (storage), MeshStyle (uniform); group 1 the shadow method's,
+//         group 2 the body sky's (the hair model's, with the volume method).
 // Writes: colour and depth of the render target.
 // Draw:   non-indexed, 3 * triangle_count vertices; vertex_index pulls the index list.
 
 #import shade/frame.wgsl
+#import shade/body_sky.wgsl
 #import shadow/none.wgsl
 
 struct MeshStyle {
@@ -42,13 +45,13 @@ fn vs_main(@builtin(vertex_index) vi: u32) -> VertexOut {
 @fragment
 fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
     let n = normalize(in.normal);
-    var lit = vec3<f32>(frame.ambient);
+    var lit = body_sky(in.world, n, frame.ambient);
     for (var i = 0u; i < min(frame.light_count, MAX_LIGHTS); i += 1u) {
         let l = frame.lights[i];
         var irradiance = frame_irradiance(l, in.world) * max(dot(n, frame_to_light(l, in.world)), 0.0);
         // The shadow contract is the key light's (light 0); the others light the mesh unshadowed.
         if (i == 0u) {
-            irradiance *= light_visibility(in.world);
+            irradiance *= surface_visibility(in.world);
         }
         lit += irradiance;
     }

@@ -9,9 +9,7 @@
 // scattering, which then carries the lights' scattering instead of the grid).
 //
 // Reads: @group(2) @binding(0..2) the model's parameters and tables (chiang.wgsl),
-//        @group(2) @binding(3) the grid's uniform (VolumeUniforms),
-//        @group(2) @binding(4) the grid's fluence (header + 3 vec4 per cell,
-//        volume_common.wgsl).
+//        @group(2) @binding(3..4) the grid's uniform and fluence (volume_field.wgsl).
 // Writes: nothing; no entry point.
 //
 // Response: with L(w) = (phi + 3 Phi . w) / (4 pi) the radiance travelling along w, read
@@ -24,9 +22,7 @@
 
 #import shade/models/chiang.wgsl
 #import shade/models/volume_common.wgsl
-
-@group(2) @binding(3) var<uniform> volume: VolumeUniforms;
-@group(2) @binding(4) var<storage, read> volume_fluence: array<vec4<f32>>;
+#import shade/models/volume_field.wgsl
 
 fn hair_radiance(t: vec3<f32>, l: vec3<f32>, v: vec3<f32>, base_color: vec3<f32>, strand_random: f32) -> vec3<f32> {
     return chiang_radiance(chiang, t, l, v, base_color, strand_random);
@@ -39,35 +35,8 @@ fn hair_ambient(base_color: vec3<f32>) -> vec3<f32> {
     return vec3<f32>(0.0);
 }
 
-// Fluence and flux of the three channels at p (trilinear between cell centres, clamped
-// at the grid's border).
-struct VolumeSample {
-    r: vec4<f32>,
-    g: vec4<f32>,
-    b: vec4<f32>,
-}
-
-fn volume_sample(p: vec3<f32>) -> VolumeSample {
-    let header = volume_fluence[0];
-    let n = i32(volume.resolution);
-    let q = (p - header.xyz) / header.w - vec3<f32>(0.5);
-    let base = floor(q);
-    let f = clamp(q - base, vec3<f32>(0.0), vec3<f32>(1.0));
-    var out = VolumeSample(vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0));
-    for (var corner = 0u; corner < 8u; corner += 1u) {
-        let o = vec3<u32>(corner & 1u, (corner >> 1u) & 1u, (corner >> 2u) & 1u);
-        let w = select(1.0 - f.x, f.x, o.x == 1u) * select(1.0 - f.y, f.y, o.y == 1u) * select(1.0 - f.z, f.z, o.z == 1u);
-        let c = clamp(vec3<i32>(base) + vec3<i32>(o), vec3<i32>(0), vec3<i32>(n - 1));
-        let i = u32((c.z * n + c.y) * n + c.x);
-        out.r += w * volume_fluence[1u + 3u * i];
-        out.g += w * volume_fluence[2u + 3u * i];
-        out.b += w * volume_fluence[3u + 3u * i];
-    }
-    return out;
-}
-
 fn hair_scattered(t: vec3<f32>, v: vec3<f32>, p: vec3<f32>, base_color: vec3<f32>) -> vec3<f32> {
-    if !(volume_fluence[0].w > 0.0) {
+    if !volume_filled() {
         return vec3<f32>(0.0);
     }
     let s = volume_sample(p);
