@@ -32,7 +32,9 @@
 //! hair's luminance against the reference's, the shade stage's wall clock and the
 //! reference's noise floor), `DIR/scattering.png|svg` (FLIP over the hair against time),
 //! `DIR/scattering_sheet.png` (per scene: path tracer | single | dual | FLIP of dual) and
-//! the path-traced images in `DIR/scattering/` (linear HDR and sRGB PNG).
+//! the path-traced images in `DIR/scattering/` (linear HDR and sRGB PNG) beside each
+//! method's (sRGB PNG, `GROOM_HAIR_METHOD.png`) and the hair's share of each pixel
+//! (`GROOM_HAIR_hair_mask.png`).
 
 use std::time::Instant;
 
@@ -621,10 +623,13 @@ pub fn run(
                 written.push((img, format!("le_{cap}_bounces")));
             }
             written.push((&t.deep, format!("le_{DEEP_BOUNCES}_bounces")));
+            let dir = opts.out.join("scattering");
             for (img, what) in &written {
-                let dir = opts.out.join("scattering");
                 img.write_hdr(&dir.join(format!("{stem}_{what}.hdr")))?;
                 img.write_png(&dir.join(format!("{stem}_{what}.png")))?;
+            }
+            for (method, image, _) in &rendered {
+                crate::output::save_png(image, &dir.join(format!("{stem}_{method}.png")))?;
             }
             let mask: Vec<f32> = a
                 .hair_mask
@@ -632,6 +637,14 @@ pub fn run(
                 .zip(&b.hair_mask)
                 .map(|(x, y)| 0.5 * (x + y))
                 .collect();
+            // The hair's share of each pixel, as the path tracer saw it (the mask the
+            // hair's figures average over).
+            let mask_image = RgbaImage::from_fn(size, size, |x, y| {
+                let v = mask[(y * size + x) as usize].clamp(0.0, 1.0);
+                let g = (v * 255.0).round() as u8;
+                image::Rgba([g, g, g, 255])
+            });
+            crate::output::save_png(&mask_image, &dir.join(format!("{stem}_hair_mask.png")))?;
             let la = a.to_linear_image()?;
             let lb = b.to_linear_image()?;
             let mean = PathTracedImage {
