@@ -13,8 +13,7 @@ use pelage_scene::{
     Camera, ChiangParams, DirectionalLight, HairParams, Light, Mesh, MultipleScattering,
     ShadeParams, ShadingModel, Transparency,
 };
-use pelage_shade::Targets;
-use support::{H, Scene, W, gpu, grown, inputs};
+use support::{H, Scene, W, gpu, grown, inputs, render_lit};
 
 const AMBIENT: f32 = 0.5;
 const SKIN: Vec3 = Vec3::new(0.2, 0.2, 0.2);
@@ -48,31 +47,15 @@ fn centre_skin(gpu: &Gpu, s: &Scene, multiple_scattering: MultipleScattering) ->
         ..Default::default()
     };
     let method = pelage_shade::build(gpu, &inputs(s, &params), W, H).unwrap();
-    let targets = Targets::new(gpu, W, H, params.samples()).unwrap();
     // A frame needs a light: one of no intensity, so the sky lights the skin alone.
     let dark = [Light::Directional(DirectionalLight {
         direction: -Vec3::Y,
         color: Vec3::ONE,
         intensity: 0.0,
     })];
-    method
-        .prepare(&gpu.queue, &s.frame, &s.camera.matrices(W, H), &dark, W, H)
-        .unwrap();
-    let (color, resolve) = targets.color_views();
-    let depth = targets.depth_view();
-    let mut encoder = gpu.device.create_command_encoder(&Default::default());
-    method
-        .encode(
-            &mut encoder,
-            &s.frame,
-            &targets.views(&color, resolve.as_ref(), &depth),
-            None,
-        )
-        .unwrap();
-    gpu.submit_and_wait([encoder.finish()]).unwrap();
-    let image = targets.read_color(gpu).unwrap();
+    let (image, _) = render_lit(gpu, s, method.as_ref(), params.samples(), &dark);
     let at = ((H / 2 * W + W / 2) * 4) as usize;
-    let px = &image.data[at..at + 3];
+    let px = &image[at..at + 3];
     // The skin is grey: any channel is the luminance.
     srgb8_to_linear(px[1])
 }

@@ -99,16 +99,20 @@ pub fn render_with(
     method: &dyn HairPass,
     samples: u32,
 ) -> (Vec<u8>, OitStats) {
+    render_lit(gpu, s, method, samples, &[Light::default()])
+}
+
+/// [`render_with`] lit by `lights`.
+pub fn render_lit(
+    gpu: &Gpu,
+    s: &Scene,
+    method: &dyn HairPass,
+    samples: u32,
+    lights: &[Light],
+) -> (Vec<u8>, OitStats) {
     let targets = Targets::new(gpu, W, H, samples).unwrap();
     method
-        .prepare(
-            &gpu.queue,
-            &s.frame,
-            &s.camera.matrices(W, H),
-            &[Light::default()],
-            W,
-            H,
-        )
+        .prepare(&gpu.queue, &s.frame, &s.camera.matrices(W, H), lights, W, H)
         .unwrap();
     let (color, resolve) = targets.color_views();
     let depth = targets.depth_view();

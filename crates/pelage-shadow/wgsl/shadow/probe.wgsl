@@ -14,20 +14,27 @@
 @group(0) @binding(0) var<storage, read> points: array<vec4<f32>>;
 @group(0) @binding(1) var<storage, read_write> visibility: array<f32>;
 
-@compute @workgroup_size(64)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+// The point this invocation evaluates, or -1 past the end.
+fn probe_point(gid: vec3<u32>, groups: vec3<u32>) -> i32 {
     let i = gid.y * groups.x * 64u + gid.x;
     if i >= arrayLength(&visibility) || i >= arrayLength(&points) {
-        return;
+        return -1;
     }
-    visibility[i] = light_visibility(points[i].xyz);
+    return i32(i);
+}
+
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = probe_point(gid, groups);
+    if i >= 0 {
+        visibility[i] = light_visibility(points[i].xyz);
+    }
 }
 
 @compute @workgroup_size(64)
 fn surface(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let i = gid.y * groups.x * 64u + gid.x;
-    if i >= arrayLength(&visibility) || i >= arrayLength(&points) {
-        return;
+    let i = probe_point(gid, groups);
+    if i >= 0 {
+        visibility[i] = surface_visibility(points[i].xyz);
     }
-    visibility[i] = surface_visibility(points[i].xyz);
 }
