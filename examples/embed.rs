@@ -35,7 +35,8 @@ use std::path::PathBuf;
 use glam::Vec3;
 use pelage::gpu::{Gpu, PassInfo, ShaderSources, wgpu};
 use pelage::scene::{
-    CameraMatrices, HairParams, Light, Mesh, ShadeParams, ShadowParams, VoxelParams,
+    CameraMatrices, ChiangParams, HairParams, Light, Mesh, MultipleScattering, ShadeParams,
+    ShadingModel, ShadowParams, VoxelParams,
 };
 use pelage::shade::{TARGET_COLOR, TARGET_DEPTH, TargetFormat, TargetViews};
 use pelage::strands::{MESH, MeshBuffers};
@@ -86,10 +87,19 @@ pub fn hair() -> HairParams {
 }
 
 /// Shading: pelage's defaults on a single-sampled target (the engine's mesh takes its
-/// colour, the ambient term and the background from here too).
+/// colour, the ambient term and the background from here too), with Chiang's dual
+/// scattering instead of the default volume grid: pelage's own mesh pass reads the
+/// grid's sky on the skin (`shade/body_sky.wgsl`), and the grid is filled in the shade
+/// stage, after the engine's mesh pass; this engine's mesh sees the open sky, as pelage's
+/// does without the grid.
 pub fn shade() -> ShadeParams {
+    let model = ShadingModel::Chiang(ChiangParams {
+        multiple_scattering: MultipleScattering::Dual,
+        ..Default::default()
+    });
     ShadeParams {
         sample_count: 1,
+        model,
         ..Default::default()
     }
 }
@@ -131,8 +141,9 @@ fn vs_mesh(@location(0) p: vec3<f32>, @location(1) n: vec3<f32>) -> MeshOut {
 fn fs_mesh(in: MeshOut) -> @location(0) vec4<f32> {
     let n = normalize(in.normal);
     var lit = vec3<f32>(engine.light.w);
-    // light_visibility: pelage's shadow method, through the contract's redirect.
-    lit += engine.light.rgb * max(dot(n, engine.to_light.xyz), 0.0) * light_visibility(in.world);
+    // surface_visibility: pelage's shadow method at a point on the body, through the
+    // contract's redirect.
+    lit += engine.light.rgb * max(dot(n, engine.to_light.xyz), 0.0) * surface_visibility(in.world);
     return vec4<f32>(engine.mesh_color.rgb * lit, 1.0);
 }
 
