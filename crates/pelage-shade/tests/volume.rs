@@ -189,6 +189,27 @@ fn run_gpu(
     (fluence, medium)
 }
 
+/// The GPU's fluence and the mirror's grid of `hair` around `body` under the sky alone
+/// ([`AMBIENT`], one light of no intensity).
+fn sky_alone(
+    gpu: &Gpu,
+    hair: &Hair,
+    params: &ChiangParams,
+    body: &Body,
+) -> (Vec<f32>, VolumeGridCpu) {
+    let (fluence, _) = run_gpu(
+        gpu,
+        hair,
+        hair.strands(),
+        params,
+        &dark(),
+        AMBIENT,
+        Some(body),
+    );
+    let cpu = mirror(hair, params, &dark(), AMBIENT, 0.5, Some(body));
+    (fluence, cpu)
+}
+
 /// A body under the hair: its mesh and `shade.mesh_color`.
 struct Body {
     mesh: Mesh,
@@ -500,16 +521,7 @@ fn volume_sky_injection_matches_cpu_mirror() {
         color: Vec3::new(0.25, 0.16, 0.11),
     };
     let params = volume_params(16, 8, Vec3::new(0.12, 0.2, 0.4));
-    let (fluence, _) = run_gpu(
-        &gpu,
-        &hair,
-        hair.strands(),
-        &params,
-        &dark(),
-        AMBIENT,
-        Some(&body),
-    );
-    let cpu = mirror(&hair, &params, &dark(), AMBIENT, 0.5, Some(&body));
+    let (fluence, cpu) = sky_alone(&gpu, &hair, &params, &body);
     let (median, p99, max) = compare(&fluence, &cpu);
     println!(
         "sky alone, with a body: GPU - mirror over the largest fluence: median {median:.2e}, p99 {p99:.2e}, max {max:.2e}"
@@ -635,17 +647,8 @@ fn volume_sky_beside_a_body_is_what_the_body_leaves() {
     };
     let hair = wavy(300, 12, 1.0, 1e-5);
     let params = volume_params(16, 12, Vec3::ONE);
-    let (fluence, _) = run_gpu(
-        &gpu,
-        &hair,
-        hair.strands(),
-        &params,
-        &dark(),
-        AMBIENT,
-        Some(&body),
-    );
     // The mirror's grid: the cells' solid shares and places (the GPU's, within 2e-3).
-    let cpu = mirror(&hair, &params, &dark(), AMBIENT, 0.5, Some(&body));
+    let (fluence, cpu) = sky_alone(&gpu, &hair, &params, &body);
     let sky = 4.0 * f64::from(AMBIENT);
     let n = cpu.resolution as usize;
     let k = 6;
