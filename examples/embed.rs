@@ -40,7 +40,7 @@ use pelage::scene::{
 };
 use pelage::shade::{TARGET_COLOR, TARGET_DEPTH, TargetFormat, TargetViews};
 use pelage::strands::{MESH, MeshBuffers};
-use pelage::{Frame, FrameTarget, Scene};
+use pelage::{Frame, FrameTarget, scene::Scene};
 use wgpu::util::DeviceExt;
 
 type Result<T> = std::result::Result<T, Box<dyn std::error::Error>>;

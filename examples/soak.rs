@@ -32,7 +32,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
 use pelage::gpu::Created;
-use pelage::{Renderer, Scene, gpu::Gpu};
+use pelage::{Renderer, gpu::Gpu, scene::Scene};
 use pelage_lab::Table;
 
 /// The system allocator, counting the bytes live and the calls made.

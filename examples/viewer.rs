@@ -21,9 +21,9 @@
 //! Each frame: pelage renders offscreen at the window's size ([`Renderer`]); a fullscreen
 //! triangle copies its colour into a composition texture, egui draws its panels over it, and
 //! the same triangle copies the composition to the window's surface. A changed parameter
-//! goes to [`Renderer::update`], which writes what lives in uniforms or small buffers
+//! goes to [`Frame::update`](pelage::Frame::update), which writes what lives in uniforms or small buffers
 //! (wind, hair colour, lights, shading) in place, at once, even while a slider is dragged;
-//! a change it answers with [`Update::Rebuild`] (strand count, methods, ...) rebuilds the
+//! a change it answers with [`pelage::Error::NeedsRebuild`] (strand count, methods, ...) rebuilds the
 //! renderer once the mouse button is up. If pelage refuses the parameters the panel says
 //! why and the last good renderer keeps drawing.
 
@@ -42,7 +42,7 @@ use pelage::scene::{
     Transparency, WindParams,
 };
 use pelage::scene::{Camera, HairParams, HairType, Light, Named, ShadeParams, ShadingModel};
-use pelage::{FrameStats, Renderer, Scene, Update};
+use pelage::{FrameStats, Renderer, scene::Scene};
 use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
 use winit::event_loop::{ActiveEventLoop, EventLoop};
 use winit::keyboard::{Key, NamedKey};
@@ -155,7 +155,7 @@ impl Orbit {
     }
 }
 
-/// Every scene parameter the panels edit; a change goes to [`Renderer::update`].
+/// Every scene parameter the panels edit; a change goes to [`Frame::update`](pelage::Frame::update).
 #[derive(Clone, PartialEq)]
 struct Controls {
     hair: HairParams,
@@ -574,10 +574,13 @@ impl App {
             .filter(|r| rebuild && !rebuild_anyway && same_size(r))
         {
             let scene = self.controls.scene(&self.base);
-            let update = renderer.update(&gfx.gpu, &scene).map_err(|e| e.to_string());
-            match update.and_then(|u| gfx.take_errors().map_or(Ok(u), Err)) {
-                Ok(Update::Applied(_)) => (rebuild, self.view.error) = (false, None),
-                Ok(Update::Rebuild(_)) => {}
+            let update = match renderer.frame_mut().update(&gfx.gpu, &scene) {
+                Err(pelage::Error::NeedsRebuild(_)) => Ok(false),
+                other => other.map(|()| true).map_err(|e| e.to_string()),
+            };
+            match update.and_then(|applied| gfx.take_errors().map_or(Ok(applied), Err)) {
+                Ok(true) => (rebuild, self.view.error) = (false, None),
+                Ok(false) => {}
                 Err(e) => {
                     self.view.error = Some(format!("kept the last good parameters: {e}"));
                     rebuild = false;
@@ -1168,7 +1171,7 @@ fn chiang_ui(ui: &mut egui::Ui, p: &mut ChiangParams, hair_color: Vec3) {
 }
 
 /// `--time-changes`: each uniform-only parameter changed twice, first through a new
-/// renderer (what the viewer did before `Renderer::update`), then in place, each change
+/// renderer (what the viewer did before `Frame::update`), then in place, each change
 /// timed from the moment the controls change to the frame presented with the GPU idle.
 #[derive(Default)]
 struct Timing {

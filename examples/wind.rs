@@ -12,7 +12,7 @@
 
 use std::path::Path;
 
-use pelage::{Renderer, Scene, gpu::Gpu};
+use pelage::{Renderer, gpu::Gpu, scene::Scene};
 
 /// Frames to render, and how many of them make a second of animation.
 const FRAMES: u32 = 12;

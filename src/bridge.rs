@@ -41,14 +41,14 @@ use pelage_scene::{CameraMatrices, Transparency};
 use pelage_shade::{TARGET_COLOR, TARGET_DEPTH, TargetFormat, TargetViews};
 
 /// The shaders of the facade crate (`src/wgsl/`): the target bridge's passes.
-pub static SHADERS: pelage_gpu::ShaderSources = pelage_gpu::wgsl_sources!(
+pub(crate) static SHADERS: pelage_gpu::ShaderSources = pelage_gpu::wgsl_sources!(
     in "src/wgsl";
     uses [&pelage_gpu::SHADERS];
     "bridge.wgsl",
 );
 
 /// The plan's name of the resolved depth's copy the write-back compares with.
-pub const RESOLVED_DEPTH: &str = "bridge.resolved_depth";
+pub(crate) const RESOLVED_DEPTH: &str = "bridge.resolved_depth";
 
 /// Labels of the bridge's passes (the plan's and the GPU timer's names).
 const RESOLVE_COLOR: &str = "bridge: resolve colour";

@@ -10,18 +10,17 @@
 use glam::Vec3;
 use pelage_gpu::audit;
 use pelage_gpu::{FramePlan, Gpu, GpuTimer, PassInfo, ShaderBinding, wgpu};
-use pelage_scene::{
-    Camera, CameraMatrices, DynamicsParams, GuideParams, Light, Mesh, MeshMotion, Resampled,
-    ShadowParams, Skin, SkinBend,
-};
+use pelage_scene::{Camera, CameraMatrices, Light, Mesh, MeshMotion, ShadowParams, Skin, SkinBend};
 use pelage_shade::{HairInputs, HairPass, TargetFormat, TargetViews, Visibility};
 use pelage_shadow::{LightVisibility, ShadowMethod};
 use pelage_strands::{
     GroomStrands, GrowStrands, GuideStrands, MeshBuffers, MeshSkin, SimulateStrands, StrandFrame,
-    StrandStage,
+    StrandSource, StrandStage,
 };
 
-use crate::Scene;
+use pelage_scene::Scene;
+
+mod update;
 use crate::bridge::TargetBridge;
 
 /// The targets a [`Frame`] records into, as the caller describes them (the views
@@ -51,106 +50,76 @@ impl FrameTarget {
     }
 }
 
-/// Where stage 1's strands come from: the one place a scene's groom, guides and dynamics
-/// choose the method.
-#[derive(Clone, Copy, Debug)]
-pub(crate) enum StrandSource<'a> {
-    /// Fur grown from the mesh ([`GrowStrands`]).
-    Grown,
-    /// A groom's own strands bent by the wind ([`GroomStrands`]).
-    Groom(&'a Resampled),
-    /// Render strands interpolated from a groom's strands as guides ([`GuideStrands`]).
-    Guides(&'a Resampled, &'a GuideParams),
-    /// The guides simulated, the render strands interpolated from them.
-    SimulatedGuides(&'a Resampled, &'a GuideParams, &'a DynamicsParams),
-    /// Grown fur (`None`) or a groom simulated ([`SimulateStrands`]).
-    Simulated(Option<&'a Resampled>, &'a DynamicsParams),
-}
-
-impl<'a> StrandSource<'a> {
-    /// The source `scene` asks for.
-    pub(crate) fn of(scene: &'a Scene) -> Self {
-        match (&scene.groom, &scene.guides, &scene.dynamics) {
-            (Some(groom), Some(guides), None) => Self::Guides(groom, guides),
-            (Some(groom), Some(guides), Some(d)) => Self::SimulatedGuides(groom, guides, d),
-            (Some(groom), None, None) => Self::Groom(groom),
-            (groom, _, Some(d)) => Self::Simulated(groom.as_ref(), d),
-            (None, _, None) => Self::Grown,
+/// Builds stage 1 of `source` on `mesh` (already uploaded, or `None` to upload
+/// `scene.mesh` here), returning the mesh buffers every stage reads, their box grown to
+/// wherever `scene.motion` takes the mesh. In a groom-only scene (`groom_only`) the mesh
+/// buffers are an empty stand-in. The one place a strand source becomes a stage.
+fn build_strands(
+    source: StrandSource<'_>,
+    gpu: &Gpu,
+    scene: &Scene,
+    mesh: Option<MeshBuffers>,
+    groom_only: bool,
+) -> crate::Result<(MeshBuffers, Box<dyn StrandStage>)> {
+    let (hair, rest) = (&scene.hair, &scene.mesh);
+    let upload = |mesh: Option<MeshBuffers>| -> crate::Result<MeshBuffers> {
+        Ok(match mesh {
+            Some(mesh) => mesh,
+            None => MeshBuffers::upload(gpu, rest)?,
+        })
+    };
+    // The mesh's box is wherever the motion takes it: a simulation sizes itself
+    // from it (grown before the stage is built); the stateless methods after.
+    let moved = |mut mesh: MeshBuffers| -> crate::Result<MeshBuffers> {
+        if let Some(motion) = &scene.motion {
+            motion.validate()?;
+            mesh.bounds = motion.reach(mesh.bounds);
         }
-    }
-
-    /// Builds the stage on `mesh` (already uploaded, or `None` to upload `scene.mesh`
-    /// here), returning the mesh buffers every stage reads, their box grown to wherever
-    /// `scene.motion` takes the mesh. In a groom-only scene (`groom_only`) the mesh
-    /// buffers are an empty stand-in.
-    fn build(
-        self,
-        gpu: &Gpu,
-        scene: &Scene,
-        mesh: Option<MeshBuffers>,
-        groom_only: bool,
-    ) -> crate::Result<(MeshBuffers, Box<dyn StrandStage>)> {
-        let (hair, rest) = (&scene.hair, &scene.mesh);
-        let upload = |mesh: Option<MeshBuffers>| -> crate::Result<MeshBuffers> {
-            Ok(match mesh {
+        if let Some(skin) = &scene.skin {
+            skin.validate()?;
+            mesh.bounds = skin.reach(mesh.bounds);
+        }
+        Ok(mesh)
+    };
+    let (mesh, strands): (MeshBuffers, Box<dyn StrandStage>) = match source {
+        StrandSource::Grown => {
+            let mesh = upload(mesh)?;
+            let strands = GrowStrands::new(gpu, rest, &mesh, hair)?;
+            (moved(mesh)?, Box::new(strands))
+        }
+        StrandSource::Groom(groom) if groom_only => {
+            let strands = GroomStrands::new(gpu, groom, hair)?;
+            let mesh = match mesh {
                 Some(mesh) => mesh,
-                None => MeshBuffers::upload(gpu, rest)?,
-            })
-        };
-        // The mesh's box is wherever the motion takes it: a simulation sizes itself
-        // from it (grown before the stage is built); the stateless methods after.
-        let moved = |mut mesh: MeshBuffers| -> crate::Result<MeshBuffers> {
-            if let Some(motion) = &scene.motion {
-                motion.validate()?;
-                mesh.bounds = motion.reach(mesh.bounds);
-            }
-            if let Some(skin) = &scene.skin {
-                skin.validate()?;
-                mesh.bounds = skin.reach(mesh.bounds);
-            }
-            Ok(mesh)
-        };
-        let (mesh, strands): (MeshBuffers, Box<dyn StrandStage>) = match self {
-            Self::Grown => {
-                let mesh = upload(mesh)?;
-                let strands = GrowStrands::new(gpu, rest, &mesh, hair)?;
-                (moved(mesh)?, Box::new(strands))
-            }
-            Self::Groom(groom) if groom_only => {
-                let strands = GroomStrands::new(gpu, groom, hair)?;
-                let mesh = match mesh {
-                    Some(mesh) => mesh,
-                    None => no_mesh(gpu, strands.buffers().reach)?,
-                };
-                (mesh, Box::new(strands))
-            }
-            Self::Groom(groom) => {
-                let mesh = upload(mesh)?;
-                let strands = GroomStrands::new(gpu, groom, hair)?;
-                (moved(mesh)?, Box::new(strands))
-            }
-            Self::Guides(groom, guides) => {
-                let mesh = upload(mesh)?;
-                let strands = GuideStrands::new(gpu, rest, &mesh, groom, hair, guides)?;
-                (moved(mesh)?, Box::new(strands))
-            }
-            Self::SimulatedGuides(groom, guides, dynamics) => {
-                let mesh = moved(upload(mesh)?)?;
-                let strands =
-                    GuideStrands::simulated(gpu, rest, &mesh, groom, hair, guides, dynamics)?;
-                (mesh, Box::new(strands))
-            }
-            Self::Simulated(groom, dynamics) => {
-                let mesh = moved(upload(mesh)?)?;
-                let strands = match groom {
-                    Some(groom) => SimulateStrands::groom(gpu, groom, rest, &mesh, hair, dynamics)?,
-                    None => SimulateStrands::grown(gpu, rest, &mesh, hair, dynamics)?,
-                };
-                (mesh, Box::new(strands))
-            }
-        };
-        Ok((mesh, strands))
-    }
+                None => no_mesh(gpu, strands.buffers().reach)?,
+            };
+            (mesh, Box::new(strands))
+        }
+        StrandSource::Groom(groom) => {
+            let mesh = upload(mesh)?;
+            let strands = GroomStrands::new(gpu, groom, hair)?;
+            (moved(mesh)?, Box::new(strands))
+        }
+        StrandSource::Guides(groom, guides) => {
+            let mesh = upload(mesh)?;
+            let strands = GuideStrands::new(gpu, rest, &mesh, groom, hair, guides)?;
+            (moved(mesh)?, Box::new(strands))
+        }
+        StrandSource::SimulatedGuides(groom, guides, dynamics) => {
+            let mesh = moved(upload(mesh)?)?;
+            let strands = GuideStrands::simulated(gpu, rest, &mesh, groom, hair, guides, dynamics)?;
+            (mesh, Box::new(strands))
+        }
+        StrandSource::Simulated(groom, dynamics) => {
+            let mesh = moved(upload(mesh)?)?;
+            let strands = match groom {
+                Some(groom) => SimulateStrands::groom(gpu, groom, rest, &mesh, hair, dynamics)?,
+                None => SimulateStrands::grown(gpu, rest, &mesh, hair, dynamics)?,
+            };
+            (mesh, Box::new(strands))
+        }
+    };
+    Ok((mesh, strands))
 }
 
 /// The stages of a frame built from a [`Scene`], owning no target: prepared with the
@@ -194,6 +163,8 @@ pub struct Frame {
     /// caller's (multisampled, or reverse-Z for some methods); `None`: the hair pass
     /// draws into the caller's targets.
     bridge: Option<TargetBridge>,
+    /// What the frame was built from (or last updated to), for [`Frame::update`].
+    built: update::Built,
 }
 
 impl Frame {
@@ -218,8 +189,7 @@ impl Frame {
     /// [`Frame::new`] with `scene.mesh` skinned on the GPU by `skin` every frame (a
     /// [`MeshSkin`] recorded before stage 1): `scene.mesh` is the bind pose the roots are
     /// sampled on, the caller sets the joint matrices before each prepare
-    /// ([`Frame::set_joint_matrices`], or its own writes into
-    /// [`MeshSkin::joint_matrices`] of [`Frame::skin`]), and `reach` is a world box the
+    /// ([`Frame::set_joint_matrices`]), and `reach` is a world box the
     /// skinned mesh stays in, in every pose (shadow maps of the mesh and a simulation's
     /// grid size themselves from it). Until the first matrices the mesh is in its bind
     /// pose (every joint the identity). Refused with `scene.skin` or `scene.motion` set,
@@ -301,7 +271,8 @@ impl Frame {
             .into());
         }
         let draw_mesh = target.draw_mesh && !groom_only;
-        let (mesh, mut strands) = StrandSource::of(scene).build(gpu, scene, mesh, groom_only)?;
+        let (mesh, mut strands) =
+            build_strands(StrandSource::of(scene), gpu, scene, mesh, groom_only)?;
         // A skinned body's distance field is rebuilt every frame, after the skinning.
         if skin.is_some()
             && let Some(sim) = strands.as_simulation_mut()
@@ -427,6 +398,7 @@ impl Frame {
             plan,
             prepared: None,
             bridge,
+            built: update::Built::of(scene),
         })
     }
 
@@ -704,30 +676,15 @@ impl Frame {
         self.strands.as_ref()
     }
 
-    /// Stage 1, to change (wind, colour).
-    pub(crate) fn strands_mut(&mut self) -> &mut dyn StrandStage {
-        self.strands.as_mut()
-    }
-
     /// Stage 3's method.
     pub fn hair_pass(&self) -> &dyn HairPass {
         self.hair.as_ref()
     }
 
-    /// Stage 3's method, to change (shading parameters).
-    pub(crate) fn hair_pass_mut(&mut self) -> &mut dyn HairPass {
-        self.hair.as_mut()
-    }
-
-    /// The mesh buffers every stage reads.
+    /// The mesh buffers every stage reads, posed for the last prepared frame (moved or
+    /// skinned on the GPU): the caller's own with [`Frame::with_mesh_buffers`].
     pub fn mesh_buffers(&self) -> &MeshBuffers {
         &self.mesh
-    }
-
-    /// The skinning pass (`None` unless the frame skins its mesh: a scene's
-    /// [`SkinBend`] or [`Frame::with_skin`]), for its joint-matrix buffer.
-    pub fn skin(&self) -> Option<&MeshSkin> {
-        self.skin.as_ref().map(|(skin, _)| skin)
     }
 
     /// Writes the joint matrices the next recorded frame skins the mesh with (see
@@ -757,11 +714,6 @@ impl Frame {
         }
     }
 
-    /// The lights the next prepare uses.
-    pub fn lights(&self) -> &[Light] {
-        &self.lights
-    }
-
     /// Replaces the lights from the next prepare on. With shadows the count must stay
     /// the one the frame was built with (each light has its own shadow passes and slice
     /// of the visibility buffer): another count is
@@ -779,7 +731,7 @@ impl Frame {
     }
 
     /// `Err(why)` when `lights` cannot replace the frame's in place.
-    pub(crate) fn lights_in_place(&self, lights: &[Light]) -> Result<(), String> {
+    fn lights_in_place(&self, lights: &[Light]) -> Result<(), String> {
         if self.visibility.is_some() && lights.len() != self.lights.len() {
             return Err(format!(
                 "the light count ({} to {}: each light has its own shadow passes)",
@@ -790,24 +742,18 @@ impl Frame {
         Ok(())
     }
 
-    /// The targets the frame was built for.
-    pub fn target(&self) -> &FrameTarget {
-        &self.target
-    }
-
-    /// The frame the last prepare returned (`None` before the first).
-    pub fn strand_frame(&self) -> Option<StrandFrame> {
-        self.prepared
-    }
-
-    /// The per-vertex light visibility buffer and its floats per light (`None` without
-    /// shadows).
-    pub fn visibility(&self) -> Option<(&wgpu::Buffer, u32)> {
-        self.visibility.as_ref().map(|b| (b, self.stride))
+    /// The per-vertex light visibility stage 2 hands the hair pass (`None` without
+    /// shadows): what an engine drawing the strands itself binds, one slice per light.
+    pub fn visibility(&self) -> Option<Visibility<'_>> {
+        self.visibility.as_ref().map(|buffer| Visibility {
+            buffer,
+            stride: self.stride,
+        })
     }
 
     /// The number of lights with a shadow (0 without shadows).
-    pub fn shadowed_lights(&self) -> usize {
+    #[cfg(not(target_arch = "wasm32"))]
+    pub(crate) fn shadowed_lights(&self) -> usize {
         self.shadows.len()
     }
 }
@@ -822,25 +768,6 @@ fn rename_lookup(shadow: &dyn ShadowMethod, name: &str) -> Vec<String> {
             None => r.clone(),
         })
         .collect()
-}
-
-/// The plan of a frame of `strands`, one shadow and hand-over per light (light `i`'s
-/// resources renamed `shadow{i}.*`), and `hair`, over the mesh and the targets (no
-/// skinning, no target bridge): what a [`Frame`] of those stages records.
-pub fn frame_plan(
-    strands: &dyn StrandStage,
-    shadows: &[(Box<dyn ShadowMethod>, LightVisibility)],
-    hair: &dyn HairPass,
-) -> FramePlan {
-    let steps = Step::order(false, shadows.len(), false);
-    Stages {
-        skin: None,
-        strands,
-        shadows,
-        hair,
-        bridge: None,
-    }
-    .plan(&steps, [])
 }
 
 /// One step of a frame. A [`Frame`] keeps its steps in recording order: its plan is
@@ -905,7 +832,7 @@ impl Step {
     }
 }
 
-/// The stages a plan is built from (a [`Frame`]'s, or those [`frame_plan`] is given).
+/// The stages a [`Frame`]'s plan is built from.
 struct Stages<'a> {
     skin: Option<&'a MeshSkin>,
     strands: &'a dyn StrandStage,

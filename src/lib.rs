@@ -24,7 +24,7 @@
 //!
 //! ```no_run
 //! let gpu = pelage::gpu::Gpu::headless()?;
-//! let scene = pelage::Scene::default();
+//! let scene = pelage::scene::Scene::default();
 //! let mut renderer = pelage::Renderer::new(&gpu, &scene, 320, 240)?;
 //! renderer.render(&gpu, 0.0, &scene.camera)?; // submits and returns, no wait
 //! let stats = renderer.finish(&gpu)?; // waits; the GPU time of each pass
@@ -43,7 +43,7 @@
 //!   plain pixels.
 //! - `files` (default): scene files (`Scene::from_file`, TOML naming OBJ meshes and PNG
 //!   maps). Without it `toml`, `tobj` and `image` are no dependencies of the library: a
-//!   scene is built in code ([`Scene`]'s fields, `scene::Mesh`, `scene::MapImage::new`).
+//!   scene is built in code ([`scene::Scene`]'s fields, `scene::Mesh`, `scene::MapImage::new`).
 //! - `usd` (default): USD grooms (`BasisCurves` in `.usda`, `.usdc`, `.usd`, `.usdz`)
 //!   in `scene::Groom::load` and scene files, through the pure-Rust `openusd` crate,
 //!   which needs Rust 1.96 (without it pelage builds on 1.87).
@@ -59,9 +59,8 @@ mod bridge;
 mod frame;
 mod renderer;
 
-pub use bridge::{RESOLVED_DEPTH, SHADERS};
-pub use frame::{Frame, FrameTarget, frame_plan};
-pub use renderer::{Change, FRAMES_IN_FLIGHT, FrameStats, Renderer, Scene, Update};
+pub use frame::{Frame, FrameTarget};
+pub use renderer::{FrameStats, Renderer};
 
 /// Any error of the frame pipeline.
 #[derive(Debug, thiserror::Error)]

@@ -1,166 +1,13 @@
 //! The frame pipeline: strands, shadows, then shading into an offscreen image.
 
-mod update;
-
-pub use update::{Change, Update};
-
 use pelage_gpu::{Gpu, GpuTimer, wgpu};
-use pelage_scene::{
-    Camera, DynamicsParams, GuideParams, HairParams, Light, Mesh, MeshMotion, Resampled,
-    ShadeParams, ShadowParams, SkinBend,
-};
+use pelage_scene::{Camera, Scene};
 #[cfg(not(target_arch = "wasm32"))]
 use pelage_shade::TargetViews;
 use pelage_shade::{TargetFormat, TargetViewSet, Targets};
-use pelage_strands::{GroomStrands, GrowStrands, GuideStrands, StrandFrame};
+use pelage_strands::StrandFrame;
 
-use crate::frame::{Frame, FrameTarget, StrandSource};
-
-/// Everything a frame is made of.
-#[derive(Clone, Debug)]
-pub struct Scene {
-    /// The surface the hair grows from (drawn under a groom, as its head, say). An empty
-    /// mesh (`Mesh::default()`, no triangles) with a groom is a groom-only scene: no mesh
-    /// is drawn or shadowed.
-    pub mesh: Mesh,
-    /// Roots, growth and wind.
-    pub hair: HairParams,
-    /// A groom to draw instead of growing fur from `mesh` (see [`GroomStrands`] for the
-    /// parts of `hair` it uses); `None` grows fur.
-    pub groom: Option<Resampled>,
-    /// With a groom: take its strands as guides and interpolate render strands rooted on
-    /// `mesh` from them ([`GuideStrands`]); `None` draws the groom's own strands.
-    pub guides: Option<GuideParams>,
-    /// Strand dynamics: `Some` simulates the hair (grown or the groom) with
-    /// [`SimulateStrands`](pelage_strands::SimulateStrands); `None` (the default) bends it
-    /// by the stateless wind.
-    pub dynamics: Option<DynamicsParams>,
-    /// A rigid motion of the mesh over time (written into the mesh buffers every
-    /// frame: the hair on it, its colliders and its drawing follow); `None` keeps it still.
-    pub motion: Option<MeshMotion>,
-    /// A procedural two-joint rig skinning the mesh on the GPU every frame
-    /// ([`pelage_strands::MeshSkin`]: the hair on it follows); `None` keeps it still. Not
-    /// with `motion`. An engine's own skin and joint matrices go through
-    /// [`Frame::with_skin`] instead.
-    pub skin: Option<SkinBend>,
-    /// Shadow method.
-    pub shadow: ShadowParams,
-    /// Raster and shading.
-    pub shade: ShadeParams,
-    /// The camera.
-    pub camera: Camera,
-    /// The lights, 1 to 4 (the first is the key light: it also shadows the mesh); each
-    /// gets its own shadow from `shadow`.
-    pub lights: Vec<Light>,
-}
-
-impl Default for Scene {
-    /// The built-in scene: the procedural creature, furred, in gusting wind.
-    fn default() -> Self {
-        Self {
-            mesh: Mesh::creature(),
-            hair: HairParams::default(),
-            groom: None,
-            guides: None,
-            dynamics: None,
-            motion: None,
-            skin: None,
-            shadow: ShadowParams::default(),
-            shade: ShadeParams::default(),
-            camera: Camera::default(),
-            lights: vec![Light::default()],
-        }
-    }
-}
-
-impl Scene {
-    /// Reads a scene file (TOML, see [`pelage_scene::SceneFile`]) and builds or loads its
-    /// mesh and groom. (Feature `files`.)
-    #[cfg(feature = "files")]
-    pub fn from_file(path: &std::path::Path) -> Result<Self, pelage_scene::SceneFileError> {
-        Self::from_scene_file(&pelage_scene::SceneFile::load(path)?, path)
-    }
-
-    /// The scene a parsed scene file describes (`path` names it in errors). (Feature
-    /// `files`.)
-    #[cfg(feature = "files")]
-    pub fn from_scene_file(
-        file: &pelage_scene::SceneFile,
-        path: &std::path::Path,
-    ) -> Result<Self, pelage_scene::SceneFileError> {
-        Ok(Self {
-            mesh: file.mesh(path)?,
-            hair: file.hair.clone(),
-            groom: file.groom(path)?,
-            guides: file.groom.as_ref().and_then(|g| g.guides.clone()),
-            dynamics: file.dynamics.clone(),
-            motion: file.motion.clone(),
-            skin: file.skin.clone(),
-            shadow: file.shadow.clone(),
-            shade: file.shade.clone(),
-            camera: file.camera.clone(),
-            lights: file.lights.clone(),
-        })
-    }
-
-    /// This scene with its shadow grid or maps sized to the hair's size on screen from
-    /// `camera` on a `width` x `height` target ([`ShadowParams::sized_for`]): nothing
-    /// finer than the picture can show. Unchanged when the hair's box reaches behind the
-    /// camera.
-    pub fn sized_for_view(&self, camera: &Camera, width: u32, height: u32) -> Self {
-        let level =
-            pelage_strands::LodLevel::for_view(&self.hair, self.reach(), camera, width, height);
-        let mut out = self.clone();
-        if level.extent_pixels.is_finite() {
-            out.shadow = self.shadow.sized_for(level.extent_pixels);
-        }
-        out
-    }
-
-    /// A world box holding the mesh and everything that can grow on it: the mesh's
-    /// bounds and [`GrowStrands::reach_of`]; with a groom, the mesh's bounds (none for
-    /// an empty mesh) and the groom's reach
-    /// ([`GroomStrands::reach_of`]; the rest bounds alone when its parameters are bad,
-    /// which the renderer then refuses).
-    ///
-    /// A simulated groom (or simulated guides) reaches its longest strand (and width)
-    /// around its rest bounds; with a [`MeshMotion`] the box is the sphere around the pivot holding it, and with a
-    /// [`SkinBend`] the box holding every pose of its moving joint.
-    pub fn reach(&self) -> (glam::Vec3, glam::Vec3) {
-        let (lo, hi) = self.mesh.bounds();
-        // A simulated groom: its longest strand (and width) around its rest bounds.
-        let simulated = |groom: &Resampled| {
-            let pad = GroomStrands::params_for(groom, &self.hair)
-                .map_or(0.0, |p| p.growth.length + p.growth.width);
-            let (a, b) = groom.bounds();
-            (a - glam::Vec3::splat(pad), b + glam::Vec3::splat(pad))
-        };
-        let (glo, ghi) = match StrandSource::of(self) {
-            StrandSource::Guides(groom, guides) => {
-                GuideStrands::reach_of(groom, (lo, hi), &self.hair, guides)
-                    .unwrap_or_else(|_| groom.bounds())
-            }
-            StrandSource::SimulatedGuides(groom, guides, _) => {
-                GuideStrands::reach_around(simulated(groom), (lo, hi), groom, &self.hair, guides)
-                    .unwrap_or_else(|_| groom.bounds())
-            }
-            StrandSource::Groom(groom) => {
-                GroomStrands::reach_of(groom, &self.hair).unwrap_or_else(|_| groom.bounds())
-            }
-            StrandSource::Simulated(Some(groom), _) => simulated(groom),
-            StrandSource::Simulated(None, _) | StrandSource::Grown => {
-                GrowStrands::reach_of(&self.mesh, &self.hair)
-            }
-        };
-        // A groom-only scene: the hair's reach alone.
-        if self.groom.is_some() && self.mesh.indices.is_empty() {
-            return (glo, ghi);
-        }
-        let reach = (lo.min(glo), hi.max(ghi));
-        let reach = self.skin.as_ref().map_or(reach, |s| s.reach(reach));
-        self.motion.as_ref().map_or(reach, |m| m.reach(reach))
-    }
-}
+use crate::frame::{Frame, FrameTarget};
 
 /// GPU time of one frame, per pass.
 #[derive(Clone, Debug, Default)]
@@ -191,12 +38,10 @@ pub struct Renderer {
     last_stats: FrameStats,
     /// Frames submitted by `render` the GPU may not have finished.
     in_flight: std::collections::VecDeque<wgpu::SubmissionIndex>,
-    /// What the renderer draws, for [`Renderer::update`] to compare a scene with.
-    built: update::Built,
 }
 
 /// Frames [`Renderer::render`] lets the GPU fall behind by before it waits.
-pub const FRAMES_IN_FLIGHT: usize = 2;
+pub(crate) const FRAMES_IN_FLIGHT: usize = 2;
 
 impl Renderer {
     /// Uploads the mesh, samples the roots (or uploads the groom), builds every pipeline
@@ -234,18 +79,17 @@ impl Renderer {
             views,
             in_flight: Default::default(),
             last_stats: FrameStats::default(),
-            built: update::Built::of(scene),
         })
     }
 
     /// Advances stage 1 to time `t` without drawing: the mesh's motion, the colliders
     /// and the level of detail as [`Renderer::render`] sets them for `t` and `camera`,
     /// then only stage 1 recorded and submitted (no shadows, no shading, no timestamp
-    /// queries, nothing read back). For a simulation ([`Scene::dynamics`]) this steps
+    /// queries, nothing read back). For a simulation (`Scene::dynamics`) this steps
     /// the hair to `t` as a rendered frame would, so that later frames are those of a
     /// renderer that drew this one, at a fraction of the cost; for the stateless
     /// methods it is wasted work. Like `render`, it returns without waiting for the GPU
-    /// (at most [`FRAMES_IN_FLIGHT`] frames queued).
+    /// (at most two frames queued).
     pub fn advance(&mut self, gpu: &Gpu, t: f32, camera: &Camera) -> crate::Result<()> {
         self.frame.prepare_strands(&gpu.queue, t, Some(camera))?;
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
@@ -271,30 +115,9 @@ impl Renderer {
         Ok(())
     }
 
-    /// Records a whole frame into `encoder`: prepares every stage for time `t` and
-    /// `camera` ([`Frame::prepare`]), then records stage 1, each light's shadow and its
-    /// hand-over, and stage 3 into the renderer's targets. Creates no buffer or bind
-    /// group in steady state and never waits for the GPU; submitting is the caller's,
-    /// then [`Renderer::after_submit`]. (Untimed: the caller's own timestamp queries, if
-    /// any, go around it.)
-    pub fn record(
-        &mut self,
-        gpu: &Gpu,
-        encoder: &mut wgpu::CommandEncoder,
-        t: f32,
-        camera: &Camera,
-    ) -> crate::Result<StrandFrame> {
-        self.record_timed(gpu, encoder, t, camera, false)
-    }
-
-    /// The step after submitting what [`Renderer::record`] recorded
-    /// ([`Frame::after_submit`]: readbacks taken, pools grown; never waits).
-    /// [`Renderer::render`] takes it itself.
-    pub fn after_submit(&mut self, gpu: &Gpu) -> crate::Result<()> {
-        self.frame.after_submit(gpu)
-    }
-
-    /// [`Renderer::record`], with the renderer's timestamp queries when `timed`.
+    /// Prepares every stage for time `t` and `camera` ([`Frame::prepare`]) and records
+    /// the frame into the renderer's targets, with the renderer's timestamp queries when
+    /// `timed`.
     fn record_timed(
         &mut self,
         gpu: &Gpu,
@@ -310,7 +133,7 @@ impl Renderer {
     }
 
     /// Grows the strands for time `t`, shadows them and draws them from `camera`:
-    /// records the frame ([`Renderer::record`]), submits it, takes the frame's
+    /// records the frame ([`Frame::prepare`], [`Frame::record`]), submits it, takes the frame's
     /// after-submit step and returns without waiting for the GPU. The [`FrameStats`]
     /// returned are those of the newest earlier frame the GPU has finished since the
     /// last call (read back a frame or more late; empty when none has finished yet);
@@ -464,35 +287,9 @@ impl Renderer {
         &self.frame
     }
 
-    /// Light visibility at every strand vertex after the last frame, one `Vec` per light
-    /// (empty without shadows); waits for the GPU.
-    pub fn light_visibility(&self, gpu: &Gpu) -> crate::Result<Vec<Vec<f32>>> {
-        let Some((buffer, stride)) = self.frame.visibility() else {
-            return Ok(Vec::new());
-        };
-        let bytes = pelage_gpu::read_buffer(gpu, buffer)?;
-        let floats: Vec<f32> = bytes
-            .chunks_exact(4)
-            .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
-            .collect();
-        let vertices = self
-            .frame
-            .strand_frame()
-            .map_or_else(
-                || self.frame.strands().buffers().full_layout(),
-                |f| f.layout,
-            )
-            .vertices() as usize;
-        Ok(floats
-            .chunks(stride as usize)
-            .take(self.frame.shadowed_lights())
-            .map(|c| c[..vertices.min(c.len())].to_vec())
-            .collect())
-    }
-
-    /// The formats of the renderer's targets.
-    pub fn target_format(&self) -> &TargetFormat {
-        &self.targets.format
+    /// The stages, to change in place ([`Frame::update`], [`Frame::set_lights`]).
+    pub fn frame_mut(&mut self) -> &mut Frame {
+        &mut self.frame
     }
 
     /// The final single-sample colour target (the renderer's [`TargetFormat`], width x height, usable as `TEXTURE_BINDING` and `COPY_SRC`): bind it to

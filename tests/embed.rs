@@ -8,7 +8,7 @@
 mod embed;
 
 use pelage::scene::Camera;
-use pelage::{Renderer, Scene};
+use pelage::{Renderer, scene::Scene};
 use pelage_reference::flip::{DEFAULT_PIXELS_PER_DEGREE, LinearImage, flip};
 
 #[test]

@@ -20,7 +20,7 @@
 use std::path::Path;
 
 use glam::Vec3;
-use pelage::{Renderer, Scene, gpu::Gpu};
+use pelage::{Renderer, gpu::Gpu, scene::Scene};
 use pelage_reference::flip::{DEFAULT_PIXELS_PER_DEGREE, FlipMap, LinearImage, flip};
 
 const GOLDEN: &str = "tests/golden/default_scene.png";

@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use glam::Vec3;
 use pelage::scene::{HairFile, SceneFile, SceneFileError, TfxFile, WindParams};
 use pelage::strands::{hash_to_unit, pcg_hash};
-use pelage::{Renderer, Scene, gpu::Gpu};
+use pelage::{Renderer, gpu::Gpu, scene::Scene};
 
 const SIZE: (u32, u32) = (160, 120);
 

@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use glam::Vec4;
 use pelage::scene::{HairFile, KajiyaKayParams, SceneFile, ShadingModel, WindParams};
 use pelage::strands::GuideStrands;
-use pelage::{Renderer, Scene, gpu::Gpu};
+use pelage::{Renderer, gpu::Gpu, scene::Scene};
 
 const SIZE: (u32, u32) = (160, 120);
 

@@ -6,7 +6,7 @@
 
 use pelage::gpu::{Gpu, wgpu};
 use pelage::scene::{ShadingModel, ShadowParams, Transparency};
-use pelage::{Renderer, Scene};
+use pelage::{Renderer, scene::Scene};
 
 /// The features the k-buffer and random subsets declare (64-bit atomics); nothing else.
 const INT64: wgpu::Features = wgpu::Features::SHADER_INT64

@@ -2,7 +2,7 @@
 
 use glam::Vec3;
 use pelage::scene::{DirectionalLight, Light, PointLight};
-use pelage::{Renderer, Scene, gpu::Gpu};
+use pelage::{Renderer, gpu::Gpu, scene::Scene};
 
 fn gpu() -> Gpu {
     Gpu::headless().unwrap_or_else(|e| panic!("this test needs a GPU adapter: {e}"))
@@ -22,9 +22,20 @@ fn directional(direction: Vec3) -> Light {
     })
 }
 
+/// Each light's visibility at every strand vertex after the last frame (up to `lights`).
+fn visibility(renderer: &Renderer, gpu: &Gpu, lights: usize) -> Vec<Vec<f32>> {
+    let frame = renderer.frame();
+    let vertices = frame.strands().buffers().full_layout().vertices() as usize;
+    frame
+        .visibility()
+        .expect("the scene has shadows")
+        .read(gpu, lights, vertices)
+        .unwrap()
+}
+
 /// Mean visibility of the strand tips (the last vertex of each strand) on each side of x = 0.
 fn sides(renderer: &Renderer, gpu: &Gpu, light: usize) -> (f32, f32) {
-    let vis = renderer.light_visibility(gpu).unwrap();
+    let vis = visibility(renderer, gpu, 4);
     let vertices =
         pelage::gpu::read_buffer(gpu, &renderer.frame().strands().buffers().vertices).unwrap();
     let points: &[[f32; 4]] = bytemuck::cast_slice(&vertices);
@@ -88,7 +99,7 @@ fn four_lights_and_the_key_plus_back_preset_render() {
     ]);
     let mut renderer = Renderer::new(&gpu, &four, 96, 72).unwrap();
     renderer.render(&gpu, 0.0, &four.camera).unwrap();
-    assert_eq!(renderer.light_visibility(&gpu).unwrap().len(), 4);
+    assert_eq!(visibility(&renderer, &gpu, 8).len(), 4);
 }
 
 #[test]

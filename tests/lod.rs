@@ -1,7 +1,7 @@
 //! Level of detail through the whole frame: a zoom from close-up to far must not pop.
 
 use pelage::scene::{Camera, LodParams, Transparency, WindParams};
-use pelage::{Renderer, Scene, gpu::Gpu};
+use pelage::{Renderer, gpu::Gpu, scene::Scene};
 
 const SIZE: (u32, u32) = (160, 120);
 const FRAMES: usize = 48;

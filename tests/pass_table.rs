@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 
 use pelage::gpu::{FramePlan, Gpu, PassInfo};
 use pelage::scene::{DynamicsParams, Named, ShadowParams, Transparency};
-use pelage::{Renderer, Scene};
+use pelage::{Renderer, scene::Scene};
 
 /// Where the generated page lives, from the repository root.
 const PAGE: &str = "docs/src/generated/pass_table.md";

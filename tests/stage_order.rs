@@ -101,7 +101,7 @@ fn a_stage_recorded_for_another_frame_than_it_was_prepared_for_is_an_error() {
 /// prepare is an error, never a picture.
 #[test]
 fn a_frame_in_the_callers_targets_is_the_renderers_picture() {
-    use pelage::{Frame, FrameTarget, Renderer, Scene};
+    use pelage::{Frame, FrameTarget, Renderer, scene::Scene};
     let gpu = Gpu::headless().unwrap_or_else(|e| panic!("this test needs a GPU adapter: {e}"));
     let mut scene = Scene::default();
     scene.hair.roots.count = 2_000;

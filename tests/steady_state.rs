@@ -5,7 +5,7 @@
 
 use pelage::gpu::{Created, Gpu};
 use pelage::scene::{ShadowParams, Transparency};
-use pelage::{Renderer, Scene};
+use pelage::{Renderer, scene::Scene};
 
 fn scene(shadow: ShadowParams, transparency: Transparency) -> Scene {
     let mut scene = Scene::default();

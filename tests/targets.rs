@@ -5,7 +5,7 @@
 use pelage::gpu::{Gpu, wgpu};
 use pelage::scene::{Camera, Transparency};
 use pelage::shade::TargetFormat;
-use pelage::{Renderer, Scene};
+use pelage::{Renderer, scene::Scene};
 
 const W: u32 = 96;
 const H: u32 = 72;

@@ -1,13 +1,14 @@
-//! `Renderer::update` and its setters: a change made in place draws the picture a new
-//! renderer of the changed scene draws (RGBA8, every pixel equal), and a change that
-//! shapes buffers, passes or pipelines is answered `Update::Rebuild` with nothing applied.
+//! `Frame::update` (through `Renderer::frame_mut`): a change made in place draws the
+//! picture a new renderer of the changed scene draws (RGBA8, every pixel equal), and a
+//! change that shapes buffers, passes or pipelines is `Error::NeedsRebuild` with nothing
+//! applied.
 
 use glam::Vec3;
 use pelage::scene::{
     ChiangParams, DirectionalLight, Light, MarschnerParams, SadeghiParams, ShadingModel,
     ShadowParams, Transparency,
 };
-use pelage::{Change, Error, Renderer, Scene, Update, gpu::Gpu};
+use pelage::{Error, Renderer, gpu::Gpu, scene::Scene};
 
 const SIZE: (u32, u32) = (96, 72);
 
@@ -42,30 +43,38 @@ fn diff(a: &image::RgbaImage, b: &image::RgbaImage) -> (usize, u8) {
     (count, worst)
 }
 
-/// Renders `from`, updates the renderer to `to` (expecting `changes`), renders again and
-/// compares with a new renderer of `to`: every pixel must be equal, and the change must
-/// show (the picture of `from` differs).
-fn in_place_matches_a_new_renderer(gpu: &Gpu, from: &Scene, to: &Scene, changes: &[Change]) {
+/// Renders `from`, updates the renderer to `to` in place (what changed: `changes`),
+/// renders again and compares with a new renderer of `to`: every pixel must be equal, and
+/// the change must show (the picture of `from` differs).
+fn in_place_matches_a_new_renderer(gpu: &Gpu, from: &Scene, to: &Scene, changes: &str) {
     let mut renderer = Renderer::new(gpu, from, SIZE.0, SIZE.1).unwrap();
     let before = picture(gpu, &mut renderer, from);
-    let update = renderer.update(gpu, to).unwrap();
-    assert_eq!(update, Update::Applied(changes.to_vec()));
+    renderer
+        .frame_mut()
+        .update(gpu, to)
+        .unwrap_or_else(|e| panic!("{changes}: {e}"));
     let in_place = picture(gpu, &mut renderer, to);
     let mut fresh = Renderer::new(gpu, to, SIZE.0, SIZE.1).unwrap();
     let fresh = picture(gpu, &mut fresh, to);
     let (shown, _) = diff(&before, &fresh);
     let (count, worst) = diff(&in_place, &fresh);
     println!(
-        "{changes:?}: the change moves {shown} pixels; in place vs new: {count} pixels differ, by at most {worst}"
+        "{changes}: the change moves {shown} pixels; in place vs new: {count} pixels differ, by at most {worst}"
     );
-    assert!(shown > 20, "{changes:?}: the change does not show");
+    assert!(shown > 20, "{changes}: the change does not show");
     assert_eq!(
         (count, worst),
         (0, 0),
-        "{changes:?}: in place differs from a new renderer"
+        "{changes}: in place differs from a new renderer"
     );
-    // Nothing left to change: the same scene again is an empty update.
-    assert_eq!(renderer.update(gpu, to).unwrap(), Update::Applied(vec![]));
+    // Nothing left to change: the same scene again changes nothing.
+    renderer.frame_mut().update(gpu, to).unwrap();
+    let again = picture(gpu, &mut renderer, to);
+    assert_eq!(
+        diff(&again, &fresh),
+        (0, 0),
+        "{changes}: a second update changed it"
+    );
 }
 
 #[test]
@@ -76,7 +85,7 @@ fn wind_in_place_draws_what_a_new_renderer_draws() {
     to.hair.wind.strength = 2.5;
     to.hair.wind.direction = Vec3::new(-1.0, 0.2, 0.5);
     to.hair.wind.turbulence = 1.2;
-    in_place_matches_a_new_renderer(&gpu, &from, &to, &[Change::Wind]);
+    in_place_matches_a_new_renderer(&gpu, &from, &to, "wind");
 }
 
 #[test]
@@ -86,7 +95,7 @@ fn hair_colour_in_place_draws_what_a_new_renderer_draws() {
     let mut to = from.clone();
     to.hair.growth.color = Vec3::new(0.8, 0.6, 0.3);
     to.hair.growth.color_jitter = 0.5;
-    in_place_matches_a_new_renderer(&gpu, &from, &to, &[Change::HairColor]);
+    in_place_matches_a_new_renderer(&gpu, &from, &to, "hair colour");
 }
 
 #[test]
@@ -100,7 +109,7 @@ fn lights_in_place_draw_what_a_new_renderer_draws() {
         color: Vec3::new(1.0, 0.9, 0.8),
         intensity: 2.0,
     });
-    in_place_matches_a_new_renderer(&gpu, &from, &to, &[Change::Lights]);
+    in_place_matches_a_new_renderer(&gpu, &from, &to, "lights");
 }
 
 #[test]
@@ -117,7 +126,7 @@ fn shading_in_place_draws_what_a_new_renderer_draws() {
         p.specular *= 2.0;
         p.shininess = 20.0;
     }
-    in_place_matches_a_new_renderer(&gpu, &from, &to, &[Change::Shading]);
+    in_place_matches_a_new_renderer(&gpu, &from, &to, "shading");
 }
 
 #[test]
@@ -178,7 +187,7 @@ fn every_model_takes_its_parameters_in_place_tables_included() {
         from.shade.model = a;
         let mut to = from.clone();
         to.shade.model = b;
-        in_place_matches_a_new_renderer(&gpu, &from, &to, &[Change::Shading]);
+        in_place_matches_a_new_renderer(&gpu, &from, &to, "shading");
     }
 }
 
@@ -195,17 +204,7 @@ fn several_changes_at_once_under_a_transparency_method() {
         direction: Vec3::new(0.5, -0.7, -0.3),
         ..Default::default()
     });
-    in_place_matches_a_new_renderer(
-        &gpu,
-        &from,
-        &to,
-        &[
-            Change::Shading,
-            Change::Wind,
-            Change::HairColor,
-            Change::Lights,
-        ],
-    );
+    in_place_matches_a_new_renderer(&gpu, &from, &to, "shading, wind, hair colour and lights");
 }
 
 #[test]
@@ -242,8 +241,8 @@ fn structural_changes_ask_for_a_rebuild_and_change_nothing() {
         to.hair.wind.strength = 3.0;
         to.shade.ambient = 0.9;
         change(&mut to);
-        match renderer.update(&gpu, &to).unwrap() {
-            Update::Rebuild(why) => println!("{name}: rebuild ({why})"),
+        match renderer.frame_mut().update(&gpu, &to) {
+            Err(Error::NeedsRebuild(why)) => println!("{name}: rebuild ({why})"),
             other => panic!("{name}: expected a rebuild, got {other:?}"),
         }
     }
@@ -256,42 +255,77 @@ fn structural_changes_ask_for_a_rebuild_and_change_nothing() {
 }
 
 #[test]
-fn setters_refuse_bad_values_and_structural_changes_with_typed_errors() {
+fn updates_refuse_bad_values_and_structural_changes_with_typed_errors() {
     let gpu = gpu();
     let from = base();
     let mut renderer = Renderer::new(&gpu, &from, SIZE.0, SIZE.1).unwrap();
     let before = picture(&gpu, &mut renderer, &from);
+    let frame = renderer.frame_mut();
     let two = Light::key_and_back(&from.camera);
     assert!(matches!(
-        renderer.set_lights(&two),
+        frame.set_lights(&two),
         Err(Error::NeedsRebuild(_))
     ));
-    let mut wind = from.hair.wind.clone();
-    wind.strength = f32::NAN;
-    assert!(matches!(renderer.set_wind(wind), Err(Error::Strands(_))));
-    assert!(
-        renderer
-            .set_hair_color(&gpu, Vec3::new(-1.0, 0.0, 0.0), 0.1)
-            .is_err()
-    );
-    assert!(renderer.set_hair_color(&gpu, Vec3::ONE, 1.0).is_err());
-    let mut shade = from.shade.clone();
-    shade.transparency = Transparency::wboit();
-    assert!(matches!(
-        renderer.set_shading(&gpu, &shade),
-        Err(Error::NeedsRebuild(_))
-    ));
-    let mut shade = from.shade.clone();
-    shade.ambient = -1.0;
-    assert!(renderer.set_shading(&gpu, &shade).is_err());
-    let mut bad = from.clone();
-    bad.shade.ambient = f32::INFINITY;
-    assert!(renderer.update(&gpu, &bad).is_err());
+    let edits: Vec<(&str, bool, Edit)> = vec![
+        (
+            "two lights",
+            true,
+            Box::new(move |s| s.lights = two.clone()),
+        ),
+        (
+            "NaN wind",
+            false,
+            Box::new(|s| s.hair.wind.strength = f32::NAN),
+        ),
+        (
+            "negative hair colour",
+            false,
+            Box::new(|s| s.hair.growth.color = Vec3::new(-1.0, 0.0, 0.0)),
+        ),
+        (
+            "colour jitter 1",
+            false,
+            Box::new(|s| s.hair.growth.color_jitter = 1.0),
+        ),
+        (
+            "another transparency method",
+            true,
+            Box::new(|s| s.shade.transparency = Transparency::wboit()),
+        ),
+        (
+            "negative ambient",
+            false,
+            Box::new(|s| s.shade.ambient = -1.0),
+        ),
+        (
+            "infinite ambient",
+            false,
+            Box::new(|s| s.shade.ambient = f32::INFINITY),
+        ),
+    ];
+    for (name, structural, edit) in edits {
+        let mut to = from.clone();
+        edit(&mut to);
+        match frame.update(&gpu, &to) {
+            Err(Error::NeedsRebuild(why)) if structural => println!("{name}: rebuild ({why})"),
+            Err(e) if !structural && !matches!(e, Error::NeedsRebuild(_)) => {
+                println!("{name}: {e}")
+            }
+            other => panic!(
+                "{name}: expected {}, got {other:?}",
+                if structural {
+                    "a rebuild"
+                } else {
+                    "a bad value"
+                }
+            ),
+        }
+    }
     let after = picture(&gpu, &mut renderer, &from);
     assert_eq!(
         diff(&before, &after),
         (0, 0),
-        "a refused setter changed the picture"
+        "a refused update changed the picture"
     );
 }
 
@@ -302,5 +336,5 @@ fn without_shadows_the_light_count_changes_in_place() {
     from.shadow = ShadowParams::None;
     let mut to = from.clone();
     to.lights = Light::key_and_back(&to.camera);
-    in_place_matches_a_new_renderer(&gpu, &from, &to, &[Change::Lights]);
+    in_place_matches_a_new_renderer(&gpu, &from, &to, "lights");
 }

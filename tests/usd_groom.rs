@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use glam::Vec3;
 use pelage::scene::{Groom, GroomSource, HairFile, HairParams, SceneFile, WindParams, usd_file};
 use pelage::strands::{GroomStrands, StrandStage};
-use pelage::{Renderer, Scene, gpu::Gpu};
+use pelage::{Renderer, gpu::Gpu, scene::Scene};
 
 const SIZE: (u32, u32) = (96, 72);
 

@@ -9,7 +9,7 @@ use pelage::scene::{
     LayerSpacing, Light, MarschnerParams, PointLight, ShadingModel, ShadowMapParams, ShadowParams,
     Transparency, VoxelParams,
 };
-use pelage::{Error, Renderer, Scene, gpu::Gpu, gpu::GpuError, strands::StrandsError};
+use pelage::{Error, Renderer, gpu::Gpu, gpu::GpuError, scene::Scene, strands::StrandsError};
 
 /// The kind of error a case must produce.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -236,8 +236,8 @@ pub fn reach(mesh: &pelage::scene::Mesh) -> (glam::Vec3, glam::Vec3) {
 /// The scene as pelage's own renderer takes it: the creature at rest, 8 000 strands,
 /// pelage's default wind, one directional key light, pelage's default camera,
 /// single-sampled shading.
-pub fn scene() -> Result<pelage::Scene> {
-    let mut scene = pelage::Scene {
+pub fn scene() -> Result<pelage::scene::Scene> {
+    let mut scene = pelage::scene::Scene {
         mesh: character()?.0,
         ..Default::default()
     };

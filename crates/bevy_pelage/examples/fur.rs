@@ -31,8 +31,8 @@ pub use headless::{FRAME_STEP, HEIGHT, WIDTH, read, time};
 /// The scene, as pelage's own renderer takes it: the creature, 12,000 strands in
 /// pelage's default gusting wind, one directional key light, pelage's default camera,
 /// single-sampled shading.
-pub fn scene() -> pelage::Scene {
-    let mut scene = pelage::Scene::default();
+pub fn scene() -> pelage::scene::Scene {
+    let mut scene = pelage::scene::Scene::default();
     scene.hair.roots.count = 12_000;
     scene.shade.sample_count = 1;
     scene.lights = vec![pelage::scene::Light::Directional(
@@ -59,7 +59,7 @@ pub fn app(view: View) -> Result<(App, Handle<Image>)> {
 }
 
 /// [`app`] of another scene (`scene()` with another transparency method, say).
-pub fn app_of(view: View, scene: &pelage::Scene) -> Result<(App, Handle<Image>)> {
+pub fn app_of(view: View, scene: &pelage::scene::Scene) -> Result<(App, Handle<Image>)> {
     let mut app = App::new();
     app.add_plugins(headless::plugins())
         .insert_resource(TimeUpdateStrategy::ManualDuration(FRAME_STEP));

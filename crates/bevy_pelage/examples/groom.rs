@@ -34,8 +34,8 @@ pub fn default_scene_file() -> PathBuf {
 
 /// The scene file at `path` as pelage's renderer takes it, and its groom file's name
 /// relative to the scene's folder (what the asset server loads).
-pub fn scene(path: &Path) -> Result<(pelage::Scene, String)> {
-    let scene = pelage::Scene::from_file(path)?;
+pub fn scene(path: &Path) -> Result<(pelage::scene::Scene, String)> {
+    let scene = pelage::scene::Scene::from_file(path)?;
     let file = pelage::scene::SceneFile::load(path)?;
     let groom = file
         .groom

@@ -70,7 +70,7 @@
 //!   own renders shade it and shadowed by the fur; turn it off when the application
 //!   draws the mesh with a Bevy material.
 //! - Each camera records its own [`pelage::Frame`] of the fur (the stages the facade's
-//!   renderer records, built from a [`pelage::Scene`] of the entity's mesh and [`Fur`]
+//!   renderer records, built from a [`pelage::scene::Scene`] of the entity's mesh and [`Fur`]
 //!   with a voxel shadow): strands are grown and shadowed once per camera; pelage's
 //!   level of detail is not used (every strand is drawn).
 //! - Nothing waits for the GPU: every stage only writes uniforms in
@@ -108,7 +108,7 @@ use pelage::scene::{
     CameraMatrices, HairParams, Light, ShadeParams, ShadowParams, Skin, VoxelParams,
 };
 use pelage::shade::{TargetFormat, TargetViews};
-use pelage::{Frame, FrameTarget, Scene};
+use pelage::{Frame, FrameTarget, scene::Scene};
 
 mod groom;
 pub use groom::{Groom, GroomAsset, GroomLoadError, GroomLoader};

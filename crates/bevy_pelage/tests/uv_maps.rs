@@ -35,7 +35,7 @@ fn half_map(black_top: bool) -> TextureMap {
 /// Fur pixels (not the background) in the top and bottom halves of the plugin's frame
 /// of Bevy's UV sphere with `density` as its density map.
 fn fur_halves(density: Option<TextureMap>) -> (usize, usize) {
-    let mut scene = pelage::Scene::default();
+    let mut scene = pelage::scene::Scene::default();
     scene.camera = pelage::scene::Camera {
         eye: glam::Vec3::new(0.0, 0.0, 2.6),
         target: glam::Vec3::ZERO,

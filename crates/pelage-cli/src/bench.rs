@@ -37,7 +37,7 @@ use pelage::strands::{
     BodySdf, GroomStrands, GrowStrands, GuideMemory, GuideStrands, MeshBuffers, MeshSkin,
     SDF_LABEL, SKIN_LABEL, SimulateStrands, StrandStage,
 };
-use pelage::{Renderer, Scene};
+use pelage::{Renderer, scene::Scene};
 use pelage_lab::{ScatterChart, ScatterPoint, Table};
 
 use crate::lab::LabOpts;
@@ -345,7 +345,13 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
         let mesh = MeshBuffers::upload(&gpu, &s.mesh)?;
         let mut grow = GrowStrands::new(&gpu, &s.mesh, &mesh, &s.hair)?;
         let b = grow.buffers();
-        let voxel = VoxelShadow::new(&gpu, &VoxelParams::default(), b, &mesh, s.reach())?;
+        let voxel = VoxelShadow::new(
+            &gpu,
+            &VoxelParams::default(),
+            b,
+            &mesh,
+            pelage::strands::scene_reach(&s),
+        )?;
         let copy = Copy::new(&gpu, b.vertices.size().max(16 << 20))?;
         let scratch = pelage::gpu::zeroed_storage(
             &gpu,
@@ -805,14 +811,20 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
         });
     }
 
-    // 4c. The CPU cost of recording a frame: the default scene (voxel shadows, opaque,
-    //     Kajiya-Kay) recorded with `Renderer::record` into an encoder and finished, wall
-    //     clock on the CPU, median of the frames after three of warm-up; submitted and
-    //     waited for outside the timing. GPU objects created while recording are counted.
+    // 4c. The CPU cost of recording a frame: the default scene prepared and recorded
+    //     (`Frame::prepare`, `Frame::record`: what an engine calls) into an encoder and
+    //     finished, wall clock on the CPU, median of the frames after three of warm-up;
+    //     submitted and waited for outside the timing. GPU objects created while
+    //     recording are counted.
     {
         let gpu = Gpu::headless()?;
         let s = Scene::default();
-        let mut renderer = Renderer::new(&gpu, &s, width, height)?;
+        let format = pelage::shade::TargetFormat::for_params(&s.shade);
+        let mut frame_stages =
+            pelage::Frame::new(&gpu, &s, &pelage::FrameTarget::new(format, width, height))?;
+        let targets = pelage::shade::Targets::with_format(&gpu, width, height, &format)?;
+        let view_set = targets.view_set();
+        let views = view_set.views();
         let record_frames = if opts.quick { 20 } else { 200 };
         let mut cpu = Vec::new();
         let mut created = pelage::gpu::Created::default();
@@ -821,7 +833,8 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
             let before = pelage::gpu::Created::now();
             let started = Instant::now();
             let mut encoder = gpu.device.create_command_encoder(&Default::default());
-            renderer.record(&gpu, &mut encoder, t, &s.camera)?;
+            frame_stages.prepare(&gpu.queue, t, &s.camera)?;
+            frame_stages.record(&mut encoder, &views, None)?;
             let commands = encoder.finish();
             let ms = started.elapsed().as_secs_f64() * 1e3;
             if frame >= 3 {
@@ -831,7 +844,7 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
                 created.bind_groups += c.bind_groups;
             }
             gpu.submit_and_wait([commands])?;
-            renderer.after_submit(&gpu)?;
+            frame_stages.after_submit(&gpu)?;
         }
         let ms = median(cpu.clone());
         cpu.sort_by(f64::total_cmp);
@@ -850,7 +863,7 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
             bytes: 0,
             copy_ratio: p90 / ms,
             note: format!(
-                "CPU wall clock of Renderer::record + finish, median; ratio column = p90/median; \
+                "CPU wall clock of Frame::prepare + Frame::record + finish, median; ratio column = p90/median; \
                  {} buffers and {} bind groups created over {record_frames} frames",
                 created.buffers, created.bind_groups
             ),
@@ -865,7 +878,8 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
             let t = frame as f32 / 24.0;
             let started = Instant::now();
             let mut encoder = gpu.device.create_command_encoder(&Default::default());
-            renderer.record(&gpu, &mut encoder, t, &s.camera)?;
+            frame_stages.prepare(&gpu.queue, t, &s.camera)?;
+            frame_stages.record(&mut encoder, &views, None)?;
             drop(encoder.finish());
             if frame >= 3 {
                 warm.push(started.elapsed().as_secs_f64() * 1e3);

@@ -33,7 +33,7 @@ use pelage::gpu::{Gpu, wgpu};
 use pelage::scene::{DeepOpacityParams, ShadowMapParams, ShadowParams, Transparency, VoxelParams};
 use pelage::scene::{Named, Resampled, WindParams};
 use pelage::strands::{GrowStrands, MeshBuffers, StrandStage};
-use pelage::{Renderer, Scene};
+use pelage::{Renderer, scene::Scene};
 use pelage_lab::Table;
 
 type Error = Box<dyn std::error::Error>;

@@ -14,7 +14,7 @@ use glam::{DVec3, Vec3, Vec4};
 use image::RgbaImage;
 use pelage::gpu::{Gpu, GpuError, read_buffer};
 use pelage::scene::{Absorption, ChiangParams, ShadingModel};
-use pelage::{Renderer, Scene};
+use pelage::{Renderer, scene::Scene};
 use pelage_reference::chiang::ChiangFibre;
 use pelage_reference::flip::{FlipMap, LinearImage};
 use pelage_reference::oit::linear_to_srgb8;

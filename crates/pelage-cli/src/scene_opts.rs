@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use std::str::FromStr;
 
 use clap::ValueEnum;
-use pelage::Scene;
+use pelage::scene::Scene;
 use pelage::scene::{
     Light, MultipleScattering, Named, ParamError, ShadingModel, ShadowParams, Transparency,
 };
@@ -270,7 +270,12 @@ impl SceneOpts {
         }
         if self.lod {
             scene.hair.lod.enabled = true;
-            scene = scene.sized_for_view(&scene.camera, self.size.width, self.size.height);
+            scene = pelage::strands::sized_for_view(
+                &scene,
+                &scene.camera,
+                self.size.width,
+                self.size.height,
+            );
         }
         Ok(scene)
     }
@@ -402,7 +407,7 @@ mod tests {
         let help = SceneOpts::augment_args(Command::new("t"))
             .render_long_help()
             .to_string();
-        let scene = pelage::Scene::default();
+        let scene = pelage::scene::Scene::default();
         let voxel = matches!(scene.shadow, ShadowParams::Voxel(_));
         assert!(voxel, "the help says voxel: update it");
         for name in [

@@ -29,6 +29,27 @@ impl Visibility<'_> {
             reason: "too many strand vertices for one visibility buffer".into(),
         })
     }
+
+    /// Reads the buffer back (waits for the GPU): light `i`'s visibility at the first
+    /// `vertices` strand vertices for each of the first `lights` lights, as many as the
+    /// buffer holds. For tests and measurements; a frame never reads it back.
+    pub fn read(
+        &self,
+        gpu: &pelage_gpu::Gpu,
+        lights: usize,
+        vertices: usize,
+    ) -> Result<Vec<Vec<f32>>, pelage_gpu::GpuError> {
+        let bytes = pelage_gpu::read_buffer(gpu, self.buffer)?;
+        let floats: Vec<f32> = bytes
+            .chunks_exact(4)
+            .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+            .collect();
+        Ok(floats
+            .chunks(self.stride.max(1) as usize)
+            .take(lights)
+            .map(|c| c[..vertices.min(c.len())].to_vec())
+            .collect())
+    }
 }
 
 #[cfg(test)]

@@ -26,6 +26,7 @@ pub mod names;
 #[cfg(feature = "obj")]
 pub mod obj;
 pub mod params;
+pub mod scene;
 #[cfg(feature = "scene-file")]
 pub mod scene_file;
 #[cfg(feature = "scene-file")]
@@ -58,6 +59,7 @@ pub use params::{
     ShadeParams, ShadowMapParams, ShadowParams, Splat, SurfaceInterpolation, VoxelParams,
     WindParams, mesh_albedo,
 };
+pub use scene::Scene;
 #[cfg(feature = "scene-file")]
 pub use scene_file::{MeshSource, SceneFile, SceneFileError};
 pub use sdf_grid::{

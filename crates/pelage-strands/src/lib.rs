@@ -36,6 +36,7 @@ mod roots;
 mod sdf;
 mod simulate;
 mod skin;
+mod source;
 
 pub use groom::GroomStrands;
 pub use grow::{GrowStrands, StrandPass, StrandStage};
@@ -54,6 +55,7 @@ pub use sdf::{
 };
 pub use simulate::{SIMULATE_LABEL, SIMULATION_STATE, SimulateStrands};
 pub use skin::{MeshSkin, SKIN_LABEL, SKIN_NON_FINITE};
+pub use source::{StrandSource, scene_reach, sized_for_view};
 
 use pelage_gpu::{GpuError, ShaderSources};
 use pelage_scene::{MeshError, ParamError};

@@ -1,4 +1,4 @@
-//! pelage in a web page: the creature of [`pelage::Scene::default`] in wind, drawn on
+//! pelage in a web page: the creature of [`pelage::scene::Scene::default`] in wind, drawn on
 //! WebGPU into a canvas (`web/index.html`), with controls for the wind, the strand count
 //! and the transparency method, and the GPU time per pass where the browser offers
 //! timestamp queries; or any `.hair` or `.tfx` groom the user drops on the page, picks
@@ -19,7 +19,7 @@
 
 use std::path::Path;
 
-use pelage::Scene;
+use pelage::scene::Scene;
 use pelage::scene::{Groom, GroomError, Mesh, Named, Resampled, Transparency};
 
 #[cfg(target_arch = "wasm32")]

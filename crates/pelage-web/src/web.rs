@@ -6,7 +6,11 @@ use std::sync::{Arc, Mutex};
 
 use pelage::gpu::{Gpu, wgpu};
 use pelage::scene::Resampled;
-use pelage::{FRAMES_IN_FLIGHT, Renderer, Scene, Update};
+use pelage::{Error, Renderer, scene::Scene};
+
+/// Frames the demo lets the GPU fall behind by before it skips an animation frame (as
+/// many as pelage's `Renderer::render` queues before it waits, which the web must never).
+const FRAMES_IN_FLIGHT: usize = 2;
 use wasm_bindgen::prelude::*;
 
 use crate::{DemoError, Settings};
@@ -241,17 +245,14 @@ impl Demo {
     /// Takes `settings` and `scene`: the renderer updated in place, or rebuilt when the
     /// change shapes its buffers (a refused scene keeps the old renderer and settings).
     fn show(&mut self, settings: Settings, scene: Scene) -> Result<(), JsValue> {
-        match self
-            .renderer
-            .update(&self.gpu, &scene)
-            .map_err(DemoError::from)?
-        {
-            Update::Applied(_) => {}
-            Update::Rebuild(_) => {
+        match self.renderer.frame_mut().update(&self.gpu, &scene) {
+            Ok(()) => {}
+            Err(Error::NeedsRebuild(_)) => {
                 self.renderer = Renderer::new(&self.gpu, &scene, self.width, self.height)
                     .map_err(DemoError::from)?;
                 self.passes.clear();
             }
+            Err(e) => return Err(DemoError::from(e).into()),
         }
         self.settings = settings;
         self.scene = scene;

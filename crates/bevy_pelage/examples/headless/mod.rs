@@ -59,7 +59,7 @@ pub fn target(world: &mut World) -> Handle<Image> {
 /// infinite far plane), placed by `world_from_scene`, with `msaa`, no tone mapping and
 /// no dithering (pelage's own frame has neither).
 pub fn camera(
-    scene: &pelage::Scene,
+    scene: &pelage::scene::Scene,
     image: &Handle<Image>,
     world_from_scene: Transform,
     msaa: Msaa,
@@ -85,7 +85,10 @@ pub fn camera(
 /// pelage's key light (the scene's first light) as a Bevy directional light, its
 /// direction turned by `rotation`: the light's direction and colour, and an illuminance
 /// that the camera's default exposure brings to pelage's intensity.
-pub fn key_light(scene: &pelage::Scene, rotation: Quat) -> Result<(DirectionalLight, Transform)> {
+pub fn key_light(
+    scene: &pelage::scene::Scene,
+    rotation: Quat,
+) -> Result<(DirectionalLight, Transform)> {
     let Some(pelage::scene::Light::Directional(key)) = scene.lights.first() else {
         return Err("the scene's key light is not directional".into());
     };
@@ -102,7 +105,7 @@ pub fn key_light(scene: &pelage::Scene, rotation: Quat) -> Result<(DirectionalLi
 
 /// The scene's hair, shading and voxel shadow as a [`Fur`] drawing the mesh, with the
 /// skinned mesh's `skin_reach`.
-pub fn fur(scene: &pelage::Scene, skin_reach: Option<(glam::Vec3, glam::Vec3)>) -> Fur {
+pub fn fur(scene: &pelage::scene::Scene, skin_reach: Option<(glam::Vec3, glam::Vec3)>) -> Fur {
     Fur {
         hair: scene.hair.clone(),
         shade: scene.shade.clone(),

@@ -59,7 +59,7 @@ use std::time::Instant;
 
 use pelage::gpu::{Gpu, read_buffer};
 use pelage::scene::SceneFile;
-use pelage::{Renderer, Scene};
+use pelage::{Renderer, scene::Scene};
 use pelage_lab::{Table, contact_sheet};
 
 use super::{LabOpts, background, flip_scores};

@@ -32,7 +32,7 @@ use glam::Vec3;
 use pelage::gpu::Gpu;
 use pelage::scene::{Camera, LodParams, ShadowParams, Transparency};
 use pelage::strands::LodLevel;
-use pelage::{Renderer, Scene};
+use pelage::{Renderer, scene::Scene};
 use pelage_lab::{ScatterChart, ScatterPoint, Table, contact_sheet};
 
 use super::{LabOpts, background, flip_scores};
@@ -101,7 +101,13 @@ fn coverage_pixels(scene: &Scene, camera: &Camera, width: u32, height: u32) -> f
         start_pixels: f32::MAX,
         ..LodParams::default()
     };
-    let level = LodLevel::for_view(&hair, scene.reach(), camera, width, height);
+    let level = LodLevel::for_view(
+        &hair,
+        pelage::strands::scene_reach(scene),
+        camera,
+        width,
+        height,
+    );
     if level.pixels.is_finite() {
         level.pixels
     } else {
@@ -276,7 +282,7 @@ pub fn run(opts: &LabOpts) -> LabResult<()> {
             if config.lod.enabled {
                 // Sized to the picture: the shadow grid and maps to the hair's size on
                 // screen, the k-buffer to the depth complexity this level draws.
-                s = s.sized_for_view(&camera, size.0, size.1);
+                s = pelage::strands::sized_for_view(&s, &camera, size.0, size.1);
                 let depth = mean_fragments(&gpu, &s, &camera, size)?;
                 s.shade.transparency = s.shade.transparency.sized_for_depth(depth);
                 adapted = format!(" ({})", describe(&s));
@@ -356,9 +362,15 @@ pub fn run(opts: &LabOpts) -> LabResult<()> {
             }
         }
         // ... the shadow resolution from the hair's size on screen ...
-        let sized = scene.sized_for_view(&camera, size.0, size.1);
-        let extent =
-            LodLevel::for_view(&scene.hair, scene.reach(), &camera, size.0, size.1).extent_pixels;
+        let sized = pelage::strands::sized_for_view(&scene, &camera, size.0, size.1);
+        let extent = LodLevel::for_view(
+            &scene.hair,
+            pelage::strands::scene_reach(&scene),
+            &camera,
+            size.0,
+            size.1,
+        )
+        .extent_pixels;
         auto_table.push(vec![
             label.clone(),
             "shadow resolution".into(),

@@ -5,7 +5,7 @@
 
 use std::path::PathBuf;
 
-use pelage::Scene;
+use pelage::scene::Scene;
 use pelage_reference::flip::{DEFAULT_PIXELS_PER_DEGREE, LinearImage, flip};
 use pelage_reference::oit::linear_to_srgb8;
 

@@ -47,7 +47,7 @@ use pelage::scene::{
     MultipleScattering, ShadingModel, ShadowMapParams, ShadowParams, Transparency, VoxelParams,
     WindParams, chiang_color_scale, sigma_a_from_melanin,
 };
-use pelage::{Renderer, Scene};
+use pelage::{Renderer, scene::Scene};
 use pelage_lab::{ScatterChart, ScatterPoint, Table, contact_sheet};
 use pelage_reference::flip::{DEFAULT_PIXELS_PER_DEGREE, LinearImage, flip};
 use pelage_reference::path_tracer::{
@@ -426,11 +426,20 @@ fn fibre_counts(
         let gpu = Gpu::headless()?;
         let mut renderer = Renderer::new(&gpu, &s, size, size)?;
         renderer.render(&gpu, 0.0, &s.camera)?;
+        let vertices = renderer
+            .frame()
+            .strands()
+            .buffers()
+            .full_layout()
+            .vertices() as usize;
         let visibility = renderer
-            .light_visibility(&gpu)?
+            .frame()
+            .visibility()
+            .ok_or("the lab's scene has no shadows")?
+            .read(&gpu, 1, vertices)?
             .into_iter()
             .next()
-            .ok_or("the lab's scene has no shadows")?;
+            .ok_or("the lab's scene has no light")?;
         if truth.is_none() {
             let traced = TracedScene::from_renderer(&s, &renderer, &gpu)?;
             let to_light = match s.lights.first() {

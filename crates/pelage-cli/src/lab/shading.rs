@@ -22,7 +22,7 @@ use pelage::scene::{
     Camera, KajiyaKayParams, Light, MarschnerParams, Mesh, SadeghiParams, ShadingModel,
     Transparency, WindParams, sigma_a_from_color,
 };
-use pelage::{Renderer, Scene};
+use pelage::{Renderer, scene::Scene};
 use pelage_lab::{Table, contact_sheet};
 
 use super::LabOpts;
