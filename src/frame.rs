@@ -309,7 +309,7 @@ impl Frame {
             )?),
         };
         if let Some(buffer) = &visibility {
-            audit::name_buffer(buffer, pelage_shade::VISIBILITY);
+            audit::name_buffer(buffer, pelage_contract::VISIBILITY);
         }
         let mut shadows = Vec::new();
         for index in 0..scene.lights.len() as u32 {

@@ -84,9 +84,9 @@ pub enum Error {
     /// The scene is not usable.
     #[error("scene: {0}")]
     Param(#[from] scene::ParamError),
-    /// A change cannot be made to a built [`Renderer`] in place (it shapes buffers,
-    /// passes or pipelines); names the parameter. Build a new renderer for it.
-    #[error("{0} cannot change in place; build a new Renderer")]
+    /// A change cannot be made to a built [`Frame`] (or [`Renderer`]) in place (it
+    /// shapes buffers, passes or pipelines); names the parameter. Build a new one for it.
+    #[error("{0} cannot change in place; build a new Frame or Renderer for the scene")]
     NeedsRebuild(String),
     /// The passes of a frame are in an order that reads a resource before it is written.
     #[error("frame plan: {0}")]

@@ -27,8 +27,9 @@ pub use models::{
     ChiangTables, ChiangUniforms, KajiyaKayUniforms, MarschnerLut, MarschnerLutInfo,
     MarschnerUniforms, SadeghiUniforms,
 };
-/// The per-vertex light visibility every method reads, defined in `pelage-contract`.
-pub use pelage_contract::{VISIBILITY, Visibility};
+/// The per-vertex light visibility every method reads (the contract's; its frame
+/// resource name is `pelage_contract::VISIBILITY`).
+pub use pelage_contract::Visibility;
 pub use pelage_scene::ShadeParams;
 pub use ribbons::{FrameLight, FrameUniforms, MeshStyle, RibbonStyle};
 pub use targets::{

@@ -70,9 +70,6 @@ pub const SHADOW_DEPTH: &str = "shadow.depth";
 pub const SHADOW_LAYERS: &str = "shadow.layers";
 /// The frame resource of the mesh's own shadow map.
 pub const SHADOW_MESH_MAP: &str = "shadow.mesh_map";
-/// The frame resource of the per-vertex light visibility every light's hand-over
-/// ([`LightVisibility`]) writes and the hair pass reads (the contract's name).
-pub use pelage_contract::VISIBILITY;
 
 /// The WGSL file every shading pass imports for `light_visibility(p)` (and the mesh pass
 /// for `surface_visibility(p)`); a method's

@@ -115,13 +115,13 @@ impl LightVisibility {
 
     /// The pass `encode` records: reads the strand vertices and the shadow method's
     /// `lookup` ([`ShadowMethod::lookup`](crate::ShadowMethod::lookup), under the
-    /// frame's name for this light), writes [`VISIBILITY`](crate::VISIBILITY).
+    /// frame's name for this light), writes [`VISIBILITY`](pelage_contract::VISIBILITY).
     pub fn passes(&self, lookup: &[String]) -> Vec<PassInfo> {
         vec![
             PassInfo::new(self.label.clone())
                 .reads([pelage_contract::STRAND_VERTICES.to_string()])
                 .reads(lookup.iter().cloned())
-                .writes([crate::VISIBILITY]),
+                .writes([pelage_contract::VISIBILITY]),
         ]
     }
 
