@@ -104,12 +104,7 @@ impl Renderer {
         self.in_flight.push_back(index);
         while self.in_flight.len() > FRAMES_IN_FLIGHT {
             if let Some(oldest) = self.in_flight.pop_front() {
-                gpu.device
-                    .poll(wgpu::PollType::Wait {
-                        submission_index: Some(oldest),
-                        timeout: None,
-                    })
-                    .map_err(|e| pelage_gpu::GpuError::Poll(e.to_string()))?;
+                pelage_gpu::wait(&gpu.device, Some(oldest))?;
             }
         }
         Ok(())
@@ -175,9 +170,7 @@ impl Renderer {
                 passes: report.by_label(),
             };
         }
-        gpu.device
-            .poll(wgpu::PollType::wait_indefinitely())
-            .map_err(|e| pelage_gpu::GpuError::Poll(e.to_string()))?;
+        pelage_gpu::wait(&gpu.device, None)?;
         self.in_flight.clear();
         gpu.check()?;
         Ok(self.last_stats.clone())

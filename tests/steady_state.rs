@@ -1,11 +1,15 @@
 //! A frame in steady state creates nothing: no buffer and no bind group, for every
 //! shadow method and every transparency method, counted by pelage-gpu
-//! ([`pelage::gpu::Created`]). And every buffer and bind group the library creates goes
-//! through those counted functions (a scan of the sources), so the count is complete.
+//! ([`pelage::gpu::Created`]); and a frame recorded as an engine records it (prepare,
+//! record, the caller's submit, after-submit) never waits for the GPU, counted likewise
+//! ([`pelage::gpu::waits`]). Every buffer and bind group the library creates and every
+//! wait goes through those counted functions (a scan of the sources), so the counts are
+//! complete.
 
 use pelage::gpu::{Created, Gpu};
 use pelage::scene::{ShadowParams, Transparency};
-use pelage::{Renderer, scene::Scene};
+use pelage::shade::{TargetFormat, Targets};
+use pelage::{Frame, FrameTarget, Renderer, scene::Scene};
 
 fn scene(shadow: ShadowParams, transparency: Transparency) -> Scene {
     let mut scene = Scene::default();
@@ -16,9 +20,9 @@ fn scene(shadow: ShadowParams, transparency: Transparency) -> Scene {
     scene
 }
 
-#[test]
-fn frames_in_steady_state_create_no_buffer_and_no_bind_group() {
-    let gpu = Gpu::headless().unwrap_or_else(|e| panic!("this test needs a GPU adapter: {e}"));
+/// Every shadow method over the opaque hair pass, then every transparency method under
+/// the default shadow.
+fn cases() -> Vec<(ShadowParams, Transparency)> {
     let shadows = [
         ShadowParams::None,
         ShadowParams::default(),
@@ -39,11 +43,17 @@ fn frames_in_steady_state_create_no_buffer_and_no_bind_group() {
         Transparency::RandomSubsets { k: 8 },
         Transparency::strand_raster(),
     ];
-    let cases = shadows
+    shadows
         .iter()
         .map(|s| (s.clone(), Transparency::Opaque))
-        .chain(methods.iter().map(|m| (ShadowParams::default(), m.clone())));
-    for (shadow, method) in cases {
+        .chain(methods.iter().map(|m| (ShadowParams::default(), m.clone())))
+        .collect()
+}
+
+#[test]
+fn frames_in_steady_state_create_no_buffer_and_no_bind_group() {
+    let gpu = Gpu::headless().unwrap_or_else(|e| panic!("this test needs a GPU adapter: {e}"));
+    for (shadow, method) in cases() {
         let s = scene(shadow.clone(), method.clone());
         let mut renderer = match Renderer::new(&gpu, &s, 96, 72) {
             Ok(r) => r,
@@ -69,6 +79,46 @@ fn frames_in_steady_state_create_no_buffer_and_no_bind_group() {
             Created::default(),
             "{shadow:?} / {method:?} created GPU objects in steady state"
         );
+    }
+}
+
+#[test]
+fn a_frame_recorded_as_an_engine_records_it_never_waits_for_the_gpu() {
+    let gpu = Gpu::headless().unwrap_or_else(|e| panic!("this test needs a GPU adapter: {e}"));
+    for (shadow, method) in cases() {
+        let s = scene(shadow.clone(), method.clone());
+        let format = TargetFormat::for_params(&s.shade);
+        let mut frame = match Frame::new(&gpu, &s, &FrameTarget::new(format, 96, 72)) {
+            Ok(f) => f,
+            Err(pelage::Error::Shade(pelage::shade::ShadeError::Unsupported(why))) => {
+                println!("{method:?}: skipped, this adapter cannot run it: {why}");
+                continue;
+            }
+            Err(e) => panic!("{shadow:?} {method:?}: {e}"),
+        };
+        let targets = Targets::with_format(&gpu, 96, 72, &format).unwrap();
+        let view_set = targets.view_set();
+        let views = view_set.views();
+        let before = pelage::gpu::waits();
+        for n in 0..6 {
+            // Time and camera move; the frames queue up behind each other unwaited.
+            let camera = s.camera.orbited(0.05 * n as f32);
+            frame.prepare(&gpu.queue, n as f32 / 24.0, &camera).unwrap();
+            let mut encoder = gpu.device.create_command_encoder(&Default::default());
+            frame.record(&mut encoder, &views, None).unwrap();
+            gpu.submit([encoder.finish()]).unwrap();
+            frame.after_submit(&gpu).unwrap();
+        }
+        let waited = pelage::gpu::waits() - before;
+        println!("{shadow:?} / {method:?}: {waited} waits over 6 frames");
+        assert_eq!(
+            waited, 0,
+            "{shadow:?} / {method:?} waited for the GPU in a frame"
+        );
+        // The count sees a wait (so the check above can fail): the frames' end.
+        pelage::gpu::wait(&gpu.device, None).unwrap();
+        assert_eq!(pelage::gpu::waits() - before, 1);
+        gpu.check().unwrap();
     }
 }
 
@@ -100,12 +150,18 @@ fn every_buffer_and_bind_group_of_the_library_is_counted() {
                     for (n, line) in text.lines().enumerate() {
                         // Binding and render passes go through pelage_gpu::audit, so that
                         // the frame plan test sees what every pass binds.
+                        // Every blocking wait for the GPU goes through pelage_gpu::wait,
+                        // so that the no-wait test counts it. (`pollster::block_on` in
+                        // pelage-gpu builds the device and pops error scopes, which wgpu
+                        // answers at once on native: no wait for the GPU.)
                         for call in [
                             ".create_bind_group(",
                             ".create_buffer(",
                             ".create_buffer_init(",
                             ".set_bind_group(",
                             ".begin_render_pass(",
+                            "PollType::Wait",
+                            "wait_indefinitely",
                         ] {
                             if line.contains(call) {
                                 direct.push(format!(
@@ -127,8 +183,9 @@ fn every_buffer_and_bind_group_of_the_library_is_counted() {
     );
     assert!(
         direct.is_empty(),
-        "uncounted creations or unaudited bindings (use pelage_gpu::create_*, \
-         pelage_gpu::set_bind_group, pelage_gpu::audit::begin_render_pass):\n{}",
+        "uncounted creations, unaudited bindings or uncounted waits (use \
+         pelage_gpu::create_*, pelage_gpu::set_bind_group, \
+         pelage_gpu::audit::begin_render_pass, pelage_gpu::wait):\n{}",
         direct.join("\n")
     );
 }

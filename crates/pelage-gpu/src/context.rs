@@ -304,12 +304,7 @@ impl Gpu {
         commands: impl IntoIterator<Item = wgpu::CommandBuffer>,
     ) -> Result<()> {
         let index = self.scoped(|_| self.queue.submit(commands))?;
-        self.device
-            .poll(wgpu::PollType::Wait {
-                submission_index: Some(index),
-                timeout: None,
-            })
-            .map_err(|e| GpuError::Poll(e.to_string()))?;
+        crate::wait(&self.device, Some(index))?;
         self.check()
     }
 

@@ -1,10 +1,12 @@
-//! Counts of the GPU objects pelage creates, so that "nothing is created per frame in
-//! steady state" is a measured fact rather than a claim.
+//! Counts of the GPU objects pelage creates and of the times it waits for the GPU, so
+//! that "nothing is created per frame in steady state" and "a frame never waits" are
+//! measured facts rather than claims.
 //!
 //! Every buffer and bind group the library creates goes through [`create_buffer`],
-//! [`create_buffer_init`] or [`create_bind_group`] (a test scans the stage crates'
-//! sources for direct calls). The counts are per thread: a frame is prepared and
-//! recorded on one thread, and tests running side by side do not see each other's.
+//! [`create_buffer_init`] or [`create_bind_group`], and every blocking wait for the GPU
+//! through [`wait`] (a test scans the stage crates' sources for direct calls). The
+//! counts are per thread: a frame is prepared and recorded on one thread, and tests
+//! running side by side do not see each other's.
 
 use std::cell::Cell;
 
@@ -13,6 +15,7 @@ use wgpu::util::DeviceExt;
 thread_local! {
     static BUFFERS: Cell<u64> = const { Cell::new(0) };
     static BIND_GROUPS: Cell<u64> = const { Cell::new(0) };
+    static WAITS: Cell<u64> = const { Cell::new(0) };
 }
 
 /// How many buffers and bind groups pelage has created on this thread so far.
@@ -44,6 +47,26 @@ impl Created {
 
 fn count(counter: &'static std::thread::LocalKey<Cell<u64>>) {
     counter.with(|c| c.set(c.get() + 1));
+}
+
+/// How many times pelage has waited for the GPU on this thread so far ([`wait`]: a
+/// readback, `Gpu::submit_and_wait`, the renderer holding its frames in flight, ...).
+/// A frame's prepare, record and after-submit step leave it unchanged.
+pub fn waits() -> u64 {
+    WAITS.with(Cell::get)
+}
+
+/// `device.poll(Wait)` until `submission` (every submission when `None`) has finished,
+/// counted ([`waits`]): the one place pelage blocks on the GPU.
+pub fn wait(device: &wgpu::Device, submission: Option<wgpu::SubmissionIndex>) -> crate::Result<()> {
+    count(&WAITS);
+    device
+        .poll(wgpu::PollType::Wait {
+            submission_index: submission,
+            timeout: None,
+        })
+        .map(|_| ())
+        .map_err(|e| crate::GpuError::Poll(e.to_string()))
 }
 
 /// `device.create_bind_group(desc)`, counted.

@@ -31,7 +31,7 @@ pub use audit::set_bind_group;
 pub use binding::{BoundResource, ShaderBinding};
 pub use buffers::{UniformBuffer, storage_buffer, write_storage, zeroed_storage};
 pub use context::{Gpu, WANTED_FEATURES, feature_names};
-pub use counters::{Created, create_bind_group, create_buffer, create_buffer_init};
+pub use counters::{Created, create_bind_group, create_buffer, create_buffer_init, wait, waits};
 pub use error::{GpuError, Result};
 pub use frame::{FramePlan, PassInfo, PlanError};
 pub use pipelines::{

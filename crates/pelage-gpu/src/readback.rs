@@ -206,9 +206,7 @@ pub(crate) fn map_read(gpu: &Gpu, buffer: &wgpu::Buffer, range: Range<u64>) -> R
             let _ = sender.send(result);
         })
     })?;
-    gpu.device
-        .poll(wgpu::PollType::wait_indefinitely())
-        .map_err(|e| GpuError::Poll(e.to_string()))?;
+    crate::wait(&gpu.device, None)?;
     match receiver.try_recv() {
         Ok(Ok(())) => {}
         Ok(Err(e)) => return Err(GpuError::Map(e.to_string())),

@@ -268,9 +268,7 @@ impl GpuTimer {
         });
         // The next resolve needs a readback that is not in flight.
         while self.in_flight.len() >= self.readbacks.len() {
-            gpu.device
-                .poll(wgpu::PollType::wait_indefinitely())
-                .map_err(|e| GpuError::Poll(e.to_string()))?;
+            crate::wait(&gpu.device, None)?;
             if let Some(oldest) = self.in_flight.pop_front() {
                 self.readbacks[oldest.slot].unmap();
             }
@@ -318,9 +316,7 @@ impl GpuTimer {
         if self.in_flight.is_empty() {
             return Ok(None);
         }
-        gpu.device
-            .poll(wgpu::PollType::wait_indefinitely())
-            .map_err(|e| GpuError::Poll(e.to_string()))?;
+        crate::wait(&gpu.device, None)?;
         self.try_read(gpu)
     }
 }
