@@ -13,7 +13,9 @@
 //! 1. lets pelage grow the strands from its mesh buffers and shadow them (voxel grid);
 //! 2. draws its own mesh into its targets with its own shader, which imports pelage's
 //!    shadow contract (`shadow/none.wgsl`, redirected to the voxel lookup) so the body
-//!    is shadowed by the fur as pelage would shadow it;
+//!    is shadowed by the fur as pelage would shadow it, and its body-sky contract
+//!    (`shade/body_sky.wgsl`, redirected to the volume grid pelage filled after its
+//!    shadows) so the skin under the fur sees the sky and light the fur leaves it;
 //! 3. lets pelage draw the hair over it (`draw_mesh = false`, `load = true`), depth
 //!    tested against the engine's depth;
 //! 4. binds pelage's strand buffer in a pass of its own, drawing every 40th strand's
@@ -35,10 +37,9 @@ use std::path::PathBuf;
 use glam::Vec3;
 use pelage::gpu::{Gpu, PassInfo, ShaderSources, wgpu};
 use pelage::scene::{
-    CameraMatrices, ChiangParams, HairParams, Light, Mesh, MultipleScattering, ShadeParams,
-    ShadingModel, ShadowParams, VoxelParams,
+    CameraMatrices, HairParams, Light, Mesh, ShadeParams, ShadowParams, VoxelParams,
 };
-use pelage::shade::{TARGET_COLOR, TARGET_DEPTH, TargetFormat, TargetViews};
+use pelage::shade::{TARGET_COLOR, TARGET_DEPTH, TargetFormat, TargetViews, VOLUME_FLUENCE};
 use pelage::strands::{MESH, MeshBuffers};
 use pelage::{Frame, FrameTarget, scene::Scene};
 use wgpu::util::DeviceExt;
@@ -86,20 +87,12 @@ pub fn hair() -> HairParams {
     hair
 }
 
-/// Shading: pelage's defaults on a single-sampled target (the engine's mesh takes its
-/// colour, the ambient term and the background from here too), with Chiang's dual
-/// scattering instead of the default volume grid: pelage's own mesh pass reads the
-/// grid's sky on the skin (`shade/body_sky.wgsl`), and the grid is filled in the shade
-/// stage, after the engine's mesh pass; this engine's mesh sees the open sky, as pelage's
-/// does without the grid.
+/// Shading: pelage's defaults (Chiang's fibres, the volume grid's multiple scattering)
+/// on a single-sampled target; the engine's mesh takes its colour, the ambient term and
+/// the background from here too, and the sky on its skin from pelage's grid.
 pub fn shade() -> ShadeParams {
-    let model = ShadingModel::Chiang(ChiangParams {
-        multiple_scattering: MultipleScattering::Dual,
-        ..Default::default()
-    });
     ShadeParams {
         sample_count: 1,
-        model,
         ..Default::default()
     }
 }
@@ -110,9 +103,11 @@ pub fn lights() -> Vec<Light> {
 }
 
 /// The engine's own shaders: its mesh (Lambert, the key light shadowed through pelage's
-/// shadow contract) and the tip markers (read from pelage's strand buffer).
+/// shadow contract, the sky through its body-sky contract) and the tip markers (read
+/// from pelage's strand buffer).
 const ENGINE_WGSL: &str = r#"
 #import shadow/none.wgsl
+#import shade/body_sky.wgsl
 
 struct Engine {
     view_proj: mat4x4<f32>,
@@ -140,7 +135,9 @@ fn vs_mesh(@location(0) p: vec3<f32>, @location(1) n: vec3<f32>) -> MeshOut {
 @fragment
 fn fs_mesh(in: MeshOut) -> @location(0) vec4<f32> {
     let n = normalize(in.normal);
-    var lit = vec3<f32>(engine.light.w);
+    // body_sky: the sky (ambient) as pelage's shading leaves it on the body, through
+    // the contract's redirect (the volume grid).
+    var lit = body_sky(in.world, n, engine.light.w);
     // surface_visibility: pelage's shadow method at a point on the body, through the
     // contract's redirect.
     lit += engine.light.rgb * max(dot(n, engine.to_light.xyz), 0.0) * surface_visibility(in.world);
@@ -166,7 +163,7 @@ static ENGINE_SHADERS: ShaderSources = ShaderSources::new(
     "embed",
     "examples",
     &[("embed/engine.wgsl", ENGINE_WGSL)],
-    &[&pelage::gpu::SHADERS],
+    &[&pelage::gpu::SHADERS, &pelage::shade::SHADERS],
 );
 
 /// `Engine` in `ENGINE_WGSL`.
@@ -215,8 +212,8 @@ pub struct Engine {
     depth: wgpu::Texture,
     uniforms: wgpu::Buffer,
     mesh_pipeline: wgpu::RenderPipeline,
-    /// The engine's own group 0, and the shadow's group (its index and bind group).
-    mesh_groups: [(u32, wgpu::BindGroup); 2],
+    /// The engine's own group 0, the shadow's and the body sky's groups (index, bind group).
+    mesh_groups: [(u32, wgpu::BindGroup); 3],
     tip_pipeline: wgpu::RenderPipeline,
     tip_group: wgpu::BindGroup,
     tip_count: u32,
@@ -276,11 +273,19 @@ impl Engine {
             ..FrameTarget::new(TARGET, WIDTH, HEIGHT)
         };
         let pelage = Frame::with_mesh_buffers(gpu, &scene, mesh, &target)?;
+        // What the engine's mesh shader imports from pelage: the key light's shadow (the
+        // voxel method's lookup) and the body's sky (the volume grid), each a contract
+        // read as the method's file, with the resources the method hands over.
+        let shadow = pelage.shadow_binding().ok_or("the scene has no shadow")?;
+        let sky = pelage
+            .body_sky_binding()
+            .ok_or("the scene's shading has no volume grid")?;
 
         // The frame's passes in order, with the engine's own mesh pass between pelage's
-        // shadows (which it samples) and pelage's hair (drawn over it), checked once.
+        // shadows and grid (which it samples) and pelage's hair (drawn over it), checked
+        // once.
         pelage.plan_with_passes_before_shade([PassInfo::new("engine mesh")
-            .reads([MESH.to_string()])
+            .reads([MESH.to_string(), VOLUME_FLUENCE.to_string()])
             .reads(pelage.key_lookup())
             .writes([TARGET_COLOR, TARGET_DEPTH])])?;
 
@@ -305,18 +310,47 @@ impl Engine {
         let color = target(TARGET.color, attach | wgpu::TextureUsages::COPY_SRC);
         let depth = target(TARGET.depth, attach | wgpu::TextureUsages::TEXTURE_BINDING);
 
-        // The engine's pipelines. Its shader imports pelage's shadow contract, read as
-        // the voxel method's lookup, whose resources the method hands over.
-        let shadow = pelage.shadow_binding().ok_or("the scene has no shadow")?;
+        // The engine's pipelines. Its shader imports pelage's contracts, redirected.
         let module = ENGINE_SHADERS.library().module_redirected(
             gpu,
             "embed/engine.wgsl",
-            &[shadow.redirect()],
+            &[shadow.redirect(), sky.redirect()],
         )?;
-        let pipeline = |vertex, buffers: &[_], fragment, topology, depth| {
+        // The mesh pipeline's layout is explicit: the body-sky group is the hair model's
+        // (the grid beside the model's tables), of which the contract reads two bindings.
+        let fragment = wgpu::ShaderStages::FRAGMENT;
+        let engine_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("engine mesh"),
+            entries: &[wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            }],
+        });
+        let shadow_layout = shadow
+            .layout(device, "engine mesh shadow", fragment)
+            .ok_or("the voxel shadow binds no resources")?;
+        let sky_layout = sky
+            .layout(device, "engine mesh sky", fragment)
+            .ok_or("the body's sky binds no resources")?;
+        let mut layouts = vec![None; 1 + shadow.group.max(sky.group) as usize];
+        layouts[0] = Some(&engine_layout);
+        layouts[shadow.group as usize] = Some(&shadow_layout);
+        layouts[sky.group as usize] = Some(&sky_layout);
+        let mesh_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("engine mesh"),
+            bind_group_layouts: &layouts,
+            immediate_size: 0,
+        });
+        let pipeline = |vertex, buffers: &[_], fragment, topology, depth, layout| {
             device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some(vertex),
-                layout: None,
+                layout,
                 vertex: wgpu::VertexState {
                     module: &module,
                     entry_point: Some(vertex),
@@ -358,6 +392,7 @@ impl Engine {
                 stencil: Default::default(),
                 bias: Default::default(),
             }),
+            Some(&mesh_layout),
         );
         // The markers are an overlay: no depth test.
         let tip_pipeline = pipeline(
@@ -365,6 +400,7 @@ impl Engine {
             &[],
             "fs_tip",
             wgpu::PrimitiveTopology::PointList,
+            None,
             None,
         );
         let uniforms = device.create_buffer(&wgpu::BufferDescriptor {
@@ -387,23 +423,17 @@ impl Engine {
             })
         };
         let mesh_groups = [
-            (
-                0,
-                group(
-                    "engine mesh",
-                    &mesh_pipeline.get_bind_group_layout(0),
-                    &[&uniforms],
-                ),
-            ),
+            (0, group("engine mesh", &engine_layout, &[&uniforms])),
             (
                 shadow.group,
                 shadow
-                    .bind_group(
-                        device,
-                        "engine mesh shadow",
-                        &mesh_pipeline.get_bind_group_layout(shadow.group),
-                    )
+                    .bind_group(device, "engine mesh shadow", &shadow_layout)
                     .ok_or("the voxel shadow binds no resources")?,
+            ),
+            (
+                sky.group,
+                sky.bind_group(device, "engine mesh sky", &sky_layout)
+                    .ok_or("the body's sky binds no resources")?,
             ),
         ];
         let b = pelage.strands().buffers();

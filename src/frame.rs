@@ -11,7 +11,7 @@ use glam::Vec3;
 use pelage_gpu::audit;
 use pelage_gpu::{FramePlan, Gpu, GpuTimer, PassInfo, ShaderBinding, wgpu};
 use pelage_scene::{Camera, CameraMatrices, Light, Mesh, MeshMotion, ShadowParams, Skin, SkinBend};
-use pelage_shade::{HairInputs, HairPass, TargetFormat, TargetViews, Visibility};
+use pelage_shade::{HairInputs, HairPass, TargetFormat, TargetViews, Visibility, VolumeGrid};
 use pelage_shadow::{LightVisibility, ShadowMethod};
 use pelage_strands::{
     GroomStrands, GrowStrands, GuideStrands, MeshBuffers, MeshSkin, SimulateStrands, StrandFrame,
@@ -362,6 +362,9 @@ impl Frame {
                     .map(|buffer| Visibility { buffer, stride }),
                 target: bridge.as_ref().map_or(target.format, TargetBridge::inner),
                 draw_mesh,
+                // The frame records the grid itself (Step::Grid), before the shade part:
+                // a caller's mesh between the parts reads the body's sky from it.
+                grid_apart: true,
             },
             target.width,
             target.height,
@@ -547,15 +550,40 @@ impl Frame {
         Ok(())
     }
 
-    /// Each light's shadow and hand-over (the second part of [`Frame::record`]): a
-    /// caller's pass sampling the shadow ([`Frame::shadow_binding`]) goes after it.
+    /// Each light's shadow and hand-over, and the volume method's grid (the second part
+    /// of [`Frame::record`]): a caller's pass sampling the shadow
+    /// ([`Frame::shadow_binding`]) or the body's sky ([`Frame::body_sky_binding`]) goes
+    /// after it.
     pub fn record_shadows(
         &self,
         encoder: &mut wgpu::CommandEncoder,
+        timer: Option<&mut GpuTimer>,
+    ) -> crate::Result<()> {
+        self.record_shadow_part(encoder, timer, |_| true)
+    }
+
+    /// Stage 2 alone: each light's shadow and hand-over, without the grid (the
+    /// renderer's wall-clock timing of the stages counts the grid with the shade stage).
+    #[cfg(not(target_arch = "wasm32"))]
+    pub(crate) fn record_stage2(&self, encoder: &mut wgpu::CommandEncoder) -> crate::Result<()> {
+        self.record_shadow_part(encoder, None, |step| step != Step::Grid)
+    }
+
+    /// The volume method's grid alone (nothing for the other models).
+    #[cfg(not(target_arch = "wasm32"))]
+    pub(crate) fn record_grid(&self, encoder: &mut wgpu::CommandEncoder) -> crate::Result<()> {
+        self.record_shadow_part(encoder, None, |step| step == Step::Grid)
+    }
+
+    /// The steps of [`Frame::record_shadows`] that `keep` takes.
+    fn record_shadow_part(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
         mut timer: Option<&mut GpuTimer>,
+        keep: impl Fn(Step) -> bool,
     ) -> crate::Result<()> {
         let frame = self.prepared()?;
-        for step in self.steps_of(Part::Shadows) {
+        for step in self.steps_of(Part::Shadows).filter(|&s| keep(s)) {
             match step {
                 Step::Shadow(i) => {
                     if let Some((shadow, _)) = self.shadows.get(i) {
@@ -565,6 +593,11 @@ impl Frame {
                 Step::HandOver(i) => {
                     if let Some((_, hand_over)) = self.shadows.get(i) {
                         hand_over.encode(encoder, &frame, timer.as_deref_mut())?;
+                    }
+                }
+                Step::Grid => {
+                    if let Some(grid) = self.hair.grid() {
+                        grid.encode(encoder, timer.as_deref_mut());
                     }
                 }
                 _ => {}
@@ -669,6 +702,17 @@ impl Frame {
     /// shader (`None` without shadows).
     pub fn shadow_binding(&self) -> Option<ShaderBinding> {
         self.shadows.first().map(|(s, _)| s.binding())
+    }
+
+    /// The body's sky (`shade/body_sky.wgsl`: `body_sky(p, n, ambient)`, the light
+    /// reaching the body from the sky and, with the volume method, scattered by the hair)
+    /// as the frame's shading implements it, for a caller's own mesh shader drawn
+    /// between [`Frame::record_shadows`] and [`Frame::record_shade`]: `Some` with the
+    /// volume method (the grid [`Frame::record_shadows`] fills, in the hair model's
+    /// group; declare its reads as `volume.fluence`), `None` for the other models (the
+    /// open sky: `body_sky` returns `ambient` as the contract file has it).
+    pub fn body_sky_binding(&self) -> Option<ShaderBinding> {
+        self.hair.body_sky_binding()
     }
 
     /// Stage 1, for binding its buffers or reading its roots.
@@ -784,6 +828,10 @@ enum Step {
     Shadow(usize),
     /// Light `i`'s hand-over to the hair (its per-vertex visibility).
     HandOver(usize),
+    /// The volume method's grid (nothing for the other models), after stage 2 and before
+    /// the shade part: a caller's mesh pass between [`Frame::record_shadows`] and
+    /// [`Frame::record_shade`] reads the body's sky from it.
+    Grid,
     /// The target bridge's passes before the hair pass.
     BridgeBefore,
     /// Stage 3.
@@ -804,7 +852,7 @@ impl Step {
     /// The steps of a frame with or without a skinning pass, with `lights` shadows and
     /// with or without a target bridge, in recording order.
     fn order(skin: bool, lights: usize, bridge: bool) -> Vec<Step> {
-        let mut steps = Vec::with_capacity(2 * lights + 5);
+        let mut steps = Vec::with_capacity(2 * lights + 6);
         if skin {
             steps.push(Step::Skin);
         }
@@ -813,6 +861,7 @@ impl Step {
             steps.push(Step::Shadow(i));
             steps.push(Step::HandOver(i));
         }
+        steps.push(Step::Grid);
         if bridge {
             steps.push(Step::BridgeBefore);
         }
@@ -826,7 +875,7 @@ impl Step {
     fn part(self) -> Part {
         match self {
             Step::Skin | Step::Strands => Part::Strands,
-            Step::Shadow(_) | Step::HandOver(_) => Part::Shadows,
+            Step::Shadow(_) | Step::HandOver(_) | Step::Grid => Part::Shadows,
             Step::BridgeBefore | Step::Hair | Step::BridgeAfter => Part::Shade,
         }
     }
@@ -893,6 +942,7 @@ impl Stages<'_> {
                             .unwrap_or_default(),
                     );
                 }
+                Step::Grid => plan.push(self.hair.grid().map(VolumeGrid::pass_info)),
                 Step::Hair => plan.push(self.hair.passes(&key_lookup)),
                 Step::BridgeAfter => {
                     plan.push(

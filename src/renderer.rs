@@ -180,8 +180,10 @@ impl Renderer {
     /// `repeats` runs, in milliseconds: an upper bound on the stage's GPU time that does
     /// not rely on the driver's timestamps. (lavapipe in Mesa 22.3 reports about 0.05 ms
     /// for a compute pass once any render pass has run on the device, whatever the pass
-    /// costs; this is the cross-check.) Not on the web (`wasm32`), where nothing may
-    /// wait for the GPU and there is no clock to time it with.
+    /// costs; this is the cross-check.) The stages are `strands`, `shadow` (each light's
+    /// shadow and hand-over; left out without shadows) and `shade` (the volume grid, which
+    /// a frame records with the shadows, and the hair pass). Not on the web (`wasm32`),
+    /// where nothing may wait for the GPU and there is no clock to time it with.
     #[cfg(not(target_arch = "wasm32"))]
     pub fn stage_wall_times(
         &mut self,
@@ -199,7 +201,7 @@ impl Renderer {
             time_alone(gpu, repeats, |e| frame.record_strands(e, None))?,
         )];
         if frame.shadowed_lights() > 0 {
-            let ms = time_alone(gpu, repeats, |e| frame.record_shadows(e, None))?;
+            let ms = time_alone(gpu, repeats, |e| frame.record_stage2(e))?;
             stages.push(("shadow".to_string(), ms));
         }
         let depth_sampled = self.targets.depth_sampled_view();
@@ -207,7 +209,12 @@ impl Renderer {
             depth_sampled: depth_sampled.as_ref(),
             ..self.targets.views(&color, resolve.as_ref(), &depth)
         };
-        let shade = time_alone(gpu, repeats, |e| frame.record_shade(e, &views, None))?;
+        // The shade stage: the volume grid (recorded with the shadows in a frame) and the
+        // hair pass.
+        let shade = time_alone(gpu, repeats, |e| {
+            frame.record_grid(e)?;
+            frame.record_shade(e, &views, None)
+        })?;
         stages.push(("shade".to_string(), shade));
         Ok(stages)
     }

@@ -43,6 +43,7 @@ fn a_stage_recorded_for_another_frame_than_it_was_prepared_for_is_an_error() {
             visibility: None,
             target: TargetFormat::default(),
             draw_mesh: true,
+            grid_apart: false,
         },
     )
     .unwrap();

@@ -267,6 +267,7 @@ fn the_methods_that_draw_reverse_z_are_the_ones_stage_3_builds() {
                 visibility: None,
                 target: reversed,
                 draw_mesh: true,
+                grid_apart: false,
             },
             W,
             H,

@@ -47,6 +47,7 @@ pub fn hair_wall_ms(
         visibility: None,
         target: TargetFormat::for_params(case.shade),
         draw_mesh: false,
+        grid_apart: false,
     };
     let method = pelage::shade::build(gpu, &inputs, width, height)?;
     let targets = Targets::new(gpu, width, height, case.shade.samples())?;

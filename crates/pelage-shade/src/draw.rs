@@ -20,6 +20,8 @@ use crate::volume::{VOLUME_FLUENCE, VolumeGrid};
 
 /// The body's sky contract `shade/mesh.wgsl` imports (`shade/body_sky.wgsl`).
 const BODY_SKY: &str = "shade/body_sky.wgsl";
+/// The volume method's implementation of [`BODY_SKY`].
+const BODY_SKY_VOLUME: &str = "shade/body_sky_volume.wgsl";
 /// The frame resource naming the colour target a method draws into.
 pub const TARGET_COLOR: &str = "target.color";
 /// The frame resource naming the depth target a method draws into and tests against.
@@ -48,6 +50,13 @@ pub struct HairInputs<'a> {
     /// the hair; `false` for an engine that draws its own mesh into the targets first
     /// (then pass [`TargetViews::load`]). The strands still grow from `mesh`.
     pub draw_mesh: bool,
+    /// With the volume method: the caller records the grid itself
+    /// ([`HairPass::grid`](crate::HairPass::grid)'s `encode`, after stage 2 and before a
+    /// mesh pass of its own that reads the body's sky from it,
+    /// [`HairPass::body_sky_binding`](crate::HairPass::body_sky_binding)), and
+    /// [`HairPass::encode`](crate::HairPass::encode) leaves it out. `false`: `encode`
+    /// records it first. Nothing for the other models.
+    pub grid_apart: bool,
 }
 
 /// The views a method renders into, owned by the caller.
@@ -171,11 +180,11 @@ pub(crate) struct Common {
     pub target: TargetFormat,
     /// Whether `mesh_draw` is drawn.
     pub draw_mesh: bool,
+    /// Whether the caller records the volume grid itself ([`HairInputs::grid_apart`]).
+    pub grid_apart: bool,
     pub model: HairModel,
     /// The volume method's grid passes, when the model uses them.
     pub volume: Option<VolumeGrid>,
-    /// The device's limits (the grid's dispatch sizes).
-    pub limits: wgpu::Limits,
     /// Floats per light in the visibility buffer (0: none).
     pub visibility_stride: u32,
     /// The visibility buffer, or a small one that is never read.
@@ -201,6 +210,7 @@ impl Common {
             visibility,
             target,
             draw_mesh,
+            grid_apart,
         } = *inputs;
         params.validate()?;
         target.validate(gpu)?;
@@ -300,7 +310,7 @@ impl Common {
         // from its grid in the model's group 2 (shade/body_sky_volume.wgsl).
         let body_sky = volume
             .is_some()
-            .then_some(Redirect::new(BODY_SKY, "shade/body_sky_volume.wgsl"));
+            .then_some(Redirect::new(BODY_SKY, BODY_SKY_VOLUME));
         let redirects: Vec<Redirect> = shadow
             .iter()
             .map(|b| b.redirect())
@@ -391,9 +401,9 @@ impl Common {
             samples,
             target,
             draw_mesh,
+            grid_apart,
             model,
             volume,
-            limits: gpu.limits().clone(),
             visibility_stride,
             visibility: visibility_buffer,
             mesh_style,
@@ -600,17 +610,41 @@ impl Common {
         })
     }
 
-    /// The volume method's grid pass, when the model uses it (recorded by
-    /// [`Common::encode_volume`] before the mesh).
+    /// The volume method's grid pass as the method records it (by
+    /// [`Common::encode_volume`], before the mesh): `None` for the other models and when
+    /// the caller records the grid apart.
     pub fn volume_pass(&self) -> Option<PassInfo> {
-        self.volume.as_ref().map(VolumeGrid::pass_info)
+        self.grid()
+            .map(VolumeGrid::pass_info)
+            .filter(|_| !self.grid_apart)
     }
 
-    /// Records the volume method's grid passes (nothing for the other models).
+    /// Records the volume method's grid passes (nothing for the other models, nor when
+    /// the caller records the grid apart).
     pub fn encode_volume(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&mut GpuTimer>) {
-        if let Some(volume) = &self.volume {
-            volume.encode(encoder, &self.limits, timer);
+        if let Some(volume) = self.grid().filter(|_| !self.grid_apart) {
+            volume.encode(encoder, timer);
         }
+    }
+
+    /// The volume method's grid (`None` for the other models).
+    pub fn grid(&self) -> Option<&VolumeGrid> {
+        self.volume.as_ref()
+    }
+
+    /// The body's sky contract (`shade/body_sky.wgsl`) as the volume method implements
+    /// it (`shade/body_sky_volume.wgsl`: the grid, read in the hair model's group), for a
+    /// caller's own mesh shader; `None` for the other models (the open sky: `ambient`).
+    pub fn body_sky_binding(&self) -> Option<ShaderBinding> {
+        self.volume.as_ref()?;
+        let model = self.model.binding();
+        Some(ShaderBinding {
+            contract: BODY_SKY,
+            module: BODY_SKY_VOLUME,
+            sources: &crate::SHADERS,
+            group: model.group,
+            resources: model.resources.clone(),
+        })
     }
 
     /// A hair pass labelled `label`: reads the strands, the visibility (when bound), the

@@ -208,6 +208,8 @@ pub struct VolumeGrid {
     propagate_groups: [wgpu::BindGroup; 2],
     max_segments: u64,
     bytes: u64,
+    /// The device's limits (the dispatch sizes).
+    limits: wgpu::Limits,
 }
 
 impl VolumeGrid {
@@ -429,6 +431,7 @@ impl VolumeGrid {
                 propagate_groups,
                 max_segments: u64::from(strands.strand_count) * u64::from(strands.segments),
                 bytes,
+                limits: gpu.limits().clone(),
             }
         })?)
     }
@@ -470,12 +473,8 @@ impl VolumeGrid {
 
     /// Records the passes: clears, fit, splat, inject, the propagation steps and the
     /// settling of the fluence where the body fills part of a cell.
-    pub fn encode(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        limits: &wgpu::Limits,
-        timer: Option<&mut GpuTimer>,
-    ) {
+    pub fn encode(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&mut GpuTimer>) {
+        let limits = &self.limits;
         let v = self.uniforms();
         encoder.clear_buffer(&self.bounds, 0, None);
         encoder.clear_buffer(&self.accum, 0, None);

@@ -226,6 +226,7 @@ fn inputs<'a>(f: &'a Fixture, params: &'a ShadeParams) -> HairInputs<'a> {
         visibility: None,
         target: target(),
         draw_mesh: false,
+        grid_apart: false,
     }
 }
 

@@ -69,6 +69,7 @@ fn render(gpu: &Gpu, mesh: &Mesh, hair: &HairParams, camera: &Camera) -> Vec<u8>
         visibility: None,
         target: TargetFormat::for_params(&params),
         draw_mesh: true,
+        grid_apart: false,
     };
     let pass = Opaque::new(gpu, &inputs).unwrap();
     let targets = Targets::new(gpu, SIZE, SIZE, params.sample_count).unwrap();

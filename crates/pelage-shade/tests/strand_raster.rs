@@ -109,6 +109,7 @@ fn mirror_frame(
         visibility: None,
         target,
         draw_mesh,
+        grid_apart: false,
     };
     let raster = StrandRaster::new(gpu, &hair, tile, bins, pool, W, H).unwrap();
     let targets = Targets::with_format(gpu, W, H, &target).unwrap();
@@ -580,6 +581,7 @@ fn an_8192_square_target_dispatches_its_tiles_in_two_dimensions() {
         visibility: None,
         target,
         draw_mesh: false,
+        grid_apart: false,
     };
     let raster = StrandRaster::new(&gpu, &inputs, 16, 4, 4.0, size, size).unwrap();
     let targets = Targets::with_format(&gpu, size, size, &target).unwrap();

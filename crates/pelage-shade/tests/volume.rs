@@ -175,7 +175,7 @@ fn run_gpu(
         "memory"
     );
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
-    grid.encode(&mut encoder, gpu.limits(), None);
+    grid.encode(&mut encoder, None);
     gpu.submit_and_wait([encoder.finish()]).unwrap();
     let floats = |b: &wgpu::Buffer| -> Vec<f32> {
         read_buffer(gpu, b)

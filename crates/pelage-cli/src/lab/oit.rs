@@ -205,6 +205,7 @@ fn render_method(
         visibility: None,
         target: TargetFormat::for_params(shade),
         draw_mesh: true,
+        grid_apart: false,
     };
     let method = pelage::shade::build(gpu, &inputs, width, height)?;
     let targets = Targets::new(gpu, width, height, shade.samples())?;
@@ -285,6 +286,7 @@ fn exact(
         // The reference A-buffer draws single-sampled, whatever the case's own method.
         target: TargetFormat::default(),
         draw_mesh: true,
+        grid_apart: false,
     };
     let targets = Targets::new(gpu, width, height, 1)?;
     let light = [Light::default()];
@@ -562,6 +564,7 @@ pub fn run(opts: &LabOpts) -> Result<(), Box<dyn std::error::Error>> {
                 visibility: None,
                 target: TargetFormat::for_params(&params),
                 draw_mesh: true,
+                grid_apart: false,
             };
             let method = pelage::shade::build(&gpu, &inputs, w, h)?;
             memory.push(vec![
@@ -651,6 +654,7 @@ fn render_flat(
         visibility: None,
         target: TargetFormat::for_params(&params),
         draw_mesh: false,
+        grid_apart: false,
     };
     let method = pelage::shade::build(gpu, &inputs, size.0, size.1)?;
     let targets = Targets::new(gpu, size.0, size.1, 1)?;

@@ -128,6 +128,25 @@ pub trait HairPass: std::fmt::Debug + wgpu::WasmNotSendSync {
         1
     }
 
+    /// The volume method's grid, which the shading reads (Chiang with volume
+    /// scattering; `None` for the other models): a caller that built the method with
+    /// [`HairInputs::grid_apart`](crate::HairInputs::grid_apart) records it
+    /// ([`VolumeGrid::encode`](crate::VolumeGrid::encode)) after stage 2 and before its
+    /// own mesh pass, and declares it ([`VolumeGrid::pass_info`](crate::VolumeGrid::pass_info)).
+    fn grid(&self) -> Option<&crate::VolumeGrid> {
+        None
+    }
+
+    /// The body's sky contract (`shade/body_sky.wgsl`: `body_sky(p, n, ambient)`, the
+    /// irradiance on the body from the sky and from the light the hair scatters) as the
+    /// method's model implements it, for a caller's own mesh shader: `Some` with the
+    /// volume method (the grid, read in the hair model's group; record the grid first,
+    /// [`HairPass::grid`]), `None` for the others (the open sky: `body_sky` returns
+    /// `ambient` unredirected).
+    fn body_sky_binding(&self) -> Option<pelage_gpu::ShaderBinding> {
+        None
+    }
+
     /// Counters of the node pool (linked-list methods); zeros for the others. Waits for the GPU.
     fn stats(&self, _gpu: &Gpu) -> crate::Result<OitStats> {
         Ok(OitStats::default())

@@ -116,6 +116,14 @@ impl HairPass for Opaque {
             .collect()
     }
 
+    fn grid(&self) -> Option<&crate::VolumeGrid> {
+        self.common.grid()
+    }
+
+    fn body_sky_binding(&self) -> Option<pelage_gpu::ShaderBinding> {
+        self.common.body_sky_binding()
+    }
+
     fn memory_bytes(&self) -> u64 {
         0
     }

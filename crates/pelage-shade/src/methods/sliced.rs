@@ -562,6 +562,14 @@ macro_rules! sliced_hair_pass {
                 self.0.sliced.memory_bytes()
             }
 
+            fn grid(&self) -> Option<&$crate::VolumeGrid> {
+                self.0.common.grid()
+            }
+
+            fn body_sky_binding(&self) -> Option<pelage_gpu::ShaderBinding> {
+                self.0.common.body_sky_binding()
+            }
+
             fn set_params(
                 &mut self,
                 gpu: &pelage_gpu::Gpu,

@@ -983,6 +983,14 @@ impl HairPass for StrandRaster {
             .collect()
     }
 
+    fn grid(&self) -> Option<&crate::VolumeGrid> {
+        self.common.grid()
+    }
+
+    fn body_sky_binding(&self) -> Option<pelage_gpu::ShaderBinding> {
+        self.common.body_sky_binding()
+    }
+
     fn memory_bytes(&self) -> u64 {
         let s = &self.storage;
         let pool = self.pool.lock().map_or(0, |p| p.buffer.size());

@@ -290,6 +290,14 @@ impl HairPass for Wboit {
             .collect()
     }
 
+    fn grid(&self) -> Option<&crate::VolumeGrid> {
+        self.common.grid()
+    }
+
+    fn body_sky_binding(&self) -> Option<pelage_gpu::ShaderBinding> {
+        self.common.body_sky_binding()
+    }
+
     fn memory_bytes(&self) -> u64 {
         10 * u64::from(self.width) * u64::from(self.height)
     }

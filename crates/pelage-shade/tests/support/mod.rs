@@ -79,6 +79,7 @@ pub fn inputs<'a>(s: &'a Scene, params: &'a ShadeParams) -> HairInputs<'a> {
         visibility: None,
         target: TargetFormat::for_params(params),
         draw_mesh: true,
+        grid_apart: false,
     }
 }
 
