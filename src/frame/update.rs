@@ -129,6 +129,11 @@ impl Frame {
         scene.hair.growth.validate()?;
         Light::validate_all(&scene.lights)?;
         scene.shade.validate()?;
+        // Lights the shadows cannot aim at (a point light at the hair's centre) are
+        // refused here, before anything is applied (set_lights, last, checks it again).
+        for (i, light) in scene.lights.iter().enumerate() {
+            light.shadow_light(i, self.shadow_target)?;
+        }
         let built = &self.built;
         if geometry_fingerprint(scene) != built.geometry {
             return Err(rebuild("the mesh or the groom"));

@@ -900,7 +900,7 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
             gpu_ms: warm_ms,
             bytes: 0,
             copy_ratio: warm_ms / ms,
-            note: "CPU wall clock of Renderer::record + finish, median, each frame's uniform \
+            note: "CPU wall clock of Frame::prepare + Frame::record + finish, median, each frame's uniform \
                    writes submitted without its passes; ratio column = this / after a lavapipe frame"
                 .into(),
         });
