@@ -535,7 +535,14 @@ pub fn volume_grid(input: &VolumeInput<'_>) -> VolumeGridCpu {
         let kappa = depth[c];
         let lit_mesh = surface[c].length();
         let xyz = IVec3::new((c % n) as i32, ((c / n) % n) as i32, (c / (n * n)) as i32);
-        let pos = origin + (xyz.as_dvec3() + 0.5) * cell;
+        // The marches start from the centroid of the cell's clear part: half the solid
+        // share of a cell edge from the centre, away from the body (`inject`).
+        let away = if lit_mesh > 0.0 {
+            surface[c] / lit_mesh
+        } else {
+            DVec3::ZERO
+        };
+        let pos = origin + (xyz.as_dvec3() + 0.5 + away * (0.5 * solid[c])) * cell;
         let (t, s) = (medium_t[c], medium_s[c]);
         let table = &tables[&keys[c]];
         // The sky (`inject`'s second half): SKY_DIRECTIONS directional lights of

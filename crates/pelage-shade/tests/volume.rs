@@ -684,14 +684,16 @@ fn volume_sky_beside_a_body_is_what_the_body_leaves() {
         ratios[ratios.len() / 2],
         ratios[ratios.len() - 1]
     );
-    // Measured: 115 cells, 0.688 to 0.947, mean 0.825: the grid's blocky body (the march
-    // from the cell's centre, near the surface, crosses other partly solid cells at
-    // grazing directions) hides a sixth too much. Before the clear share, a cell half
-    // solid read twice its sky: the bound above 1 catches that.
+    // Measured: 115 cells, 0.814 to 0.965, mean 0.890, with the marches starting from the
+    // centroid of each cell's clear part; from the cell's centre, 0.688 to 0.947, mean
+    // 0.825 (the march from a centre near the surface crosses more of the partly solid
+    // cells at grazing directions). What is left is the grid's blocky body: a ray grazing
+    // the sphere crosses cells partly inside it and is dimmed by their clear share. Before
+    // the clear share, a cell half solid read twice its sky: the bound above 1 catches that.
     assert!(ratios.len() > 50, "{} cells", ratios.len());
-    assert!((0.75..0.92).contains(&mean), "mean {mean}");
+    assert!((0.85..0.95).contains(&mean), "mean {mean}");
     assert!(
-        ratios[0] > 0.6 && ratios[ratios.len() - 1] < 1.05,
+        ratios[0] > 0.75 && ratios[ratios.len() - 1] < 1.05,
         "{} to {}",
         ratios[0],
         ratios[ratios.len() - 1]

@@ -419,7 +419,13 @@ fn inject(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups
     let iso = VolumeFibre(medium[3u * i + 1u].xyz, medium[3u * i + 2u].xyz);
     let surface = surface_at(i);
     let lit_mesh = length(surface);
-    let p = origin + (vec3<f32>(c) + vec3<f32>(0.5)) * cell;
+    // The marches toward the lights and the sky start from the centroid of the cell's
+    // clear part (where its fibres are), not its centre: half the solid share of a cell
+    // edge away from the body, along the body's outward normal in the cell (exact for a
+    // flat surface parallel to a face). From the centre, a cell beside the body saw a
+    // sixth too little of the sky (volume_sky_beside_a_body_is_what_the_body_leaves).
+    let away = select(vec3<f32>(0.0), surface / lit_mesh, lit_mesh > 0.0);
+    let p = origin + (vec3<f32>(c) + vec3<f32>(0.5) + away * (0.5 * medium[3u * i + 2u].w)) * cell;
     // The energy born in the cell and its flux (a column per channel).
     var e = vec3<f32>(0.0);
     var f = mat3x3<f32>(vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0));
@@ -509,19 +515,20 @@ fn volume_sky_direction(k: u32) -> vec3<f32> {
     return vec3<f32>(r * cos(phi), r * sin(phi), z);
 }
 
-// The transmittance toward l up to `reach` (world units from the centre p of cell c),
-// from where the ray from p leaves cell c: exp(-tau) times the clear share of the body,
-// tau the cells' extinction (per cell edge) times the length of the ray in each cell
-// (cell edges), the cells found by a 3D DDA (Amanatides and Woo) until the border.
+// The transmittance toward l up to `reach` (world units from p, a point in cell c), from
+// where the ray from p leaves cell c: exp(-tau) times the clear share of the body, tau
+// the cells' extinction (per cell edge) times the length of the ray in each cell (cell
+// edges), the cells found by a 3D DDA (Amanatides and Woo) until the border.
 fn volume_clear_toward(c: vec3<i32>, p: vec3<f32>, l: vec3<f32>, origin: vec3<f32>, cell: f32, reach: f32) -> f32 {
     let n = i32(u.resolution);
     let limit = reach / cell;
     let step = select(vec3<i32>(-1), vec3<i32>(1), l >= vec3<f32>(0.0));
     let al = abs(l);
     let inv = select(vec3<f32>(1e30), 1.0 / al, al > vec3<f32>(1e-20));
-    // Ray length (cell edges) to the next face along each axis: half a cell from the
-    // centre, then one cell each.
-    var next = 0.5 * inv;
+    // Ray length (cell edges) to the next face along each axis: from p's place in its
+    // cell, then one cell each.
+    let q = clamp((p - origin) / cell - vec3<f32>(c), vec3<f32>(0.0), vec3<f32>(1.0));
+    var next = select(q, vec3<f32>(1.0) - q, l >= vec3<f32>(0.0)) * inv;
     var at = c;
     var t = 0.0;
     var tau = 0.0;
