@@ -39,7 +39,7 @@ use pelage::gpu::{Gpu, PassInfo, ShaderSources, wgpu};
 use pelage::scene::{
     CameraMatrices, HairParams, Light, Mesh, ShadeParams, ShadowParams, VoxelParams,
 };
-use pelage::shade::{TARGET_COLOR, TARGET_DEPTH, TargetFormat, TargetViews, VOLUME_FLUENCE};
+use pelage::shade::{TARGET_COLOR, TARGET_DEPTH, TargetFormat, TargetViews};
 use pelage::strands::{MESH, MeshBuffers};
 use pelage::{Frame, FrameTarget, scene::Scene};
 use wgpu::util::DeviceExt;
@@ -284,9 +284,10 @@ impl Engine {
         // The frame's passes in order, with the engine's own mesh pass between pelage's
         // shadows and grid (which it samples) and pelage's hair (drawn over it), checked
         // once.
-        pelage.plan_with_passes_before_shade([PassInfo::new("engine mesh")
-            .reads([MESH.to_string(), VOLUME_FLUENCE.to_string()])
-            .reads(pelage.key_lookup())
+        pelage.plan([PassInfo::new("engine mesh")
+            .reads([MESH])
+            .reads(shadow.reads.clone())
+            .reads(sky.reads.clone())
             .writes([TARGET_COLOR, TARGET_DEPTH])])?;
 
         // The engine's targets.
@@ -475,7 +476,7 @@ impl Engine {
 
         // Per-frame uniforms: every pelage stage, with the engine's matrices.
         let (camera, lights, shade) = (camera(), lights(), shade());
-        self.pelage.prepare_matrices(queue, t, &camera)?;
+        self.pelage.prepare(queue, t, &camera)?;
         let key = lights[0].as_directional(Vec3::ZERO);
         let b = self.pelage.strands().buffers();
         let uniforms = EngineUniforms {
@@ -499,8 +500,7 @@ impl Engine {
         });
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         // 1. pelage's strands and shadow (the engine's mesh pass samples the shadow).
-        self.pelage.record_strands(&mut encoder, None)?;
-        self.pelage.record_shadows(&mut encoder, None)?;
+        self.pelage.record_before_shade(&mut encoder, None)?;
         // 2. The engine's mesh, into its cleared targets.
         {
             let bg = shade.background.as_dvec3();

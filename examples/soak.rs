@@ -215,7 +215,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
                 sample.created.buffers.to_string(),
                 sample.created.bind_groups.to_string(),
                 format!("{frame_ms:.2}"),
-                format!("{:.2}", stats.gpu_ms()),
+                format!("{:.2}", stats.total_ms()),
             ])?;
             println!(
                 "frame {f:>6}: resident {:8.1} MB, C heap {:>8} MB, Rust heap {:7.3} MB, \

@@ -35,6 +35,7 @@ use std::time::Instant;
 
 use egui::{CollapsingHeader, Slider};
 use glam::Vec3;
+use pelage::gpu::TimerReport;
 use pelage::gpu::{Gpu, ShaderSources, wgpu};
 use pelage::scene::sigma_a_from_color;
 use pelage::scene::{
@@ -42,7 +43,7 @@ use pelage::scene::{
     Transparency, WindParams,
 };
 use pelage::scene::{Camera, HairParams, HairType, Light, Named, ShadeParams, ShadingModel};
-use pelage::{FrameStats, Renderer, scene::Scene};
+use pelage::{Renderer, scene::Scene};
 use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
 use winit::event_loop::{ActiveEventLoop, EventLoop};
 use winit::keyboard::{Key, NamedKey};
@@ -214,7 +215,7 @@ impl Controls {
 struct View {
     playing: bool,
     t: f32,
-    stats: FrameStats,
+    stats: TimerReport,
     /// Strands and segments per strand drawn in the last frame (level of detail).
     drawn: (u32, u32),
     frame_ms: f64,
@@ -626,7 +627,7 @@ impl App {
             match renderer.render(&gfx.gpu, self.view.t, &self.orbit.camera()) {
                 Ok(stats) => {
                     // Timings arrive a frame or more late: keep the last ones until then.
-                    if !stats.passes.is_empty() {
+                    if !stats.scopes.is_empty() {
                         self.view.stats = stats;
                     }
                     self.view.drawn = (
@@ -732,7 +733,7 @@ impl App {
         }
         let seconds = self.started.elapsed().as_secs_f64();
         let fps = f64::from(self.frames) / seconds;
-        let gpu_ms = self.view.stats.gpu_ms();
+        let gpu_ms = self.view.stats.total_ms();
         println!(
             "{} frames of {w}x{h} in {seconds:.1} s ({fps:.2} frames/s), the last {gpu_ms:.1} ms on the GPU",
             self.frames
@@ -842,9 +843,10 @@ fn panels(ui: &mut egui::Ui, c: &mut Controls, v: &mut View) -> f32 {
     let corner = egui::Window::new("GPU time").anchor(egui::Align2::RIGHT_TOP, [-8.0, 8.0]);
     corner.auto_sized().show(ui.ctx(), |ui| {
         egui::Grid::new("passes").striped(true).show(ui, |ui| {
-            let passes = v.stats.passes.iter().map(|(l, ms)| (l.as_str(), *ms, "ms"));
+            let by_label = v.stats.by_label();
+            let passes = by_label.iter().map(|(l, ms)| (l.as_str(), *ms, "ms"));
             let totals = [
-                ("frame total", v.stats.gpu_ms(), "ms"),
+                ("frame total", v.stats.total_ms(), "ms"),
                 ("wall clock", v.frame_ms, "ms"),
                 ("frames per second", 1000.0 / v.frame_ms.max(1e-3), "/s"),
             ];
@@ -857,7 +859,7 @@ fn panels(ui: &mut egui::Ui, c: &mut Controls, v: &mut View) -> f32 {
             ui.monospace(format!("{} x {}", v.drawn.0, v.drawn.1));
             ui.end_row();
         });
-        if v.stats.passes.is_empty() {
+        if v.stats.scopes.is_empty() {
             ui.label("(no pass timings: nothing rendered, or no timestamp queries)");
         }
         ui.small(&v.adapter);

@@ -54,7 +54,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         println!(
             "{}: t = {t:.3} s, {:.1} ms on the GPU",
             path.display(),
-            stats.gpu_ms()
+            stats.total_ms()
         );
     }
     Ok(())

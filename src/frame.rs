@@ -10,7 +10,7 @@
 use glam::Vec3;
 use pelage_gpu::audit;
 use pelage_gpu::{FramePlan, Gpu, GpuTimer, PassInfo, ShaderBinding, wgpu};
-use pelage_scene::{Camera, CameraMatrices, Light, Mesh, MeshMotion, ShadowParams, Skin, SkinBend};
+use pelage_scene::{CameraMatrices, Light, Mesh, MeshMotion, ShadowParams, Skin, SkinBend};
 use pelage_shade::{HairInputs, HairPass, TargetFormat, TargetViews, Visibility, VolumeGrid};
 use pelage_shadow::{LightVisibility, ShadowMethod};
 use pelage_strands::{
@@ -125,11 +125,10 @@ fn build_strands(
 /// The stages of a frame built from a [`Scene`], owning no target: prepared with the
 /// time, camera and lights, recorded into the caller's encoder and views.
 ///
-/// Each frame: [`Frame::prepare`] (or [`Frame::prepare_matrices`] with an engine's own
-/// view and projection), [`Frame::record`] into the caller's encoder (or its three parts,
-/// [`Frame::record_strands`], [`Frame::record_shadows`] and [`Frame::record_shade`], with
-/// the caller's own passes between them), the caller's submit, then
-/// [`Frame::after_submit`]. Nothing waits for the GPU and nothing is created per frame in
+/// Each frame: [`Frame::prepare`] with the view and projection, [`Frame::record`] into
+/// the caller's encoder (or its two parts, [`Frame::record_before_shade`] and
+/// [`Frame::record_shade`], with the caller's own passes between them), the caller's
+/// submit, then [`Frame::after_submit`]. Nothing waits for the GPU and nothing is created per frame in
 /// steady state.
 #[derive(Debug)]
 pub struct Frame {
@@ -405,39 +404,40 @@ impl Frame {
         })
     }
 
-    /// Writes every stage's uniforms for time `t` seen by `camera`: the mesh's motion and
-    /// the colliders, the level of detail for the hair's size on screen, stage 1 (whose
-    /// [`StrandFrame`] is returned and recorded with), each light's shadow and
-    /// hand-over, and the hair pass (projected as the target's depth direction asks).
-    /// Queue writes only.
+    /// Writes every stage's uniforms for time `t` seen through `camera`'s view and
+    /// projection (any handedness, a jitter; reverse-Z exactly when the target's depth
+    /// is: a pelage camera's are [`Camera::matrices`] or [`Camera::matrices_reverse_z`]):
+    /// the mesh's motion and the colliders, the level of detail for the hair's size on
+    /// screen, stage 1 (whose [`StrandFrame`] is returned and recorded with), each
+    /// light's shadow and hand-over, and the hair pass. Queue writes only. Matrices that
+    /// are not finite, not invertible or not a perspective projection, or whose depth
+    /// direction is not the target's, are an error.
+    ///
+    /// [`Camera::matrices`]: pelage_scene::Camera::matrices
+    /// [`Camera::matrices_reverse_z`]: pelage_scene::Camera::matrices_reverse_z
     pub fn prepare(
-        &mut self,
-        queue: &wgpu::Queue,
-        t: f32,
-        camera: &Camera,
-    ) -> crate::Result<StrandFrame> {
-        let frame = self.prepare_strands(queue, t, Some(camera))?;
-        let (width, height) = (self.target.width, self.target.height);
-        let matrices = if self.target.format.reverse_z {
-            camera.matrices_reverse_z(width, height)
-        } else {
-            camera.matrices(width, height)
-        };
-        self.prepare_later_stages(queue, &frame, &matrices)?;
-        Ok(frame)
-    }
-
-    /// [`Frame::prepare`] with the caller's own view and projection (any handedness,
-    /// reverse-Z to match the target, a jitter): the level of detail stays the one last
-    /// set (every strand, unless a [`Frame::prepare`] chose fewer).
-    pub fn prepare_matrices(
         &mut self,
         queue: &wgpu::Queue,
         t: f32,
         camera: &CameraMatrices,
     ) -> crate::Result<StrandFrame> {
         camera.validate()?;
-        let frame = self.prepare_strands(queue, t, None)?;
+        if camera.reverse_z() != self.target.format.reverse_z {
+            let (given, target) = match camera.reverse_z() {
+                true => ("reverse-Z", "standard depth (near 0, far 1)"),
+                false => ("standard depth (near 0, far 1)", "reverse-Z"),
+            };
+            return Err(pelage_scene::ParamError {
+                name: "camera.projection".into(),
+                value: given.into(),
+                reason: format!(
+                    "the frame's target has {target} (FrameTarget::format.reverse_z): project \
+                     the same way, or build the frame for this projection"
+                ),
+            }
+            .into());
+        }
+        let frame = self.prepare_strands(queue, t, Some(camera))?;
         self.prepare_later_stages(queue, &frame, camera)?;
         Ok(frame)
     }
@@ -448,11 +448,8 @@ impl Frame {
         &mut self,
         queue: &wgpu::Queue,
         t: f32,
-        camera: Option<&Camera>,
+        camera: Option<&CameraMatrices>,
     ) -> crate::Result<StrandFrame> {
-        if let Some(camera) = camera {
-            camera.validate()?;
-        }
         if let Some((skin, Some(rig))) = &self.skin {
             skin.set_joint_matrices(queue, &rig.joint_matrices(t))?;
         }
@@ -517,20 +514,33 @@ impl Frame {
     /// Records the whole frame into `encoder`: stage 1, each light's shadow and its
     /// hand-over, then the hair pass into `views` (clearing them unless `views.load`).
     /// Records only: no device, no wait; submitting is the caller's, followed by
-    /// [`Frame::after_submit`].
+    /// [`Frame::after_submit`]. The same as [`Frame::record_before_shade`] then
+    /// [`Frame::record_shade`], between which a caller may record passes of its own.
     pub fn record(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         views: &TargetViews<'_>,
         mut timer: Option<&mut GpuTimer>,
     ) -> crate::Result<()> {
-        self.record_strands(encoder, timer.as_deref_mut())?;
-        self.record_shadows(encoder, timer.as_deref_mut())?;
+        self.record_before_shade(encoder, timer.as_deref_mut())?;
         self.record_shade(encoder, views, timer)
     }
 
-    /// Stage 1's passes alone (the first part of [`Frame::record`]).
-    pub fn record_strands(
+    /// The first part of [`Frame::record`]: stage 1, each light's shadow and hand-over,
+    /// and the volume method's grid. A caller's pass sampling the shadow
+    /// ([`Frame::shadow_binding`]) or the body's sky ([`Frame::body_sky_binding`]) goes
+    /// after it, before [`Frame::record_shade`] (its plan: [`Frame::plan`]).
+    pub fn record_before_shade(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        mut timer: Option<&mut GpuTimer>,
+    ) -> crate::Result<()> {
+        self.record_strands(encoder, timer.as_deref_mut())?;
+        self.record_shadow_part(encoder, timer, |_| true)
+    }
+
+    /// Stage 1's passes alone.
+    pub(crate) fn record_strands(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         mut timer: Option<&mut GpuTimer>,
@@ -550,18 +560,6 @@ impl Frame {
         Ok(())
     }
 
-    /// Each light's shadow and hand-over, and the volume method's grid (the second part
-    /// of [`Frame::record`]): a caller's pass sampling the shadow
-    /// ([`Frame::shadow_binding`]) or the body's sky ([`Frame::body_sky_binding`]) goes
-    /// after it.
-    pub fn record_shadows(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        timer: Option<&mut GpuTimer>,
-    ) -> crate::Result<()> {
-        self.record_shadow_part(encoder, timer, |_| true)
-    }
-
     /// Stage 2 alone: each light's shadow and hand-over, without the grid (the
     /// renderer's wall-clock timing of the stages counts the grid with the shade stage).
     #[cfg(not(target_arch = "wasm32"))]
@@ -575,7 +573,7 @@ impl Frame {
         self.record_shadow_part(encoder, None, |step| step == Step::Grid)
     }
 
-    /// The steps of [`Frame::record_shadows`] that `keep` takes.
+    /// The shadow steps (each light's shadow and hand-over, the grid) that `keep` takes.
     fn record_shadow_part(
         &self,
         encoder: &mut wgpu::CommandEncoder,
@@ -606,8 +604,9 @@ impl Frame {
         Ok(())
     }
 
-    /// The hair pass into `views` (the last part of [`Frame::record`]), with the target
-    /// bridge's passes around it when the hair pass draws the bridge's targets.
+    /// The hair pass into `views` (the second part of [`Frame::record`], after
+    /// [`Frame::record_before_shade`]), with the target bridge's passes around it when the
+    /// hair pass draws the bridge's targets.
     pub fn record_shade(
         &self,
         encoder: &mut wgpu::CommandEncoder,
@@ -676,41 +675,42 @@ impl Frame {
     }
 
     /// The passes [`Frame::record`] records, in order, with the named resources each
-    /// reads and writes (validated when the frame was built).
-    pub fn plan(&self) -> &FramePlan {
-        &self.plan
-    }
-
-    /// The plan with the caller's `passes` recorded between [`Frame::record_shadows`]
-    /// and [`Frame::record_shade`] (an engine's mesh sampling the shadow, say), validated.
-    pub fn plan_with_passes_before_shade(
+    /// reads and writes, and the caller's `passes_before_shade` recorded between
+    /// [`Frame::record_before_shade`] and [`Frame::record_shade`] (an engine's mesh
+    /// sampling the shadow, say; none: `[]`, the plan checked when the frame was built).
+    /// A plan whose passes read a resource before any pass wrote it is
+    /// [`Error::Plan`](crate::Error::Plan), naming the pass and the resource.
+    pub fn plan(
         &self,
-        passes: impl IntoIterator<Item = PassInfo>,
+        passes_before_shade: impl IntoIterator<Item = PassInfo>,
     ) -> crate::Result<FramePlan> {
+        let mut passes = passes_before_shade.into_iter().peekable();
+        if passes.peek().is_none() {
+            return Ok(self.plan.clone());
+        }
         let plan = self.stages().plan(&self.steps, passes);
         plan.validate()?;
         Ok(plan)
     }
 
-    /// The resources the key light's shadow writes under the frame's names
-    /// (`shadow0.*`): what a pass sampling [`Frame::shadow_binding`] reads.
-    pub fn key_lookup(&self) -> Vec<String> {
-        self.stages().key_lookup()
-    }
-
     /// The key light's shadow as the shadow contract's implementation, for a caller's own
-    /// shader (`None` without shadows).
+    /// shader (`None` without shadows); its `reads` are the resources under the frame's
+    /// names for that light (`shadow0.*`), what the caller's pass declares it reads.
     pub fn shadow_binding(&self) -> Option<ShaderBinding> {
-        self.shadows.first().map(|(s, _)| s.binding())
+        let (shadow, _) = self.shadows.first()?;
+        Some(ShaderBinding {
+            reads: self.stages().key_lookup(),
+            ..shadow.binding()
+        })
     }
 
     /// The body's sky (`shade/body_sky.wgsl`: `body_sky(p, n, ambient)`, the light
     /// reaching the body from the sky and, with the volume method, scattered by the hair)
     /// as the frame's shading implements it, for a caller's own mesh shader drawn
-    /// between [`Frame::record_shadows`] and [`Frame::record_shade`]: `Some` with the
-    /// volume method (the grid [`Frame::record_shadows`] fills, in the hair model's
-    /// group; declare its reads as `volume.fluence`), `None` for the other models (the
-    /// open sky: `body_sky` returns `ambient` as the contract file has it).
+    /// between [`Frame::record_before_shade`] and [`Frame::record_shade`]: `Some` with
+    /// the volume method (the grid [`Frame::record_before_shade`] fills, in the hair
+    /// model's group; its `reads` name the grid), `None` for the other models (the open
+    /// sky: `body_sky` returns `ambient` as the contract file has it).
     pub fn body_sky_binding(&self) -> Option<ShaderBinding> {
         self.hair.body_sky_binding()
     }
@@ -816,7 +816,7 @@ fn rename_lookup(shadow: &dyn ShadowMethod, name: &str) -> Vec<String> {
 
 /// One step of a frame. A [`Frame`] keeps its steps in recording order: its plan is
 /// built by walking them ([`Stages::plan`]) and its recording walks the same list
-/// ([`Frame::record_strands`], [`Frame::record_shadows`], [`Frame::record_shade`]), so
+/// ([`Frame::record_before_shade`], [`Frame::record_shade`]), so
 /// the plan is the order and the membership of what runs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Step {
@@ -829,7 +829,7 @@ enum Step {
     /// Light `i`'s hand-over to the hair (its per-vertex visibility).
     HandOver(usize),
     /// The volume method's grid (nothing for the other models), after stage 2 and before
-    /// the shade part: a caller's mesh pass between [`Frame::record_shadows`] and
+    /// the shade part: a caller's mesh pass between [`Frame::record_before_shade`] and
     /// [`Frame::record_shade`] reads the body's sky from it.
     Grid,
     /// The target bridge's passes before the hair pass.

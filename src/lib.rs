@@ -30,7 +30,7 @@
 //! let stats = renderer.finish(&gpu)?; // waits; the GPU time of each pass
 //! let (width, height, rgba) = renderer.rgba8(&gpu)?; // sRGB RGBA8, rows top to bottom
 //! assert_eq!(rgba.len(), 4 * width as usize * height as usize);
-//! println!("{:.2} ms on the GPU", stats.gpu_ms());
+//! println!("{:.2} ms on the GPU", stats.total_ms());
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 //!
@@ -60,7 +60,7 @@ mod frame;
 mod renderer;
 
 pub use frame::{Frame, FrameTarget};
-pub use renderer::{FrameStats, Renderer};
+pub use renderer::Renderer;
 
 /// Any error of the frame pipeline.
 #[derive(Debug, thiserror::Error)]

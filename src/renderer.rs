@@ -1,27 +1,13 @@
 //! The frame pipeline: strands, shadows, then shading into an offscreen image.
 
-use pelage_gpu::{Gpu, GpuTimer, wgpu};
-use pelage_scene::{Camera, Scene};
+use pelage_gpu::{Gpu, GpuTimer, TimerReport, wgpu};
+use pelage_scene::{Camera, CameraMatrices, Scene};
 #[cfg(not(target_arch = "wasm32"))]
 use pelage_shade::TargetViews;
 use pelage_shade::{TargetFormat, TargetViewSet, Targets};
 use pelage_strands::StrandFrame;
 
 use crate::frame::{Frame, FrameTarget};
-
-/// GPU time of one frame, per pass.
-#[derive(Clone, Debug, Default)]
-pub struct FrameStats {
-    /// Milliseconds per pass label; empty when the adapter has no timestamp queries.
-    pub passes: Vec<(String, f64)>,
-}
-
-impl FrameStats {
-    /// Sum of all passes, milliseconds.
-    pub fn gpu_ms(&self) -> f64 {
-        self.passes.iter().map(|(_, ms)| ms).sum()
-    }
-}
 
 /// A [`Frame`] rendering into its own offscreen targets, with its timer, readback and
 /// frames in flight.
@@ -35,7 +21,7 @@ pub struct Renderer {
     /// built for them).
     views: TargetViewSet,
     /// The timings of the newest frame read back.
-    last_stats: FrameStats,
+    last_stats: TimerReport,
     /// Frames submitted by `render` the GPU may not have finished.
     in_flight: std::collections::VecDeque<wgpu::SubmissionIndex>,
 }
@@ -78,7 +64,7 @@ impl Renderer {
             timer,
             views,
             in_flight: Default::default(),
-            last_stats: FrameStats::default(),
+            last_stats: TimerReport::default(),
         })
     }
 
@@ -91,11 +77,23 @@ impl Renderer {
     /// methods it is wasted work. Like `render`, it returns without waiting for the GPU
     /// (at most two frames queued).
     pub fn advance(&mut self, gpu: &Gpu, t: f32, camera: &Camera) -> crate::Result<()> {
-        self.frame.prepare_strands(&gpu.queue, t, Some(camera))?;
+        let matrices = self.matrices(camera)?;
+        self.frame.prepare_strands(&gpu.queue, t, Some(&matrices))?;
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         self.frame.record_strands(&mut encoder, None)?;
         let index = gpu.submit([encoder.finish()])?;
         self.queue_frame(gpu, index)
+    }
+
+    /// `camera`'s view and projection for the renderer's targets (reverse-Z when their
+    /// depth is).
+    fn matrices(&self, camera: &Camera) -> crate::Result<CameraMatrices> {
+        camera.validate()?;
+        let (width, height) = (self.targets.width, self.targets.height);
+        Ok(match self.targets.format.reverse_z {
+            true => camera.matrices_reverse_z(width, height),
+            false => camera.matrices(width, height),
+        })
     }
 
     /// Remembers a submitted frame; beyond [`FRAMES_IN_FLIGHT`] waits for the oldest,
@@ -121,7 +119,8 @@ impl Renderer {
         camera: &Camera,
         timed: bool,
     ) -> crate::Result<StrandFrame> {
-        let frame = self.frame.prepare(&gpu.queue, t, camera)?;
+        let matrices = self.matrices(camera)?;
+        let frame = self.frame.prepare(&gpu.queue, t, &matrices)?;
         let timer = self.timer.as_mut().filter(|_| timed);
         self.frame.record(encoder, &self.views.views(), timer)?;
         Ok(frame)
@@ -129,11 +128,11 @@ impl Renderer {
 
     /// Grows the strands for time `t`, shadows them and draws them from `camera`:
     /// records the frame ([`Frame::prepare`], [`Frame::record`]), submits it, takes the frame's
-    /// after-submit step and returns without waiting for the GPU. The [`FrameStats`]
+    /// after-submit step and returns without waiting for the GPU. The GPU times
     /// returned are those of the newest earlier frame the GPU has finished since the
-    /// last call (read back a frame or more late; empty when none has finished yet);
-    /// [`Renderer::finish`] waits for this frame's.
-    pub fn render(&mut self, gpu: &Gpu, t: f32, camera: &Camera) -> crate::Result<FrameStats> {
+    /// last call (read back a frame or more late; empty when none has finished yet, or
+    /// without timestamp queries); [`Renderer::finish`] waits for this frame's.
+    pub fn render(&mut self, gpu: &Gpu, t: f32, camera: &Camera) -> crate::Result<TimerReport> {
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         self.record_timed(gpu, &mut encoder, t, camera, true)?;
         if let Some(timer) = &self.timer {
@@ -145,30 +144,26 @@ impl Renderer {
         // oldest, as a swap chain would hold it back.
         self.queue_frame(gpu, index)?;
         let Some(timer) = &mut self.timer else {
-            return Ok(FrameStats::default());
+            return Ok(TimerReport::default());
         };
         timer.submitted(gpu)?;
         Ok(match timer.try_read(gpu)? {
             Some(report) => {
-                self.last_stats = FrameStats {
-                    passes: report.by_label(),
-                };
+                self.last_stats = report;
                 self.last_stats.clone()
             }
-            None => FrameStats::default(),
+            None => TimerReport::default(),
         })
     }
 
     /// Waits for the GPU to finish every frame submitted so far and returns the GPU
     /// time of the last one per pass (empty without timestamp queries).
-    pub fn finish(&mut self, gpu: &Gpu) -> crate::Result<FrameStats> {
+    pub fn finish(&mut self, gpu: &Gpu) -> crate::Result<TimerReport> {
         if let Some(report) = match &mut self.timer {
             Some(timer) => timer.wait(gpu)?,
             None => None,
         } {
-            self.last_stats = FrameStats {
-                passes: report.by_label(),
-            };
+            self.last_stats = report;
         }
         pelage_gpu::wait(&gpu.device, None)?;
         self.in_flight.clear();
@@ -192,7 +187,8 @@ impl Renderer {
         camera: &Camera,
         repeats: usize,
     ) -> crate::Result<Vec<(String, f64)>> {
-        self.frame.prepare(&gpu.queue, t, camera)?;
+        let matrices = self.matrices(camera)?;
+        self.frame.prepare(&gpu.queue, t, &matrices)?;
         let (color, resolve) = self.targets.color_views();
         let depth = self.targets.depth_view();
         let frame = &self.frame;

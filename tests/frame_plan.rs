@@ -91,7 +91,7 @@ fn the_plan_declares_the_passes_a_frame_records_through_the_target_bridge() {
     for (name, s, format) in bridged() {
         let mut renderer = Renderer::with_format(&gpu, &s, 96, 72, &format)
             .unwrap_or_else(|e| panic!("{name}: {e}"));
-        let plan = renderer.frame().plan().clone();
+        let plan = renderer.frame().plan([]).unwrap();
         plan.validate().unwrap();
         assert!(
             plan.labels().iter().any(|l| l.starts_with("bridge: ")),
@@ -100,7 +100,8 @@ fn the_plan_declares_the_passes_a_frame_records_through_the_target_bridge() {
         );
         renderer.render(&gpu, 0.0, &s.camera).unwrap();
         let stats = renderer.finish(&gpu).unwrap();
-        let timed: Vec<&str> = stats.passes.iter().map(|(l, _)| l.as_str()).collect();
+        let by_label = stats.by_label();
+        let timed: Vec<&str> = by_label.iter().map(|(l, _)| l.as_str()).collect();
         println!("{name}: {:?}", plan.labels());
         assert_eq!(plan.labels(), timed, "{name}");
     }
@@ -122,11 +123,12 @@ fn the_plan_declares_the_passes_a_frame_records() {
             }
             Err(e) => panic!("{shadow:?} {method:?}: {e}"),
         };
-        let plan = renderer.frame().plan().clone();
+        let plan = renderer.frame().plan([]).unwrap();
         plan.validate().unwrap();
         renderer.render(&gpu, 0.0, &s.camera).unwrap();
         let stats = renderer.finish(&gpu).unwrap();
-        let timed: Vec<&str> = stats.passes.iter().map(|(l, _)| l.as_str()).collect();
+        let by_label = stats.by_label();
+        let timed: Vec<&str> = by_label.iter().map(|(l, _)| l.as_str()).collect();
         println!(
             "{method:?}, {lights} light(s): {} passes: {:?}",
             plan.passes().len(),
@@ -236,7 +238,7 @@ fn every_pass_binds_only_what_the_plan_declares() {
         audit.clear_passes();
         renderer.render(&gpu, 0.0, &s.camera).unwrap();
         let bound = audit.finish();
-        let plan = renderer.frame().plan();
+        let plan = renderer.frame().plan([]).unwrap();
         let labels: Vec<&str> = bound.iter().map(|p| p.label.as_str()).collect();
         assert_eq!(
             plan.labels(),
@@ -287,8 +289,9 @@ fn a_plan_in_the_wrong_order_names_the_pass_to_record_first() {
     let s = scene(ShadowParams::default(), Transparency::Opaque, 1);
     let renderer = Renderer::new(&gpu, &s, 64, 48).unwrap();
     // Stage 3 before stage 1: the hair pass would read strands nothing wrote yet.
-    let mut wrong = pelage::gpu::FramePlan::new(renderer.frame().plan().inputs().to_vec());
-    let passes = renderer.frame().plan().passes();
+    let plan = renderer.frame().plan([]).unwrap();
+    let mut wrong = pelage::gpu::FramePlan::new(plan.inputs().to_vec());
+    let passes = plan.passes();
     let hair: Vec<_> = passes
         .iter()
         .filter(|p| p.label.starts_with("shade:"))
@@ -315,7 +318,7 @@ fn a_plan_in_the_wrong_order_names_the_pass_to_record_first() {
     }
     // Without its shadow's passes the plan is refused: the hair pass's mesh samples the
     // key light's shadow, which nothing would write.
-    let mut unshadowed = pelage::gpu::FramePlan::new(renderer.frame().plan().inputs().to_vec());
+    let mut unshadowed = pelage::gpu::FramePlan::new(plan.inputs().to_vec());
     unshadowed.push(
         passes
             .iter()

@@ -74,7 +74,8 @@ fn the_guides_scene_draws_its_interpolated_strands() {
         2,
         "the guides are bent, then interpolated"
     );
-    let plan = renderer.frame().plan().labels();
+    let plan = renderer.frame().plan([]).unwrap();
+    let plan = plan.labels();
     assert!(
         plan.contains(&"strands: guides bend") && plan.contains(&"strands: guides"),
         "{plan:?}"
@@ -158,7 +159,8 @@ fn guides_with_dynamics_simulate_the_guides_and_draw_the_interpolated_strands() 
     scene.dynamics = Some(pelage::scene::DynamicsParams::default());
     scene.motion = Some(pelage::scene::MeshMotion::default());
     let mut renderer = Renderer::new(&gpu, &scene, SIZE.0, SIZE.1).unwrap();
-    let plan = renderer.frame().plan().labels();
+    let plan = renderer.frame().plan([]).unwrap();
+    let plan = plan.labels();
     assert!(
         plan.contains(&"strands: simulate") && plan.contains(&"strands: guides"),
         "{plan:?}"

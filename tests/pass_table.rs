@@ -88,7 +88,7 @@ fn stage_labels(plan: &FramePlan, which: &str) -> String {
 fn plan_of(gpu: &Gpu, scene: &Scene) -> Result<FramePlan, String> {
     match Renderer::new(gpu, scene, 96, 72) {
         Ok(renderer) => {
-            let plan = renderer.frame().plan().clone();
+            let plan = renderer.frame().plan([]).unwrap();
             plan.validate().map_err(|e| format!("invalid plan: {e}"))?;
             Ok(plan)
         }

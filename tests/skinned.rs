@@ -31,13 +31,8 @@ fn a_skinned_scene_skins_before_stage_1_and_its_roots_follow_the_skin() {
     let scene = skinned_scene();
     let rig = scene.skin.clone().unwrap();
     let mut renderer = Renderer::new(&gpu, &scene, 64, 48).unwrap();
-    let labels: Vec<&str> = renderer
-        .frame()
-        .plan()
-        .passes()
-        .iter()
-        .map(|p| p.label.as_str())
-        .collect();
+    let plan = renderer.frame().plan([]).unwrap();
+    let labels: Vec<&str> = plan.passes().iter().map(|p| p.label.as_str()).collect();
     println!("{labels:?}");
     assert_eq!(labels[0], SKIN_LABEL);
     assert_eq!(labels[1], "strands: grow");
@@ -102,7 +97,9 @@ fn a_callers_skin_takes_its_matrices_and_bad_ones_are_refused_by_name() {
         ),
         "skin.joint_matrices"
     );
-    frame.prepare(&gpu.queue, 0.5, &scene.camera).unwrap();
+    frame
+        .prepare(&gpu.queue, 0.5, &scene.camera.matrices(32, 24))
+        .unwrap();
     // A rig's frame sets its own matrices; a frame without a skin has none to set.
     let rigged = Frame::new(&gpu, &skinned_scene(), &target).unwrap();
     assert_eq!(

@@ -117,7 +117,9 @@ fn a_frame_in_the_callers_targets_is_the_renderers_picture() {
         "recorded before any prepare: {early:?}"
     );
     let t = 0.25;
-    frame.prepare(&gpu.queue, t, &scene.camera).unwrap();
+    frame
+        .prepare(&gpu.queue, t, &scene.camera.matrices(W, H))
+        .unwrap();
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
     frame.record(&mut encoder, &views.views(), None).unwrap();
     gpu.submit_and_wait([encoder.finish()]).unwrap();

@@ -103,6 +103,7 @@ fn a_frame_recorded_as_an_engine_records_it_never_waits_for_the_gpu() {
         for n in 0..6 {
             // Time and camera move; the frames queue up behind each other unwaited.
             let camera = s.camera.orbited(0.05 * n as f32);
+            let camera = camera.matrices(96, 72);
             frame.prepare(&gpu.queue, n as f32 / 24.0, &camera).unwrap();
             let mut encoder = gpu.device.create_command_encoder(&Default::default());
             frame.record(&mut encoder, &views, None).unwrap();

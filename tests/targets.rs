@@ -173,6 +173,16 @@ fn a_projection_that_disagrees_with_the_depth_direction_is_an_error() {
         .prepare(&gpu.queue, &frame, &reversed, &s.lights, W, H)
         .unwrap_err();
     assert!(err.to_string().contains("reverse_z"), "{err}");
+    // The frame checks it first, for every method, naming the camera's projection.
+    let err = renderer
+        .frame_mut()
+        .prepare(&gpu.queue, 0.0, &reversed)
+        .unwrap_err();
+    assert!(err.to_string().contains("camera.projection"), "{err}");
+    renderer
+        .frame_mut()
+        .prepare(&gpu.queue, 0.0, &camera.matrices(W, H))
+        .unwrap();
 }
 
 /// Every transparency method the adapter runs draws multisampled targets and reversed

@@ -1010,7 +1010,7 @@ fn prepare_instance(
             color: v3(color),
             intensity: illuminance * camera.exposure,
         })])?;
-        frame.prepare_matrices(
+        frame.prepare(
             &gpu.queue,
             extracted.time,
             &camera_matrices(view, fur.world_from_model),

@@ -89,7 +89,8 @@ fn pelages_own(t: f32, matrices: Option<&[glam::Mat4]>) -> image::RgbaImage {
         }
     };
     let targets = Targets::with_format(&gpu, w, h, &format).unwrap();
-    frame.prepare(&gpu.queue, t, &scene.camera).unwrap();
+    let camera = scene.camera.matrices_reverse_z(w, h);
+    frame.prepare(&gpu.queue, t, &camera).unwrap();
     let mut encoder = gpu
         .device
         .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());

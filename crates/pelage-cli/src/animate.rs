@@ -245,7 +245,7 @@ fn animate(opts: &AnimateOpts) -> Result<(), CliError> {
             let stats = renderer.finish(&gpu)?;
             dropped.after_frame(&renderer, &gpu, f)?;
             if passes.len() < MAX_TIMED_FRAMES {
-                passes.push(stats.passes);
+                passes.push(stats.by_label());
             }
             let image = renderer.image(&gpu)?;
             save_png(&image, &opts.out.join(frame_name(f)))?;

@@ -571,7 +571,7 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
                 if frame < 3 {
                     continue;
                 }
-                for (label, ms) in stats.passes {
+                for (label, ms) in stats.by_label() {
                     if !label.starts_with("shade: ") || label == "shade: mesh" {
                         continue;
                     }
@@ -833,7 +833,7 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
             let before = pelage::gpu::Created::now();
             let started = Instant::now();
             let mut encoder = gpu.device.create_command_encoder(&Default::default());
-            frame_stages.prepare(&gpu.queue, t, &s.camera)?;
+            frame_stages.prepare(&gpu.queue, t, &s.camera.matrices(width, height))?;
             frame_stages.record(&mut encoder, &views, None)?;
             let commands = encoder.finish();
             let ms = started.elapsed().as_secs_f64() * 1e3;
@@ -878,7 +878,7 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
             let t = frame as f32 / 24.0;
             let started = Instant::now();
             let mut encoder = gpu.device.create_command_encoder(&Default::default());
-            frame_stages.prepare(&gpu.queue, t, &s.camera)?;
+            frame_stages.prepare(&gpu.queue, t, &s.camera.matrices(width, height))?;
             frame_stages.record(&mut encoder, &views, None)?;
             drop(encoder.finish());
             if frame >= 3 {
@@ -1305,7 +1305,8 @@ fn bridge_section(
             load: true,
         };
         let samples = frame_samples(&gpu, frames, |encoder, timer, i| {
-            frame.prepare(&gpu.queue, i as f32 / 24.0, &s.camera)?;
+            let camera = s.camera.matrices_reverse_z(width, height);
+            frame.prepare(&gpu.queue, i as f32 / 24.0, &camera)?;
             frame.record(encoder, &views, timer)?;
             Ok(())
         })?;

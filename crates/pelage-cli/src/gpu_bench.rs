@@ -215,7 +215,7 @@ fn measure(gpu: &Gpu, case: &Case, frames: usize, warm_up: usize) -> Result<Meas
             continue;
         }
         walls.push(wall);
-        for (label, ms) in stats.passes {
+        for (label, ms) in stats.by_label() {
             match samples.iter_mut().find(|(l, _)| *l == label) {
                 Some((_, v)) => v.push(ms),
                 None => samples.push((label, vec![ms])),

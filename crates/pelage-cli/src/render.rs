@@ -156,7 +156,7 @@ fn render(opts: &RenderOpts) -> Result<(), CliError> {
             lod.pixels, lod.zone.lambda, lod.strands, lod.segments
         );
     }
-    crate::report::print_pass_times(&stats.passes, "GPU time per pass (one frame):");
+    crate::report::print_pass_times(&stats.by_label(), "GPU time per pass (one frame):");
     dropped.print(&scene.shade.transparency);
     println!("wall time: {:.1} s", started.elapsed().as_secs_f64());
     Ok(())

@@ -76,6 +76,11 @@ pub struct ShaderBinding {
     pub group: u32,
     /// The resources, binding `i` = `resources[i]`.
     pub resources: Vec<BoundResource>,
+    /// The frame resources among them, by the names a [`crate::FramePlan`] gives them
+    /// (`shadow.grid`, `volume.fluence`, ...): what a pass binding the module declares it
+    /// reads ([`crate::PassInfo::reads`]). Uniforms, samplers and data written once at
+    /// build are not frame resources and not listed.
+    pub reads: Vec<String>,
 }
 
 impl ShaderBinding {

@@ -391,6 +391,7 @@ fn a_shader_binding_describes_its_layout() {
             BoundResource::Uniform(buffer.clone()),
             BoundResource::Storage(buffer.clone()),
         ],
+        reads: vec!["b".into()],
     };
     let entries = binding.layout_entries(wgpu::ShaderStages::FRAGMENT);
     assert_eq!(entries.len(), 2);

@@ -644,6 +644,7 @@ impl Common {
             sources: &crate::SHADERS,
             group: model.group,
             resources: model.resources.clone(),
+            reads: model.reads.clone(),
         })
     }
 

@@ -118,6 +118,12 @@ impl HairModel {
             .iter()
             .map(|r| r.buffer().map_or(0, wgpu::Buffer::size))
             .sum();
+        // The grid's fluence is the one frame resource a model reads (the tables are
+        // written once at build).
+        let reads = match volume {
+            Some(_) => vec![crate::VOLUME_FLUENCE.to_string()],
+            None => Vec::new(),
+        };
         Ok(Self {
             binding: ShaderBinding {
                 contract: CONTRACT,
@@ -125,6 +131,7 @@ impl HairModel {
                 sources: &crate::SHADERS,
                 group: 2,
                 resources,
+                reads,
             },
             lut,
             chiang,

@@ -442,6 +442,8 @@ impl LightMap {
             sources: &crate::SHADERS,
             group: 1,
             resources,
+            // The method's names, filled in by its `ShadowMethod::binding`.
+            reads: Vec::new(),
         }
     }
 
@@ -543,7 +545,10 @@ macro_rules! light_map_method {
             }
 
             fn binding(&self) -> ShaderBinding {
-                self.map.binding($lookup)
+                ShaderBinding {
+                    reads: self.lookup(),
+                    ..self.map.binding($lookup)
+                }
             }
 
             fn memory_bytes(&self) -> u64 {

@@ -266,6 +266,7 @@ impl ShadowMethod for VoxelShadow {
             sources: &crate::SHADERS,
             group: 1,
             resources,
+            reads: self.lookup(),
         }
     }
 

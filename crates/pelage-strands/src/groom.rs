@@ -3,7 +3,7 @@
 
 use glam::{Vec2, Vec3};
 use pelage_gpu::{Gpu, storage_buffer, wgpu};
-use pelage_scene::{Camera, HairParams, HairType, ParamError, Resampled};
+use pelage_scene::{CameraMatrices, HairParams, HairType, ParamError, Resampled};
 
 use crate::grow::{StrandPass, StrandStage};
 use crate::lod::{bend_error, bend_per_segment, fewest_segments};
@@ -319,7 +319,7 @@ impl StrandStage for GroomStrands {
     fn level_for_view(
         &self,
         bounds: (Vec3, Vec3),
-        camera: &Camera,
+        camera: &CameraMatrices,
         width: u32,
         height: u32,
     ) -> LodLevel {

@@ -8,7 +8,7 @@ use pelage_gpu::{
     dispatch_size, storage_buffer, wgpu, zeroed_storage,
 };
 use pelage_scene::{
-    Camera, GrowthParams, HairParams, HairType, Mesh, SurfaceInterpolation, WindParams,
+    CameraMatrices, GrowthParams, HairParams, HairType, Mesh, SurfaceInterpolation, WindParams,
 };
 
 use crate::{
@@ -308,7 +308,7 @@ impl StrandStage for GrowStrands {
     fn level_for_view(
         &self,
         bounds: (Vec3, Vec3),
-        camera: &Camera,
+        camera: &CameraMatrices,
         width: u32,
         height: u32,
     ) -> LodLevel {
@@ -578,7 +578,7 @@ pub trait StrandStage: std::fmt::Debug + wgpu::WasmNotSendSync {
     fn level_for_view(
         &self,
         bounds: (Vec3, Vec3),
-        camera: &Camera,
+        camera: &CameraMatrices,
         width: u32,
         height: u32,
     ) -> LodLevel;

@@ -5,8 +5,8 @@
 use glam::Vec3;
 use pelage_gpu::{Gpu, GpuTimer, PassInfo, storage_buffer, wgpu};
 use pelage_scene::{
-    Camera, DynamicsParams, GuideParams, HairParams, MAX_GUIDES, Mesh, ParamError, Resampled,
-    SurfaceInterpolation, WindParams,
+    CameraMatrices, DynamicsParams, GuideParams, HairParams, MAX_GUIDES, Mesh, ParamError,
+    Resampled, SurfaceInterpolation, WindParams,
 };
 
 use crate::groom::GroomShape;
@@ -622,7 +622,7 @@ impl StrandStage for GuideStrands {
     fn level_for_view(
         &self,
         bounds: (Vec3, Vec3),
-        camera: &Camera,
+        camera: &CameraMatrices,
         width: u32,
         height: u32,
     ) -> LodLevel {

@@ -7,7 +7,7 @@
 
 use glam::{Vec3, Vec4Swizzles};
 use pelage_contract::StrandLayout;
-use pelage_scene::{Camera, GrowthParams, HairParams, HairType, Transition, WindParams};
+use pelage_scene::{CameraMatrices, GrowthParams, HairParams, HairType, Transition, WindParams};
 
 /// One frame's level of detail.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -41,13 +41,14 @@ impl LodLevel {
     }
 
     /// The level `hair.lod` asks for when the hair, inside the world box `bounds`, is seen
-    /// by `camera` on a `width` x `height` target. Full detail when LOD is disabled, when
-    /// the box reaches behind the camera, or when anything is not finite (the box's size
+    /// through `camera`'s view and projection (any handedness, either depth direction)
+    /// on a `width` x `height` target. Full detail when LOD is disabled, when the box
+    /// reaches in front of the near plane, or when anything is not finite (the box's size
     /// on screen is measured either way, unless it reaches behind the camera).
     pub fn for_view(
         hair: &HairParams,
         bounds: (Vec3, Vec3),
-        camera: &Camera,
+        camera: &CameraMatrices,
         width: u32,
         height: u32,
     ) -> Self {
@@ -69,7 +70,7 @@ impl LodLevel {
     pub fn for_view_with(
         hair: &HairParams,
         bounds: (Vec3, Vec3),
-        camera: &Camera,
+        camera: &CameraMatrices,
         width: u32,
         height: u32,
         segments: impl FnOnce(f32) -> (u32, f32),
@@ -129,14 +130,13 @@ struct ScreenBox {
 }
 
 impl ScreenBox {
-    fn new(bounds: (Vec3, Vec3), camera: &Camera, width: u32, height: u32) -> Option<Self> {
+    fn new(bounds: (Vec3, Vec3), camera: &CameraMatrices, width: u32, height: u32) -> Option<Self> {
         let (lo, hi) = bounds;
         if !lo.is_finite() || !hi.is_finite() {
             return None;
         }
-        let aspect = width as f32 / height as f32;
-        let view = camera.view();
-        let clip = camera.view_projection(aspect);
+        let clip = camera.view_projection();
+        let reverse_z = camera.reverse_z();
         let (mut min, mut max) = (glam::Vec2::splat(f32::MAX), glam::Vec2::splat(f32::MIN));
         let mut nearest = f32::MAX;
         for corner in 0..8 {
@@ -145,12 +145,15 @@ impl ScreenBox {
                 if corner & 2 == 0 { lo.y } else { hi.y },
                 if corner & 4 == 0 { lo.z } else { hi.z },
             );
-            let depth = -(view * p.extend(1.0)).z;
-            if depth <= camera.near {
+            // A perspective projection's clip w is the distance along the view axis;
+            // a corner nearer than the near plane has clip depth outside [0, w] on the
+            // near side (below 0, or above w with reverse-Z).
+            let c = clip * p.extend(1.0);
+            let before_near = if reverse_z { c.z >= c.w } else { c.z <= 0.0 };
+            if c.w <= 0.0 || before_near {
                 return None;
             }
-            nearest = nearest.min(depth);
-            let c = clip * p.extend(1.0);
+            nearest = nearest.min(c.w);
             let ndc = c.xy() / c.w;
             min = min.min(ndc);
             max = max.max(ndc);
@@ -158,7 +161,8 @@ impl ScreenBox {
         let min = min.clamp(glam::Vec2::splat(-1.0), glam::Vec2::splat(1.0));
         let max = max.clamp(glam::Vec2::splat(-1.0), glam::Vec2::splat(1.0));
         let size = (max - min) * 0.5 * glam::Vec2::new(width as f32, height as f32);
-        let focal = height as f32 / (2.0 * (camera.fov_y * 0.5).tan());
+        // Pixels per world unit at distance 1: the projection's focal length in pixels.
+        let focal = 1.0 / camera.pixel_scale(height);
         let out = Self {
             pixels: size.x * size.y,
             extent: size.max_element(),

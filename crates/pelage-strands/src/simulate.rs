@@ -6,8 +6,8 @@ use encase::ShaderType;
 use glam::{Mat4, UVec3, Vec2, Vec3, Vec4};
 use pelage_gpu::{Gpu, GpuTimer, UniformBuffer, read_buffer, storage_buffer, wgpu, zeroed_storage};
 use pelage_scene::{
-    Camera, Collider, DynamicsParams, HairParams, HairType, MAX_COLLIDERS, Mesh, ParamError,
-    Resampled, SdfGrid,
+    CameraMatrices, Collider, DynamicsParams, HairParams, HairType, MAX_COLLIDERS, Mesh,
+    ParamError, Resampled, SdfGrid,
 };
 
 use crate::MESH;
@@ -691,7 +691,7 @@ impl StrandStage for SimulateStrands {
     fn level_for_view(
         &self,
         bounds: (Vec3, Vec3),
-        camera: &Camera,
+        camera: &CameraMatrices,
         width: u32,
         height: u32,
     ) -> LodLevel {

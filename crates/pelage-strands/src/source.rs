@@ -82,7 +82,8 @@ pub fn scene_reach(scene: &Scene) -> (Vec3, Vec3) {
 /// on a `width` x `height` target (`ShadowParams::sized_for`): nothing finer than the
 /// picture can show. Unchanged when the hair's box reaches behind the camera.
 pub fn sized_for_view(scene: &Scene, camera: &Camera, width: u32, height: u32) -> Scene {
-    let level = LodLevel::for_view(&scene.hair, scene_reach(scene), camera, width, height);
+    let matrices = camera.matrices(width, height);
+    let level = LodLevel::for_view(&scene.hair, scene_reach(scene), &matrices, width, height);
     let mut out = scene.clone();
     if level.extent_pixels.is_finite() {
         out.shadow = scene.shadow.sized_for(level.extent_pixels);

@@ -270,7 +270,7 @@ fn a_straight_groom_is_reduced_further_than_a_curly_one() {
     let level = |g: &Resampled| {
         let s = GroomStrands::new(&gpu, g, &hair).unwrap();
         let reach = GroomStrands::reach_of(g, &hair).unwrap();
-        s.level_for_view(reach, &camera, 320, 240)
+        s.level_for_view(reach, &camera.matrices(320, 240), 320, 240)
     };
     let (a, b) = (level(&straight), level(&curly));
     println!(

@@ -143,7 +143,9 @@ fn segment_reduction_stays_within_its_pixel_bound() {
             let view = Camera { eye, ..camera };
             let (lo, hi) = mesh.bounds();
             let reach = Vec3::splat(params.growth.length * 1.3);
-            let level = LodLevel::for_view(&params, (lo - reach, hi + reach), &view, width, height);
+            let matrices = view.matrices(width, height);
+            let level =
+                LodLevel::for_view(&params, (lo - reach, hi + reach), &matrices, width, height);
             strands.set_lod(level).unwrap();
             let reduced = grow_on_gpu(&gpu, &mut strands, 0.3);
             // Pixels per world unit at the nearest point of the hair, as the bound uses.
@@ -201,4 +203,56 @@ fn a_level_the_groom_cannot_grow_is_refused() {
     assert!(err.contains("lod.strands"), "{err}");
     level.strands = 0;
     assert!(strands.set_lod(level).is_err());
+}
+
+/// The level of detail comes from the view and projection alone: the same camera's
+/// matrices in either handedness and either depth direction (finite or infinite, as
+/// Bevy projects) choose the same strands and segments, from the same screen size.
+#[test]
+fn the_level_is_the_same_in_every_handedness_and_depth_direction() {
+    use glam::camera::{lh, rh};
+    use pelage_scene::CameraMatrices;
+    let (width, height) = (320, 240);
+    let aspect = width as f32 / height as f32;
+    let mut params = hair(400, HairType::Straight);
+    params.lod.start_pixels = 1.0e9; // drop strands at every distance
+    let (lo, hi) = Mesh::creature().bounds();
+    let reach = Vec3::splat(params.growth.length * 1.3);
+    let bounds = (lo - reach, hi + reach);
+    for distance in [4.0f32, 8.0, 16.0] {
+        let camera = Camera::default();
+        let eye = camera.target + (camera.eye - camera.target).normalize() * distance;
+        let camera = Camera { eye, ..camera };
+        let (fov, near, far) = (camera.fov_y, camera.near, camera.far);
+        let views = [
+            camera.matrices(width, height),
+            camera.matrices_reverse_z(width, height),
+            CameraMatrices {
+                view: camera.view(),
+                projection: rh::proj::directx::perspective_infinite_reverse(fov, aspect, near),
+            },
+            CameraMatrices {
+                view: lh::view::look_at_mat4(eye, camera.target, glam::Vec3::Y),
+                projection: lh::proj::directx::perspective(fov, aspect, near, far),
+            },
+        ];
+        let levels: Vec<LodLevel> = views
+            .iter()
+            .map(|m| LodLevel::for_view(&params, bounds, m, width, height))
+            .collect();
+        let first = levels[0];
+        assert!(
+            first.strands < params.roots.count && first.pixels.is_finite(),
+            "at {distance}: {first:?}"
+        );
+        for (i, level) in levels.iter().enumerate() {
+            assert_eq!(
+                (level.strands, level.segments),
+                (first.strands, first.segments),
+                "view {i} at {distance}"
+            );
+            let off = (level.pixels - first.pixels).abs() / first.pixels;
+            assert!(off < 1e-4, "view {i} at {distance}: {level:?} vs {first:?}");
+        }
+    }
 }

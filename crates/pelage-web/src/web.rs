@@ -272,8 +272,8 @@ impl Demo {
             .renderer
             .render(&self.gpu, t, &self.scene.camera)
             .map_err(DemoError::from)?;
-        if !stats.passes.is_empty() {
-            self.passes = stats.passes;
+        if !stats.scopes.is_empty() {
+            self.passes = stats.by_label();
         }
         let texture = match self.surface.get_current_texture() {
             wgpu::CurrentSurfaceTexture::Success(texture)
@@ -316,8 +316,8 @@ impl Demo {
     /// collects what the browser has answered and waits for nothing).
     pub fn timings(&mut self) -> Result<String, JsValue> {
         let stats = self.renderer.finish(&self.gpu).map_err(DemoError::from)?;
-        if !stats.passes.is_empty() {
-            self.passes = stats.passes;
+        if !stats.scopes.is_empty() {
+            self.passes = stats.by_label();
         }
         Ok(self
             .passes

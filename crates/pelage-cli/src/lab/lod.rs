@@ -104,7 +104,7 @@ fn coverage_pixels(scene: &Scene, camera: &Camera, width: u32, height: u32) -> f
     let level = LodLevel::for_view(
         &hair,
         pelage::strands::scene_reach(scene),
-        camera,
+        &camera.matrices(width, height),
         width,
         height,
     );
@@ -167,7 +167,7 @@ fn measure(
         renderer.render(gpu, 0.5, camera)?;
         let stats = renderer.finish(gpu)?;
         wall.push(started.elapsed().as_secs_f64() * 1e3);
-        stamps.push(stats.gpu_ms());
+        stamps.push(stats.total_ms());
     }
     Ok(Run {
         image: renderer.image(gpu)?,
@@ -366,7 +366,7 @@ pub fn run(opts: &LabOpts) -> LabResult<()> {
         let extent = LodLevel::for_view(
             &scene.hair,
             pelage::strands::scene_reach(&scene),
-            &camera,
+            &camera.matrices(size.0, size.1),
             size.0,
             size.1,
         )
