@@ -71,8 +71,10 @@
 //!   draws the mesh with a Bevy material.
 //! - Each camera records its own [`pelage::Frame`] of the fur (the stages the facade's
 //!   renderer records, built from a [`pelage::scene::Scene`] of the entity's mesh and [`Fur`]
-//!   with a voxel shadow): strands are grown and shadowed once per camera; pelage's
-//!   level of detail is not used (every strand is drawn).
+//!   with a voxel shadow): strands are grown and shadowed once per camera, at the level
+//!   of detail of the hair's size on screen through that camera's own view and
+//!   projection ([`HairParams::lod`](pelage::scene::HairParams::lod), as pelage's
+//!   renderer chooses it).
 //! - Nothing waits for the GPU: every stage only writes uniforms in
 //!   [`RenderSystems::PrepareBindGroups`] and records into Bevy's command encoder; the
 //!   frame's after-submit step (readbacks, pool growth; never a wait) runs at the next
