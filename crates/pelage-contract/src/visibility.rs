@@ -40,10 +40,9 @@ impl Visibility<'_> {
         vertices: usize,
     ) -> Result<Vec<Vec<f32>>, pelage_gpu::GpuError> {
         let bytes = pelage_gpu::read_buffer(gpu, self.buffer)?;
-        let floats: Vec<f32> = bytes
-            .chunks_exact(4)
-            .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
-            .collect();
+        // The buffer's bytes as the f32s the shader wrote (copied: a readback's bytes
+        // need not be aligned for f32).
+        let floats: Vec<f32> = bytemuck::pod_collect_to_vec(&bytes);
         Ok(floats
             .chunks(self.stride.max(1) as usize)
             .take(lights)
