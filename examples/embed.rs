@@ -276,7 +276,7 @@ impl Engine {
         // What the engine's mesh shader imports from pelage: the key light's shadow (the
         // voxel method's lookup) and the body's sky (the volume grid), each a contract
         // read as the method's file, with the resources the method hands over.
-        let shadow = pelage.shadow_binding().ok_or("the scene has no shadow")?;
+        let shadow = pelage.shadow_binding(0).ok_or("the scene has no shadow")?;
         let sky = pelage
             .body_sky_binding()
             .ok_or("the scene's shading has no volume grid")?;

@@ -329,7 +329,8 @@ impl Frame {
             )?;
             shadows.push((shadow, hand_over));
         }
-        let binding = shadows.first().map(|(s, _)| s.binding());
+        // Each light's shadow, which also shadows the mesh for that light.
+        let bindings: Vec<_> = shadows.iter().map(|(s, _)| s.binding()).collect();
         scene
             .shade
             .validate()
@@ -355,7 +356,7 @@ impl Frame {
                 params: &scene.shade,
                 mesh: &mesh,
                 strands: strands.buffers(),
-                shadow: binding.as_ref(),
+                shadows: &bindings,
                 visibility: visibility
                     .as_ref()
                     .map(|buffer| Visibility { buffer, stride }),
@@ -693,13 +694,15 @@ impl Frame {
         Ok(plan)
     }
 
-    /// The key light's shadow as the shadow contract's implementation, for a caller's own
-    /// shader (`None` without shadows); its `reads` are the resources under the frame's
-    /// names for that light (`shadow0.*`), what the caller's pass declares it reads.
-    pub fn shadow_binding(&self) -> Option<ShaderBinding> {
-        let (shadow, _) = self.shadows.first()?;
+    /// Light `light`'s shadow (0: the key light) as the shadow contract's implementation,
+    /// for a caller's own shader (`None` without shadows or past the last light): bound
+    /// once per light, as pelage draws its mesh. Its `reads` are the resources under the
+    /// frame's names for that light (`shadow0.*`, ...), what the caller's pass declares
+    /// it reads.
+    pub fn shadow_binding(&self, light: usize) -> Option<ShaderBinding> {
+        let (shadow, _) = self.shadows.get(light)?;
         Some(ShaderBinding {
-            reads: self.stages().key_lookup(),
+            reads: rename_lookup(shadow.as_ref(), &format!("shadow{light}")),
             ..shadow.binding()
         })
     }
@@ -891,12 +894,12 @@ struct Stages<'a> {
 }
 
 impl Stages<'_> {
-    /// The resources the key light's shadow writes under the frame's names (`shadow0.*`).
-    fn key_lookup(&self) -> Vec<String> {
-        self.shadows
-            .first()
-            .map(|(shadow, _)| rename_lookup(shadow.as_ref(), "shadow0"))
-            .unwrap_or_default()
+    /// The resources every light's shadow writes under the frame's names (`shadow0.*`,
+    /// `shadow1.*`, ...): what the mesh pass, drawn once per light with a shadow, reads.
+    fn lookups(&self) -> Vec<String> {
+        (self.shadows.iter().enumerate())
+            .flat_map(|(i, (shadow, _))| rename_lookup(shadow.as_ref(), &format!("shadow{i}")))
+            .collect()
     }
 
     /// The passes of `steps`, in order, over the mesh and the targets, with `before_shade`
@@ -907,7 +910,7 @@ impl Stages<'_> {
             pelage_shade::TARGET_COLOR,
             pelage_shade::TARGET_DEPTH,
         ]);
-        let key_lookup = self.key_lookup();
+        let lookups = self.lookups();
         let mut before_shade = Some(before_shade);
         for &step in steps {
             if step.part() == Part::Shade
@@ -943,7 +946,7 @@ impl Stages<'_> {
                     );
                 }
                 Step::Grid => plan.push(self.hair.grid().map(VolumeGrid::pass_info)),
-                Step::Hair => plan.push(self.hair.passes(&key_lookup)),
+                Step::Hair => plan.push(self.hair.passes(&lookups)),
                 Step::BridgeAfter => {
                     plan.push(
                         self.bridge

@@ -152,3 +152,44 @@ fn a_point_light_falls_off_with_distance() {
         "inverse-square falloff is off: {ratio}"
     );
 }
+
+/// Every light with a shadow shadows the mesh, not only the key light: the key light
+/// split into two lights of half its intensity (the same direction, so the same shadow
+/// twice) draws the picture the key light draws alone, mesh included (the mesh's
+/// second light is an additive draw shadowed by its own shadow). Drawn into an HDR
+/// target, so the sum is not rounded to 8 bits between the draws.
+#[test]
+fn every_shadowed_light_shadows_the_mesh() {
+    let gpu = gpu();
+    let one = scene(vec![Light::default()]);
+    let Light::Directional(key) = Light::default() else {
+        panic!("the default light is directional");
+    };
+    let half = Light::Directional(DirectionalLight {
+        intensity: key.intensity * 0.5,
+        ..key
+    });
+    let two = scene(vec![half.clone(), half]);
+    let picture = |s: &Scene| {
+        let format = pelage::shade::TargetFormat {
+            color: pelage::gpu::wgpu::TextureFormat::Rgba16Float,
+            ..pelage::shade::TargetFormat::for_params(&s.shade)
+        };
+        let mut renderer = Renderer::with_format(&gpu, s, 96, 72, &format).unwrap();
+        renderer.render(&gpu, 0.0, &s.camera).unwrap();
+        renderer.rgba8(&gpu).unwrap().2
+    };
+    let (a, b) = (picture(&one), picture(&two));
+    let diffs: Vec<u8> = a.iter().zip(&b).map(|(x, y)| x.abs_diff(*y)).collect();
+    let largest = diffs.iter().copied().max().unwrap_or(0);
+    let differing = diffs.iter().filter(|&&d| d > 1).count();
+    println!(
+        "one light vs two half lights: largest difference {largest}/255, {differing} of {} \
+         channels differ by more than 1",
+        diffs.len()
+    );
+    assert!(
+        largest <= 2 && differing * 1000 <= diffs.len(),
+        "{largest}, {differing}"
+    );
+}

@@ -39,7 +39,7 @@ fn a_stage_recorded_for_another_frame_than_it_was_prepared_for_is_an_error() {
             params: &params,
             mesh: &buffers,
             strands: b,
-            shadow: None,
+            shadows: &[],
             visibility: None,
             target: TargetFormat::default(),
             draw_mesh: true,

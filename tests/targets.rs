@@ -273,7 +273,7 @@ fn the_methods_that_draw_reverse_z_are_the_ones_stage_3_builds() {
                 params: &s.shade,
                 mesh: frame.mesh_buffers(),
                 strands: frame.strands().buffers(),
-                shadow: None,
+                shadows: &[],
                 visibility: None,
                 target: reversed,
                 draw_mesh: true,

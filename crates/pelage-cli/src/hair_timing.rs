@@ -43,7 +43,7 @@ pub fn hair_wall_ms(
         params: case.shade,
         mesh: &mesh,
         strands: strands.buffers(),
-        shadow: None,
+        shadows: &[],
         visibility: None,
         target: TargetFormat::for_params(case.shade),
         draw_mesh: false,

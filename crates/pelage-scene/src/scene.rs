@@ -38,8 +38,8 @@ pub struct Scene {
     pub shade: ShadeParams,
     /// The camera.
     pub camera: Camera,
-    /// The lights, 1 to 4 (the first is the key light: it also shadows the mesh); each
-    /// gets its own shadow from `shadow`.
+    /// The lights, 1 to 4 (the first is the key light); each gets its own shadow from
+    /// `shadow`, which shadows the hair and the mesh for that light.
     pub lights: Vec<Light>,
 }
 

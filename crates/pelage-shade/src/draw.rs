@@ -29,6 +29,9 @@ pub const TARGET_DEPTH: &str = "target.depth";
 /// The frame resource naming a transparency method's own per-pixel storage.
 pub const OIT_STORAGE: &str = "oit.storage";
 
+/// The label of the mesh's pass (its draws, one per light with a shadow).
+const MESH_LABEL: &str = "shade: mesh";
+
 /// The inputs every method is built from.
 #[derive(Clone, Copy, Debug)]
 pub struct HairInputs<'a> {
@@ -39,15 +42,17 @@ pub struct HairInputs<'a> {
     /// Stage 1's strands (their widths and opacity come with them, in
     /// [`StrandBuffers::style`]).
     pub strands: &'a StrandBuffers,
-    /// Stage 2's implementation of the shadow contract (`shadow/none.wgsl`) for the key
-    /// light (light 0), which shadows the mesh; `None` draws the mesh unshadowed.
-    pub shadow: Option<&'a ShaderBinding>,
+    /// Stage 2's implementation of the shadow contract (`shadow/none.wgsl`) for each
+    /// light, in light order (one method for every light): the mesh is drawn once per
+    /// binding, each light shadowed by its own (a light past the end lights it
+    /// unshadowed); empty draws the mesh unshadowed.
+    pub shadows: &'a [ShaderBinding],
     /// Stage 2's per-vertex light visibility for the hair; `None` lights every vertex fully.
     pub visibility: Option<Visibility<'a>>,
     /// The formats of the targets the method will draw into (the caller's).
     pub target: TargetFormat,
-    /// Whether the method draws `mesh` (flat coloured, shadowed by the key light) before
-    /// the hair; `false` for an engine that draws its own mesh into the targets first
+    /// Whether the method draws `mesh` (flat coloured, shadowed by each light's shadow)
+    /// before the hair; `false` for an engine that draws its own mesh into the targets first
     /// (then pass [`TargetViews::load`]). The strands still grow from `mesh`.
     pub draw_mesh: bool,
     /// With the volume method: the caller records the grid itself
@@ -167,7 +172,9 @@ pub(crate) struct Common {
     pub params: ShadeParams,
     pub frame: UniformBuffer<FrameUniforms>,
     pub style: UniformBuffer<RibbonStyle>,
-    pub mesh_draw: Draw,
+    /// The mesh's draws: the first with the body's sky, light 0 and the lights without a
+    /// shadow; one more per further light with a shadow, added over it.
+    pub mesh_draws: Vec<Draw>,
     /// Ribbon vertices of this frame's strands (written by `prepare`).
     pub hair_vertices: Arc<AtomicU32>,
     /// The stage 1 frame `prepare` last wrote the uniforms for.
@@ -178,7 +185,7 @@ pub(crate) struct Common {
     pub samples: u32,
     /// The targets' formats.
     pub target: TargetFormat,
-    /// Whether `mesh_draw` is drawn.
+    /// Whether `mesh_draws` are drawn.
     pub draw_mesh: bool,
     /// Whether the caller records the volume grid itself ([`HairInputs::grid_apart`]).
     pub grid_apart: bool,
@@ -189,8 +196,8 @@ pub(crate) struct Common {
     pub visibility_stride: u32,
     /// The visibility buffer, or a small one that is never read.
     pub visibility: wgpu::Buffer,
-    /// The mesh's colour (rewritten by [`Common::set_params`]).
-    pub mesh_style: UniformBuffer<MeshStyle>,
+    /// Each mesh draw's style (its colour rewritten by [`Common::set_params`]).
+    pub mesh_styles: Vec<(UniformBuffer<MeshStyle>, MeshStyle)>,
 }
 
 impl Common {
@@ -206,7 +213,7 @@ impl Common {
             params,
             mesh,
             strands,
-            shadow,
+            shadows,
             visibility,
             target,
             draw_mesh,
@@ -255,14 +262,22 @@ impl Common {
             opacity: strands.style.opacity,
         };
         let style = UniformBuffer::new(gpu, "pelage ribbon style", &style_value)?;
-        let mesh_style = UniformBuffer::new(
-            gpu,
-            "pelage mesh style",
-            &MeshStyle {
-                color: params.mesh_color,
-                _pad: 0.0,
-            },
-        )?;
+        // One mesh draw per light with a shadow (at least one: the body's sky).
+        let mesh_styles = (0..shadows.len().max(1))
+            .map(|i| {
+                let style = MeshStyle {
+                    color: params.mesh_color,
+                    base: u32::from(i == 0),
+                    shadowed: if i < shadows.len() {
+                        i as u32
+                    } else {
+                        u32::MAX
+                    },
+                    unshadowed_from: shadows.len() as u32,
+                };
+                Ok((UniformBuffer::new(gpu, "pelage mesh style", &style)?, style))
+            })
+            .collect::<crate::Result<Vec<_>>>()?;
         // The shadow contract: every pass imports shadow/none.wgsl; a shadow method
         // redirects it to its own lookup and hands over the resources for group 1.
         let vertex_count = u64::from(strands.strand_count) * u64::from(strands.segments + 1);
@@ -311,6 +326,7 @@ impl Common {
         let body_sky = volume
             .is_some()
             .then_some(Redirect::new(BODY_SKY, BODY_SKY_VOLUME));
+        let shadow = shadows.first();
         let redirects: Vec<Redirect> = shadow
             .iter()
             .map(|b| b.redirect())
@@ -321,7 +337,7 @@ impl Common {
             crate::SHADERS
                 .library()
                 .module_redirected(gpu, "shade/mesh.wgsl", &redirects)?;
-        let mesh_draw = gpu.scoped(|device| {
+        let mesh_draws = gpu.scoped(|device| {
             // mesh.wgsl: frame, positions, normals, indices, style; group 1 the shadow
             // method's; group 2 the hair model's when the body's sky reads the grid.
             let layout = BindLayout::new("pelage mesh", wgpu::ShaderStages::VERTEX_FRAGMENT)
@@ -350,50 +366,93 @@ impl Common {
             if sky_layout.is_some() {
                 model.binding().place(&mut layouts, sky_layout.as_ref());
             }
-            let pipeline = raster_pipeline(
-                device,
-                &RasterDesc {
-                    label: "pelage mesh",
-                    layouts: &layouts,
-                    module: &mesh_module,
-                    vertex: "vs_main",
-                    fragment: Some("fs_main"),
-                    targets: &[Some(target.color.into())],
-                    depth: Some(depth_state(&target, true)),
-                    samples,
-                    cull: Some(wgpu::Face::Back),
-                },
-            );
-            let group0 = bind_buffers(
-                device,
+            let pipeline = |label, color: wgpu::ColorTargetState, depth| {
+                raster_pipeline(
+                    device,
+                    &RasterDesc {
+                        label,
+                        layouts: &layouts,
+                        module: &mesh_module,
+                        vertex: "vs_main",
+                        fragment: Some("fs_main"),
+                        targets: &[Some(color)],
+                        depth: Some(depth),
+                        samples,
+                        cull: Some(wgpu::Face::Back),
+                    },
+                )
+            };
+            // The first draw writes colour and depth; each further light is added
+            // (one + one) where the first draw's depth is, exactly (the same vertex
+            // shader, so the same depths), without writing it.
+            let first = pipeline(
                 "pelage mesh",
-                &layout,
-                &[
-                    &frame.buffer,
-                    &mesh.positions,
-                    &mesh.normals,
-                    &mesh.indices,
-                    &mesh_style.buffer,
-                ],
+                target.color.into(),
+                depth_state(&target, true),
             );
-            let shadow_group = shadow
-                .zip(shadow_layout.as_ref())
-                .and_then(|(b, l)| b.bind_group(device, "pelage mesh shadow", l));
+            let added = (shadows.len() > 1).then(|| {
+                let add = wgpu::BlendComponent {
+                    src_factor: wgpu::BlendFactor::One,
+                    dst_factor: wgpu::BlendFactor::One,
+                    operation: wgpu::BlendOperation::Add,
+                };
+                pipeline(
+                    "pelage mesh, a further light",
+                    wgpu::ColorTargetState {
+                        format: target.color,
+                        blend: Some(wgpu::BlendState {
+                            color: add,
+                            alpha: add,
+                        }),
+                        write_mask: wgpu::ColorWrites::COLOR,
+                    },
+                    wgpu::DepthStencilState {
+                        depth_compare: Some(wgpu::CompareFunction::Equal),
+                        ..depth_state(&target, false)
+                    },
+                )
+            });
             let sky_group = sky_layout
                 .as_ref()
                 .and_then(|l| model.binding().bind_group(device, "pelage mesh sky", l));
-            Draw {
-                label: "shade: mesh",
-                pipeline,
-                groups: vec![Some(group0), shadow_group, sky_group],
-                vertices: Vertices::Fixed(mesh.triangle_count.saturating_mul(3)),
-            }
+            mesh_styles
+                .iter()
+                .enumerate()
+                .map(|(i, (style, _))| {
+                    let group0 = bind_buffers(
+                        device,
+                        "pelage mesh",
+                        &layout,
+                        &[
+                            &frame.buffer,
+                            &mesh.positions,
+                            &mesh.normals,
+                            &mesh.indices,
+                            &style.buffer,
+                        ],
+                    );
+                    let shadow_group = shadows
+                        .get(i)
+                        .zip(shadow_layout.as_ref())
+                        .and_then(|(b, l)| b.bind_group(device, "pelage mesh shadow", l));
+                    let pipeline = match (i, &added) {
+                        (0, _) | (_, None) => first.clone(),
+                        (_, Some(added)) => added.clone(),
+                    };
+                    Draw {
+                        label: MESH_LABEL,
+                        pipeline,
+                        groups: vec![Some(group0), shadow_group, sky_group.clone()],
+                        vertices: Vertices::Fixed(mesh.triangle_count.saturating_mul(3)),
+                    }
+                })
+                .collect::<Vec<_>>()
         })?;
         Ok(Self {
             params: params.clone(),
             frame,
             style,
-            mesh_draw,
+            mesh_draws,
             hair_vertices: Arc::new(AtomicU32::new(ribbon_vertices(strands.full_layout()))),
             prepared: PreparedFrame::default(),
             style_value,
@@ -406,7 +465,7 @@ impl Common {
             volume,
             visibility_stride,
             visibility: visibility_buffer,
-            mesh_style,
+            mesh_styles,
         })
     }
 
@@ -577,13 +636,10 @@ impl Common {
         }
         self.model.check_update(&params.model)?;
         self.model.update(gpu, &params.model)?;
-        self.mesh_style.write(
-            &gpu.queue,
-            &MeshStyle {
-                color: params.mesh_color,
-                _pad: 0.0,
-            },
-        )?;
+        for (buffer, style) in &mut self.mesh_styles {
+            style.color = params.mesh_color;
+            buffer.write(&gpu.queue, style)?;
+        }
         if let Some(volume) = &self.volume {
             volume.set_mesh_color(params.mesh_color);
         }
@@ -593,12 +649,12 @@ impl Common {
     }
 
     /// The mesh pass as `encode_mesh` records it when the method draws the mesh (reads
-    /// the mesh, the key light's shadow `lookup` and, with the volume method, the grid's
+    /// the mesh, every light's shadow `lookup` and, with the volume method, the grid's
     /// fluence for the body's sky; clears and writes the targets); `None` when the
     /// engine draws its own.
     pub fn mesh_pass(&self, lookup: &[String]) -> Option<PassInfo> {
         self.draw_mesh.then(|| {
-            let pass = PassInfo::new(self.mesh_draw.label)
+            let pass = PassInfo::new(MESH_LABEL)
                 .reads([pelage_contract::MESH.to_string()])
                 .reads(lookup.iter().cloned());
             let pass = if self.volume.is_some() {
@@ -701,7 +757,7 @@ impl Common {
         let mut pass = pelage_gpu::audit::begin_render_pass(
             &mut *encoder,
             &wgpu::RenderPassDescriptor {
-                label: Some(self.mesh_draw.label),
+                label: Some(MESH_LABEL),
                 color_attachments: &[Some(wgpu::RenderPassColorAttachment {
                     view: target.color,
                     depth_slice: None,
@@ -732,13 +788,15 @@ impl Common {
                     }),
                     stencil_ops: None,
                 }),
-                timestamp_writes: timer.and_then(|t| t.render_pass(self.mesh_draw.label)),
+                timestamp_writes: timer.and_then(|t| t.render_pass(MESH_LABEL)),
                 occlusion_query_set: None,
                 multiview_mask: None,
             },
         );
         if self.draw_mesh {
-            self.mesh_draw.record(&mut pass, None);
+            for draw in &self.mesh_draws {
+                draw.record(&mut pass, None);
+            }
         }
     }
 }

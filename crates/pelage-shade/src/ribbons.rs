@@ -49,13 +49,21 @@ pub struct RibbonStyle {
     pub opacity: f32,
 }
 
-/// Style of the opaque mesh (`MeshStyle` in `mesh.wgsl`).
+/// Style of one draw of the opaque mesh (`MeshStyle` in `mesh.wgsl`). The mesh is drawn
+/// once per light with a shadow: the first draw the body's sky, light 0 through its
+/// shadow and the lights without a shadow of their own; each later draw adds one light
+/// through its own shadow.
 #[derive(Clone, Copy, Debug, PartialEq, ShaderType)]
 pub struct MeshStyle {
     /// Albedo, linear RGB.
     pub color: Vec3,
-    /// Padding.
-    pub _pad: f32,
+    /// 1 in the first draw: the body's sky and the lights from `unshadowed_from` on,
+    /// unshadowed; 0 in the others.
+    pub base: u32,
+    /// The light this draw adds through the shadow bound with it (`u32::MAX`: none).
+    pub shadowed: u32,
+    /// In the first draw, the first light without a shadow of its own.
+    pub unshadowed_from: u32,
 }
 
 impl FrameUniforms {

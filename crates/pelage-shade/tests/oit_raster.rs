@@ -222,7 +222,7 @@ fn inputs<'a>(f: &'a Fixture, params: &'a ShadeParams) -> HairInputs<'a> {
         params,
         mesh: &f.mesh,
         strands: &f.strands,
-        shadow: None,
+        shadows: &[],
         visibility: None,
         target: target(),
         draw_mesh: false,

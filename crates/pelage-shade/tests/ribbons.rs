@@ -65,7 +65,7 @@ fn render(gpu: &Gpu, mesh: &Mesh, hair: &HairParams, camera: &Camera) -> Vec<u8>
         params: &params,
         mesh: &mesh_buffers,
         strands: strands.buffers(),
-        shadow: None,
+        shadows: &[],
         visibility: None,
         target: TargetFormat::for_params(&params),
         draw_mesh: true,

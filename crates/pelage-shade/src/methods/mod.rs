@@ -103,8 +103,9 @@ pub trait HairPass: std::fmt::Debug + wgpu::WasmNotSendSync {
 
     /// The passes [`HairPass::encode`] records in order (a pass drawn once per slice of
     /// the screen appears once per slice), with the named resources each reads and
-    /// writes; `lookup` names what the key light's shadow (the one the mesh samples)
-    /// wrote, empty without shadows.
+    /// writes; `lookup` names what the lights' shadows (those the mesh samples, one
+    /// draw per light: [`HairInputs::shadows`](crate::HairInputs::shadows)) wrote, empty
+    /// without shadows.
     fn passes(&self, lookup: &[String]) -> Vec<PassInfo>;
 
     /// Bytes of GPU memory the method owns beyond the caller's targets.

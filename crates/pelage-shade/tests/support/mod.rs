@@ -75,7 +75,7 @@ pub fn inputs<'a>(s: &'a Scene, params: &'a ShadeParams) -> HairInputs<'a> {
         params,
         mesh: &s.buffers,
         strands: s.strands.buffers(),
-        shadow: None,
+        shadows: &[],
         visibility: None,
         target: TargetFormat::for_params(params),
         draw_mesh: true,

@@ -1,7 +1,10 @@
 // Stage 3, opaque mesh: the surface the hair grows from, Lambert shaded by every light,
-// the key light (light 0) shadowed through the shadow contract (surface_visibility,
-// shadow/none.wgsl or its redirect), and by the sky through the body's sky contract
-// (body_sky, shade/body_sky.wgsl or its redirect: the volume method's grid).
+// each light with a shadow shadowed through the shadow contract (surface_visibility,
+// shadow/none.wgsl or its redirect, bound to that light's shadow), and by the sky
+// through the body's sky contract (body_sky, shade/body_sky.wgsl or its redirect: the
+// volume method's grid). Drawn once per light with a shadow: the first draw (style.base)
+// the sky, light style.shadowed and the lights from style.unshadowed_from on (those
+// without a shadow); each further draw adds its own light, blended one + one.
 //
 // Reads:  Frame (uniform), mesh positions and normals (f32 x3 storage), the u32
 //         triangle list (storage), MeshStyle (uniform); group 1 the shadow method's,
@@ -15,7 +18,9 @@
 
 struct MeshStyle {
     color: vec3<f32>,
-    _pad: f32,
+    base: u32,
+    shadowed: u32,
+    unshadowed_from: u32,
 }
 
 @group(0) @binding(0) var<uniform> frame: Frame;
@@ -45,15 +50,24 @@ fn vs_main(@builtin(vertex_index) vi: u32) -> VertexOut {
 @fragment
 fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
     let n = normalize(in.normal);
-    var lit = body_sky(in.world, n, frame.ambient);
+    let base = style.base == 1u;
+    var lit = vec3<f32>(0.0);
+    if (base) {
+        lit = body_sky(in.world, n, frame.ambient);
+    }
     for (var i = 0u; i < min(frame.light_count, MAX_LIGHTS); i += 1u) {
+        let shadowed = i == style.shadowed;
+        if (!shadowed && !(base && i >= style.unshadowed_from)) {
+            continue;
+        }
         let l = frame.lights[i];
         var irradiance = frame_irradiance(l, in.world) * max(dot(n, frame_to_light(l, in.world)), 0.0);
-        // The shadow contract is the key light's (light 0); the others light the mesh unshadowed.
-        if (i == 0u) {
+        // The shadow contract is bound to this draw's light.
+        if (shadowed) {
             irradiance *= surface_visibility(in.world);
         }
         lit += irradiance;
     }
+    // Alpha 1 from the first draw; a further draw adds colour only (its write mask).
     return vec4<f32>(style.color * lit, 1.0);
 }
