@@ -128,8 +128,8 @@ fn build_strands(
 /// Each frame: [`Frame::prepare`] with the view and projection, [`Frame::record`] into
 /// the caller's encoder (or its two parts, [`Frame::record_before_shade`] and
 /// [`Frame::record_shade`], with the caller's own passes between them), the caller's
-/// submit, then [`Frame::after_submit`]. Nothing waits for the GPU and nothing is created per frame in
-/// steady state.
+/// submit, then [`Frame::after_submit`]. Nothing waits for the GPU and nothing is
+/// created per frame in steady state.
 #[derive(Debug)]
 pub struct Frame {
     mesh: MeshBuffers,

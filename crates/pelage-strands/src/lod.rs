@@ -43,8 +43,8 @@ impl LodLevel {
     /// The level `hair.lod` asks for when the hair, inside the world box `bounds`, is seen
     /// through `camera`'s view and projection (any handedness, either depth direction)
     /// on a `width` x `height` target. Full detail when LOD is disabled, when the box
-    /// reaches in front of the near plane, or when anything is not finite (the box's size
-    /// on screen is measured either way, unless it reaches behind the camera).
+    /// reaches nearer than the near plane, or when anything is not finite (the box's size
+    /// on screen is measured either way, unless it reaches nearer than the near plane).
     pub fn for_view(
         hair: &HairParams,
         bounds: (Vec3, Vec3),
