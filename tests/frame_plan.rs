@@ -332,3 +332,47 @@ fn a_plan_in_the_wrong_order_names_the_pass_to_record_first() {
         Ok(()) => panic!("a frame without the shadow the hair reads must be refused"),
     }
 }
+
+/// The contracts a frame hands an engine's own mesh shader name what they sample: each
+/// light's shadow binding reads that light's shadow resources (`shadow0.*`, `shadow1.*`:
+/// resources the frame's own passes write), the body's sky the volume grid's fluence;
+/// a pass declaring those reads fits the plan between the two record parts, and one
+/// reading a resource no pass writes does not.
+#[test]
+fn contract_bindings_name_what_they_sample() {
+    let gpu = Gpu::headless().unwrap_or_else(|e| panic!("this test needs a GPU adapter: {e}"));
+    let s = scene(ShadowParams::default(), Transparency::default(), 2);
+    let renderer = Renderer::new(&gpu, &s, 64, 48).unwrap();
+    let frame = renderer.frame();
+    let plan = frame.plan([]).unwrap();
+    let written: Vec<&String> = plan.passes().iter().flat_map(|p| &p.writes).collect();
+    let mut reads = Vec::new();
+    for light in 0..2 {
+        let binding = frame.shadow_binding(light).unwrap();
+        assert!(!binding.reads.is_empty(), "light {light}: {binding:?}");
+        for name in &binding.reads {
+            assert!(name.starts_with(&format!("shadow{light}.")), "{name}");
+            assert!(
+                written.contains(&name),
+                "no pass of the frame writes {name}"
+            );
+        }
+        reads.extend(binding.reads);
+    }
+    assert!(frame.shadow_binding(2).is_none());
+    let sky = frame
+        .body_sky_binding()
+        .expect("the default shading has the grid");
+    assert_eq!(sky.reads, [pelage::shade::VOLUME_FLUENCE]);
+    reads.extend(sky.reads);
+    let engine = |reads: Vec<String>| {
+        pelage::gpu::PassInfo::new("engine mesh")
+            .reads(reads)
+            .writes([pelage::shade::TARGET_COLOR, pelage::shade::TARGET_DEPTH])
+    };
+    frame.plan([engine(reads)]).unwrap();
+    let err = frame
+        .plan([engine(vec!["shadow2.grid".into()])])
+        .unwrap_err();
+    assert!(err.to_string().contains("shadow2.grid"), "{err}");
+}
