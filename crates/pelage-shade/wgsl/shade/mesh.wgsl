@@ -30,7 +30,9 @@ struct MeshStyle {
 @group(0) @binding(4) var<uniform> style: MeshStyle;
 
 struct VertexOut {
-    @builtin(position) clip: vec4<f32>,
+    // Invariant: the further lights' draws (another pipeline, the same computation) test
+    // their depth Equal against the first draw's.
+    @builtin(position) @invariant clip: vec4<f32>,
     @location(0) normal: vec3<f32>,
     @location(1) world: vec3<f32>,
 }
