@@ -702,7 +702,7 @@ impl Frame {
     pub fn shadow_binding(&self, light: usize) -> Option<ShaderBinding> {
         let (shadow, _) = self.shadows.get(light)?;
         Some(ShaderBinding {
-            reads: rename_lookup(shadow.as_ref(), &format!("shadow{light}")),
+            reads: rename_lookup(shadow.as_ref(), light),
             ..shadow.binding()
         })
     }
@@ -805,8 +805,15 @@ impl Frame {
     }
 }
 
-/// `shadow`'s lookup resources under the frame's name `name` for its light.
-fn rename_lookup(shadow: &dyn ShadowMethod, name: &str) -> Vec<String> {
+/// The frame's name for light `light`'s shadow resources (`shadow0`, `shadow1`, ...):
+/// a method's `shadow.*` become `shadow{light}.*`.
+fn shadow_name(light: usize) -> String {
+    format!("shadow{light}")
+}
+
+/// `shadow`'s lookup resources under the frame's names for light `light`.
+fn rename_lookup(shadow: &dyn ShadowMethod, light: usize) -> Vec<String> {
+    let name = shadow_name(light);
     shadow
         .lookup()
         .iter()
@@ -898,7 +905,7 @@ impl Stages<'_> {
     /// `shadow1.*`, ...): what the mesh pass, drawn once per light with a shadow, reads.
     fn lookups(&self) -> Vec<String> {
         (self.shadows.iter().enumerate())
-            .flat_map(|(i, (shadow, _))| rename_lookup(shadow.as_ref(), &format!("shadow{i}")))
+            .flat_map(|(i, (shadow, _))| rename_lookup(shadow.as_ref(), i))
             .collect()
     }
 
@@ -923,7 +930,7 @@ impl Stages<'_> {
                 Step::Strands => plan.push(self.strands.passes()),
                 Step::Shadow(i) => {
                     if let Some((shadow, _)) = self.shadows.get(i) {
-                        let name = format!("shadow{i}");
+                        let name = shadow_name(i);
                         plan.push(
                             shadow
                                 .passes()
@@ -934,7 +941,7 @@ impl Stages<'_> {
                 }
                 Step::HandOver(i) => {
                     if let Some((shadow, hand_over)) = self.shadows.get(i) {
-                        let lookup = rename_lookup(shadow.as_ref(), &format!("shadow{i}"));
+                        let lookup = rename_lookup(shadow.as_ref(), i);
                         plan.push(hand_over.passes(&lookup));
                     }
                 }

@@ -16,7 +16,7 @@ use pelage_scene::{CameraMatrices, Light, ParamError, ShadeParams};
 use crate::hair_model::HairModel;
 use crate::ribbons::{FrameUniforms, MeshStyle, RibbonStyle};
 use crate::targets::TargetFormat;
-use crate::volume::{VOLUME_FLUENCE, VolumeGrid};
+use crate::volume::VolumeGrid;
 
 /// The body's sky contract `shade/mesh.wgsl` imports (`shade/body_sky.wgsl`).
 const BODY_SKY: &str = "shade/body_sky.wgsl";
@@ -654,15 +654,13 @@ impl Common {
     /// engine draws its own.
     pub fn mesh_pass(&self, lookup: &[String]) -> Option<PassInfo> {
         self.draw_mesh.then(|| {
-            let pass = PassInfo::new(MESH_LABEL)
+            // The body's sky is the model's group (the grid, with the volume method): the
+            // frame resources it reads are the model binding's.
+            PassInfo::new(MESH_LABEL)
                 .reads([pelage_contract::MESH.to_string()])
-                .reads(lookup.iter().cloned());
-            let pass = if self.volume.is_some() {
-                pass.reads([VOLUME_FLUENCE])
-            } else {
-                pass
-            };
-            pass.writes([TARGET_COLOR, TARGET_DEPTH])
+                .reads(lookup.iter().cloned())
+                .reads(self.model.binding().reads.iter().cloned())
+                .writes([TARGET_COLOR, TARGET_DEPTH])
         })
     }
 
@@ -724,8 +722,8 @@ impl Common {
             pelage_contract::STRAND_VERTICES,
             pelage_contract::STRAND_ROOTS,
         ]);
-        if model && self.volume.is_some() {
-            pass = pass.reads([VOLUME_FLUENCE]);
+        if model {
+            pass = pass.reads(self.model.binding().reads.iter().cloned());
         }
         if self.visibility_stride > 0 {
             pass.reads([VISIBILITY])

@@ -415,7 +415,9 @@ impl LightMap {
         passes
     }
 
-    fn binding(&self, module: &'static str) -> ShaderBinding {
+    /// The shadow contract's implementation `module` over this map's resources, which
+    /// the method names `reads` (its `ShadowMethod::lookup`).
+    fn binding(&self, module: &'static str, reads: Vec<String>) -> ShaderBinding {
         let mut resources = vec![
             BoundResource::Uniform(self.fit.uniforms().clone()),
             BoundResource::Storage(self.fit.grid().clone()),
@@ -442,8 +444,7 @@ impl LightMap {
             sources: &crate::SHADERS,
             group: 1,
             resources,
-            // The method's names, filled in by its `ShadowMethod::binding`.
-            reads: Vec::new(),
+            reads,
         }
     }
 
@@ -545,10 +546,7 @@ macro_rules! light_map_method {
             }
 
             fn binding(&self) -> ShaderBinding {
-                ShaderBinding {
-                    reads: self.lookup(),
-                    ..self.map.binding($lookup)
-                }
+                self.map.binding($lookup, self.lookup())
             }
 
             fn memory_bytes(&self) -> u64 {
