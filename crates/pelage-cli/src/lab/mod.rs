@@ -187,6 +187,22 @@ pub struct ScatteringOpts {
         allow_hyphen_values = true
     )]
     pub size: Option<u32>,
+    /// Only these grooms (comma-separated or repeated; default: the lab's own).
+    #[arg(
+        long = "groom",
+        value_name = "NAME",
+        value_delimiter = ',',
+        value_parser = clap::builder::PossibleValuesParser::new(scattering::GROOMS)
+    )]
+    pub grooms: Vec<String>,
+    /// Only these hair colours (comma-separated or repeated; default: the lab's own).
+    #[arg(
+        long,
+        value_name = "NAME",
+        value_delimiter = ',',
+        value_parser = clap::builder::PossibleValuesParser::new(scattering::HAIR_NAMES)
+    )]
+    pub hair: Vec<String>,
 }
 
 impl Lab {
@@ -214,6 +230,10 @@ impl Lab {
                     no_sky: opts.no_sky,
                     no_back_light: opts.no_back_light,
                     no_key_light: opts.no_key_light,
+                },
+                &scattering::Rows {
+                    grooms: opts.grooms.clone(),
+                    hair: opts.hair.clone(),
                 },
             ),
             Lab::Dynamics(opts) => dynamics::run(&opts.lab, opts.scene.as_deref()),

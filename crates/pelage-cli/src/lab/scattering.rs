@@ -5,7 +5,7 @@
 //! camera's shoulder, and a back light from above and behind the hair) and sky.
 //!
 //! ```text
-//! pelage lab scattering [--quick] [--out DIR] [--spp N]
+//! pelage lab scattering [--quick] [--out DIR] [--spp N] [--groom NAMES] [--hair NAMES]
 //! ```
 //!
 //! Black, brown, blond and red hair × fur on the creature, long hair from a groom file
@@ -89,6 +89,12 @@ impl Variant {
 
 /// Irradiance of the back light (the key light's is 2.5).
 const BACK_LIGHT: f32 = 1.5;
+
+/// The grooms of the full lab, in its order (`--quick` runs fur and curly).
+pub const GROOMS: [&str; 3] = ["fur", "long_hair", "curly"];
+
+/// The names of the hair colours (`--hair`), in [`HAIR`]'s order.
+pub const HAIR_NAMES: [&str; 4] = [HAIR[0].0, HAIR[1].0, HAIR[2].0, HAIR[3].0];
 
 /// The hair colours: name, eumelanin, pheomelanin (pbrt's coefficients).
 const HAIR: [(&str, f32, f32); 4] = [
@@ -532,11 +538,24 @@ fn fibre_counts(
 /// Runs the lab (see the module docs); `spp` overrides the path tracer's samples per pixel,
 /// `size` the images' side; `variant` takes the skin's bounce, the sky or a light out of
 /// both renderers.
+/// Which of the lab's rows to run: the grooms and hair colours named (empty: the lab's
+/// own, all four colours and three grooms, or `--quick`'s fur and curly, brown and blond).
+#[derive(Clone, Debug, Default)]
+pub struct Rows {
+    /// Names from [`GROOMS`].
+    pub grooms: Vec<String>,
+    /// Names from [`HAIR_NAMES`].
+    pub hair: Vec<String>,
+}
+
+/// Runs the lab: the `rows` named (or the lab's own) under `variant`'s lights, images
+/// `size` pixels square, the reference at `spp` samples per pixel per seed.
 pub fn run(
     opts: &LabOpts,
     spp: Option<u32>,
     size: Option<u32>,
     variant: Variant,
+    rows: &Rows,
 ) -> Result<(), Box<dyn std::error::Error>> {
     if variant.no_key_light && variant.no_back_light && variant.no_sky {
         return Err(
@@ -550,12 +569,25 @@ pub fn run(
     let size = size.unwrap_or(if quick { 64 } else { 256 });
     let spp = spp.unwrap_or(if quick { 16 } else { 64 });
     let frames = if quick { 2 } else { 5 };
-    let grooms: &[&str] = if quick {
-        &["fur", "curly"]
+    let grooms: Vec<&str> = if !rows.grooms.is_empty() {
+        GROOMS
+            .into_iter()
+            .filter(|g| rows.grooms.iter().any(|r| r == g))
+            .collect()
+    } else if quick {
+        vec![GROOMS[0], GROOMS[2]]
     } else {
-        &["fur", "long_hair", "curly"]
+        GROOMS.to_vec()
     };
-    let hair: &[(&str, f32, f32)] = if quick { &HAIR[1..3] } else { &HAIR };
+    let hair: Vec<(&str, f32, f32)> = if !rows.hair.is_empty() {
+        HAIR.into_iter()
+            .filter(|h| rows.hair.iter().any(|r| r == h.0))
+            .collect()
+    } else if quick {
+        HAIR[1..3].to_vec()
+    } else {
+        HAIR.to_vec()
+    };
     pelage_lab::create_dir(&opts.out.join("scattering"))?;
     println!("adapter: {}", Gpu::headless()?.describe());
     // Caps of the cumulative luminances: BOUNCE_CAPS, the reference's, the deep run's.
@@ -596,7 +628,7 @@ pub fn run(
         "best_scale",
     ]);
     let mut counts_text = String::new();
-    for &groom in grooms {
+    for &groom in &grooms {
         counts_text.push_str(&fibre_counts(groom, quick, size, &mut counts)?);
     }
     counts.write_csv(&opts.out.join("scattering_fibre_counts.csv"))?;
@@ -605,8 +637,8 @@ pub fn run(
     let mut fields = Table::new(&FieldStats::COLUMNS);
     let mut field_text = String::new();
     let bar = progress::bar((grooms.len() * hair.len()) as u64, "scenes")?;
-    for &groom in grooms {
-        for &(name, eu, pheo) in hair {
+    for &groom in &grooms {
+        for &(name, eu, pheo) in &hair {
             bar.set_message(format!("{groom} {name}"));
             let mut rendered = Vec::new();
             let mut first = None;
@@ -837,10 +869,19 @@ struct FieldStats {
     /// The difference between two independent halves of the path tracer's directions, of
     /// `fluence_ratio`, `reading_ratio` and `grid_ratio`: the reference's noise.
     noise: [f64; 3],
+    /// The sky's unscattered light at the fibres, as the share of the sky each sees: the
+    /// path traced strands' and body's (rays from the fibre's axis in [`SKY_RAYS`]
+    /// directions that nothing stops) and the grid's (its sky fluence over the whole
+    /// sky's). NaN without a sky.
+    sky_seen_reference: f64,
+    sky_seen_grid: f64,
 }
 
+/// Directions of the rays [`FieldStats::sky_seen_reference`] follows from each fibre.
+const SKY_RAYS: u32 = 256;
+
 impl FieldStats {
-    const COLUMNS: [&'static str; 13] = [
+    const COLUMNS: [&'static str; 15] = [
         "groom",
         "hair",
         "fibres",
@@ -854,6 +895,8 @@ impl FieldStats {
         "noise_fluence",
         "noise_reading",
         "noise_grid",
+        "sky_seen_reference",
+        "sky_seen_grid",
     ];
 
     fn row(&self, groom: &str, hair: &str) -> Vec<String> {
@@ -871,6 +914,8 @@ impl FieldStats {
             format!("{:.3}", self.noise[0]),
             format!("{:.3}", self.noise[1]),
             format!("{:.3}", self.noise[2]),
+            format!("{:.3}", self.sky_seen_reference),
+            format!("{:.3}", self.sky_seen_grid),
         ]
     }
 
@@ -878,7 +923,7 @@ impl FieldStats {
         format!(
             "{} fibres: fluence x{:.2} (±{:.2}); |flux| / fluence {:.2} (path tracer {:.2}), \
              cos {:.2}; response x{:.2} (±{:.2}) read from the path tracer's light, x{:.2} \
-             (±{:.2}) from the grid's",
+             (±{:.2}) from the grid's; sky seen {:.3} (path traced), {:.3} (grid)",
             self.fibres,
             self.fluence_ratio,
             self.noise[0],
@@ -888,7 +933,9 @@ impl FieldStats {
             self.reading_ratio,
             self.noise[1],
             self.grid_ratio,
-            self.noise[2]
+            self.noise[2],
+            self.sky_seen_reference,
+            self.sky_seen_grid
         )
     }
 }
@@ -985,7 +1032,61 @@ fn field_at_fibres(
         (a.reading_ratio - b.reading_ratio).abs(),
         (a.grid_ratio - b.grid_ratio).abs(),
     ];
+    (stats.sky_seen_reference, stats.sky_seen_grid) = if variant.no_sky {
+        (f64::NAN, f64::NAN)
+    } else {
+        sky_seen(&both, strands, &grid, f64::from(scene.shade.ambient))
+    };
     Ok(stats)
+}
+
+/// The mean share of the sky the fibres at `samples` see unscattered: through the traced
+/// strands and body (rays from each fibre's axis, which its own cylinder does not stop,
+/// in [`SKY_RAYS`] directions of a Fibonacci lattice turned per fibre) and as `grid`
+/// holds it (its sky fluence there over the unoccluded sky's, `4 ambient`).
+fn sky_seen(
+    samples: &[FieldSample],
+    strands: &TracedScene,
+    grid: &VolumeGridCpu,
+    ambient: f64,
+) -> (f64, f64) {
+    let bvh = SegmentBvh::build(strands.segments.clone());
+    let triangles: Vec<[Vec3; 3]> = strands
+        .mesh_triangles
+        .iter()
+        .filter_map(|t| {
+            let p = |k: u32| strands.mesh_positions.get(k as usize).copied();
+            Some([p(t[0])?, p(t[1])?, p(t[2])?])
+        })
+        .collect();
+    let seen: Vec<(f64, f64)> = samples
+        .par_iter()
+        .enumerate()
+        .map(|(i, s)| {
+            let turn = std::f64::consts::TAU * (i as f64 * 0.618_033_988_749_894_9).fract();
+            let open = (0..SKY_RAYS)
+                .filter(|&k| {
+                    let z = 1.0 - (2.0 * f64::from(k) + 1.0) / f64::from(SKY_RAYS);
+                    let r = (1.0 - z * z).max(0.0).sqrt();
+                    let a = turn + 2.399_963_229_728_653 * f64::from(k);
+                    let d = DVec3::new(r * a.cos(), r * a.sin(), z);
+                    !bvh.occluded(s.point, d, f64::INFINITY, None)
+                        && !triangles
+                            .iter()
+                            .any(|t| ray_hits_triangle(s.point.as_vec3(), d.as_vec3(), t))
+                })
+                .count();
+            (
+                open as f64 / f64::from(SKY_RAYS),
+                grid.sample_sky(s.point).x / (4.0 * ambient),
+            )
+        })
+        .collect();
+    let n = seen.len().max(1) as f64;
+    (
+        seen.iter().map(|s| s.0).sum::<f64>() / n,
+        seen.iter().map(|s| s.1).sum::<f64>() / n,
+    )
 }
 
 /// [`FieldStats`] of the path tracer's `samples` against `grid` read by `reading`.
