@@ -385,6 +385,18 @@ fn shadow_methods() -> [(&'static str, ShadowParams); 4] {
     ]
 }
 
+/// The traced body's triangles by their corners (those whose indices are in range).
+fn triangles_of(traced: &TracedScene) -> Vec<[Vec3; 3]> {
+    traced
+        .mesh_triangles
+        .iter()
+        .filter_map(|t| {
+            let p = |k: u32| traced.mesh_positions.get(k as usize).copied();
+            Some([p(t[0])?, p(t[1])?, p(t[2])?])
+        })
+        .collect()
+}
+
 /// Whether the ray from `origin` along `dir` (unit) hits triangle `t` beyond a small offset
 /// (Möller-Trumbore).
 fn ray_hits_triangle(origin: Vec3, dir: Vec3, t: &[Vec3; 3]) -> bool {
@@ -458,14 +470,7 @@ fn fibre_counts(
             let floats: &[f32] =
                 bytemuck::try_cast_slice(&bytes).map_err(|e| format!("strand vertices: {e:?}"))?;
             let bvh = SegmentBvh::build(traced.segments.clone());
-            let triangles: Vec<[Vec3; 3]> = traced
-                .mesh_triangles
-                .iter()
-                .filter_map(|t| {
-                    let p = |k: u32| traced.mesh_positions.get(k as usize).copied();
-                    Some([p(t[0])?, p(t[1])?, p(t[2])?])
-                })
-                .collect();
+            let triangles = triangles_of(&traced);
             // Every `step`-th vertex (at most ~8 000), those the mesh does not shadow: the
             // shadow methods' visibility includes the mesh, the crossings count fibres.
             let step = (visibility.len() / 8_000).max(1);
@@ -535,9 +540,6 @@ fn fibre_counts(
     Ok(text)
 }
 
-/// Runs the lab (see the module docs); `spp` overrides the path tracer's samples per pixel,
-/// `size` the images' side; `variant` takes the skin's bounce, the sky or a light out of
-/// both renderers.
 /// Which of the lab's rows to run: the grooms and hair colours named (empty: the lab's
 /// own, all four colours and three grooms, or `--quick`'s fur and curly, brown and blond).
 #[derive(Clone, Debug, Default)]
@@ -548,8 +550,9 @@ pub struct Rows {
     pub hair: Vec<String>,
 }
 
-/// Runs the lab: the `rows` named (or the lab's own) under `variant`'s lights, images
-/// `size` pixels square, the reference at `spp` samples per pixel per seed.
+/// Runs the lab (see the module docs); `spp` overrides the path tracer's samples per pixel,
+/// `size` the images' side; `variant` takes the skin's bounce, the sky or a light out of
+/// both renderers; `rows` picks the grooms and colours (the lab's own when empty).
 pub fn run(
     opts: &LabOpts,
     spp: Option<u32>,
@@ -1051,14 +1054,7 @@ fn sky_seen(
     ambient: f64,
 ) -> (f64, f64) {
     let bvh = SegmentBvh::build(strands.segments.clone());
-    let triangles: Vec<[Vec3; 3]> = strands
-        .mesh_triangles
-        .iter()
-        .filter_map(|t| {
-            let p = |k: u32| strands.mesh_positions.get(k as usize).copied();
-            Some([p(t[0])?, p(t[1])?, p(t[2])?])
-        })
-        .collect();
+    let triangles = triangles_of(strands);
     let seen: Vec<(f64, f64)> = samples
         .par_iter()
         .enumerate()
