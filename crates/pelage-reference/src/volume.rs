@@ -27,9 +27,16 @@ pub const SKY_DIRECTIONS: usize = 15;
 /// `volume_sky_direction`: the `k`-th of [`SKY_DIRECTIONS`] directions of a Fibonacci
 /// lattice on the sphere (z uniform, azimuth stepped by the golden angle).
 pub fn sky_direction(k: usize) -> DVec3 {
-    let z = 1.0 - (2.0 * k as f64 + 1.0) / SKY_DIRECTIONS as f64;
+    lattice_direction(k, SKY_DIRECTIONS, 0.0)
+}
+
+/// The `k`-th of `n` directions of a Fibonacci lattice on the sphere, its azimuths turned
+/// by `turn` radians: z at the middle of the `k`-th of `n` equal bands, the azimuth
+/// stepped by the golden angle.
+pub fn lattice_direction(k: usize, n: usize, turn: f64) -> DVec3 {
+    let z = 1.0 - (2.0 * k as f64 + 1.0) / n.max(1) as f64;
     let r = (1.0 - z * z).max(0.0).sqrt();
-    let phi = PI * (3.0 - 5f64.sqrt()) * k as f64;
+    let phi = turn + PI * (3.0 - 5f64.sqrt()) * k as f64;
     DVec3::new(r * phi.cos(), r * phi.sin(), z)
 }
 

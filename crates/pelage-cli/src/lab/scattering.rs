@@ -55,7 +55,7 @@ use pelage_reference::path_tracer::{
 };
 use pelage_reference::transmittance::SegmentBvh;
 use pelage_reference::volume::{
-    FibreResponse, VolumeGridCpu, VolumeInput, VolumeMesh, volume_grid,
+    FibreResponse, VolumeGridCpu, VolumeInput, VolumeMesh, lattice_direction, volume_grid,
 };
 use rayon::prelude::*;
 
@@ -881,7 +881,7 @@ struct FieldStats {
 }
 
 /// Directions of the rays [`FieldStats::sky_seen_reference`] follows from each fibre.
-const SKY_RAYS: u32 = 256;
+const SKY_RAYS: usize = 256;
 
 impl FieldStats {
     const COLUMNS: [&'static str; 15] = [
@@ -1062,10 +1062,7 @@ fn sky_seen(
             let turn = std::f64::consts::TAU * (i as f64 * 0.618_033_988_749_894_9).fract();
             let open = (0..SKY_RAYS)
                 .filter(|&k| {
-                    let z = 1.0 - (2.0 * f64::from(k) + 1.0) / f64::from(SKY_RAYS);
-                    let r = (1.0 - z * z).max(0.0).sqrt();
-                    let a = turn + 2.399_963_229_728_653 * f64::from(k);
-                    let d = DVec3::new(r * a.cos(), r * a.sin(), z);
+                    let d = lattice_direction(k, SKY_RAYS, turn);
                     !bvh.occluded(s.point, d, f64::INFINITY, None)
                         && !triangles
                             .iter()
@@ -1073,7 +1070,7 @@ fn sky_seen(
                 })
                 .count();
             (
-                open as f64 / f64::from(SKY_RAYS),
+                open as f64 / SKY_RAYS as f64,
                 grid.sample_sky(s.point).x / (4.0 * ambient),
             )
         })
