@@ -10,7 +10,9 @@
 use glam::Vec3;
 use pelage_gpu::audit;
 use pelage_gpu::{FramePlan, Gpu, GpuTimer, PassInfo, ShaderBinding, wgpu};
-use pelage_scene::{CameraMatrices, Light, Mesh, MeshMotion, ShadowParams, Skin, SkinBend};
+use pelage_scene::{
+    CameraMatrices, Light, Mesh, MeshMotion, ShadowParams, Skin, SkinBend, SkinnedSdf,
+};
 use pelage_shade::{HairInputs, HairPass, TargetFormat, TargetViews, Visibility, VolumeGrid};
 use pelage_shadow::{LightVisibility, ShadowMethod};
 use pelage_strands::{
@@ -272,12 +274,6 @@ impl Frame {
         let draw_mesh = target.draw_mesh && !groom_only;
         let (mesh, mut strands) =
             build_strands(StrandSource::of(scene), gpu, scene, mesh, groom_only)?;
-        // A skinned body's distance field is rebuilt every frame, after the skinning.
-        if skin.is_some()
-            && let Some(sim) = strands.as_simulation_mut()
-        {
-            sim.set_sdf_every_frame(true);
-        }
         // The resources that cross stages and that the frame may take from its caller,
         // named as the plan names them (for an audit of what each pass binds:
         // pelage_gpu::audit; nothing happens outside one). Stage 1 names its strands.
@@ -285,10 +281,25 @@ impl Frame {
             audit::name_buffer(buffer, pelage_strands::MESH);
         }
         let skin = match skin {
-            Some(skin) => Some((
-                MeshSkin::new(gpu, &scene.mesh, skin, &mesh)?,
-                scene.skin.clone(),
-            )),
+            Some(skin) => {
+                let mesh_skin = MeshSkin::new(gpu, &scene.mesh, skin, &mesh)?;
+                // A skinned body's distance field: built once in the bind pose and read
+                // through the skin, or rebuilt every frame after the skinning
+                // (`dynamics.sdf_skinned`).
+                if let Some(sim) = strands.as_simulation_mut() {
+                    match sim.dynamics().sdf_skinned {
+                        SkinnedSdf::ThroughSkin => sim.skin_body_sdf(
+                            gpu,
+                            &mesh,
+                            &scene.mesh,
+                            skin,
+                            mesh_skin.joint_matrices(),
+                        )?,
+                        SkinnedSdf::Rebuilt => sim.set_sdf_every_frame(true)?,
+                    }
+                }
+                Some((mesh_skin, scene.skin.clone()))
+            }
             None => None,
         };
         Light::validate_all(&scene.lights).map_err(pelage_shade::ShadeError::from)?;

@@ -211,8 +211,9 @@ fn every_pass_binds_only_what_the_plan_declares() {
         let format = TargetFormat::for_params(&s.shade);
         scenes.push((file.into(), s, format));
     }
-    // The body's distance field: built once and moved with the head, and rebuilt every
-    // frame after the skinning pass (a pass of its own, declared).
+    // The body's distance field: built once and moved with the head; built once in the
+    // bind pose and read through the skin (the skin's lattice pass after the skinning
+    // pass, a pass of its own, declared); and rebuilt every frame after the skinning.
     for file in ["head_turn.toml", "creature_skinned.toml"] {
         let path = Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("scenes")
@@ -223,7 +224,18 @@ fn every_pass_binds_only_what_the_plan_declares() {
         dynamics.sdf_resolution = 32;
         s.dynamics = Some(dynamics);
         let format = TargetFormat::for_params(&s.shade);
-        scenes.push((format!("{file} with the body's field"), s, format));
+        scenes.push((format!("{file} with the body's field"), s.clone(), format));
+        if s.skin.is_some() {
+            let mut rebuilt = s;
+            if let Some(d) = rebuilt.dynamics.as_mut() {
+                d.sdf_skinned = pelage::scene::SkinnedSdf::Rebuilt;
+            }
+            scenes.push((
+                format!("{file} with the body's field rebuilt"),
+                rebuilt,
+                format,
+            ));
+        }
     }
     for (name, s, format) in scenes {
         let audit = Audit::start();

@@ -45,3 +45,76 @@ pub fn mesh_size(mesh: &Mesh) -> f32 {
     let (lo, hi): (Vec3, Vec3) = mesh.bounds();
     (hi - lo).length()
 }
+
+/// The skin's blend at a lattice point, as the mirror finds it: the matrix (rows of its
+/// upper 3x4) and the distance from the point to the body's surface point it took the
+/// weights of.
+#[derive(Clone, Copy, Debug)]
+pub struct LatticeBlend {
+    /// The blended matrix's first three rows.
+    pub rows: [glam::DVec4; 3],
+    /// How far the nearest surface point is.
+    pub distance: f64,
+}
+
+/// Mirror of `strands/sdf_skin.wgsl` and `pelage_strands::lattice_skin`, by brute force:
+/// at every point of `lattice` (in `SdfGrid::index` order), the weights of the nearest
+/// point of the triangles of `bind` not flagged in `buried` (the barycentric blend of its
+/// corners' weights, each vertex's divided by their sum; only the four heaviest joints,
+/// renormalised) blending `matrices`, in `f64`.
+pub fn lattice_blend(
+    bind: &Mesh,
+    skin: &Skin,
+    buried: &[bool],
+    lattice: &pelage_scene::SdfGrid,
+    matrices: &[Mat4],
+) -> Vec<LatticeBlend> {
+    use rayon::prelude::*;
+    let matrices: Vec<DMat4> = matrices.iter().map(|m| m.as_dmat4()).collect();
+    (0..lattice.nodes())
+        .into_par_iter()
+        .map(|i| {
+            let p = lattice.node(lattice.node_of(i));
+            let mut best = (usize::MAX, (1.0, 0.0, 0.0), f64::INFINITY);
+            for (t, tri) in bind.indices.chunks_exact(3).enumerate() {
+                if buried.get(t).copied().unwrap_or(false) {
+                    continue;
+                }
+                let [a, b, c] = [0, 1, 2].map(|k| bind.positions[tri[k] as usize]);
+                let (u, v, w) = crate::sdf::closest_bary(p, a, b, c);
+                let q = a.as_dvec3() * u + b.as_dvec3() * v + c.as_dvec3() * w;
+                let d = p.as_dvec3().distance(q);
+                if d < best.2 {
+                    best = (t, (u, v, w), d);
+                }
+            }
+            let (t, (u, v, w), distance) = best;
+            let mut joints: Vec<(u32, f64)> = Vec::new();
+            for (k, share) in [u, v, w].into_iter().enumerate() {
+                let vertex = bind.indices[3 * t + k] as usize;
+                let sum: f64 = skin.weights[vertex].iter().map(|&x| f64::from(x)).sum();
+                for slot in 0..4 {
+                    let weight = share * f64::from(skin.weights[vertex][slot]) / sum;
+                    if weight > 0.0 {
+                        let j = skin.joints[vertex][slot];
+                        match joints.iter_mut().find(|(k, _)| *k == j) {
+                            Some((_, total)) => *total += weight,
+                            None => joints.push((j, weight)),
+                        }
+                    }
+                }
+            }
+            joints.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
+            joints.truncate(4);
+            let total: f64 = joints.iter().map(|(_, w)| w).sum();
+            let mut m = DMat4::ZERO;
+            for (j, w) in joints {
+                m += matrices[j as usize] * (w / total);
+            }
+            LatticeBlend {
+                rows: [0, 1, 2].map(|r| m.row(r)),
+                distance,
+            }
+        })
+        .collect()
+}

@@ -56,8 +56,8 @@ pub use params::{
     LayerSpacing, MAX_ACCELERATION, MAX_COLLIDERS, MAX_COLOR, MAX_FORCE, MAX_MAP_VALUE,
     MAX_REGIONS, MAX_SEGMENTS, MAX_WAVES, MapParams, MeshMotion, OpacityFormat, ParamError,
     RegionParams, RootParams, RootTextures, STIFFNESS_INTERVAL, SUBSTEP_SLACK, SUBSTEP_ULPS,
-    ShadeParams, ShadowMapParams, ShadowParams, Splat, SurfaceInterpolation, VoxelParams,
-    WindParams, mesh_albedo,
+    ShadeParams, ShadowMapParams, ShadowParams, SkinnedSdf, Splat, SurfaceInterpolation,
+    VoxelParams, WindParams, mesh_albedo,
 };
 pub use scene::Scene;
 #[cfg(feature = "scene-file")]

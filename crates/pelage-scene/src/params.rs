@@ -855,9 +855,33 @@ pub struct DynamicsParams {
     /// (the default) for none, else in
     /// [[`MIN_SDF_RESOLUTION`](crate::MIN_SDF_RESOLUTION),
     /// [`MAX_SDF_RESOLUTION`](crate::MAX_SDF_RESOLUTION)] and at most the device's
-    /// `max_texture_dimension_3d`. Built once for a rigid or still mesh, every frame for
-    /// a skinned one.
+    /// `max_texture_dimension_3d`. Built once for a rigid or still mesh; for a skinned
+    /// one, see `sdf_skinned`.
     pub sdf_resolution: u32,
+    /// How a skinned mesh's field follows the skin ([`SkinnedSdf`]): `through_skin` (the
+    /// default) or `rebuilt`. Fixed when the simulation is made.
+    pub sdf_skinned: SkinnedSdf,
+}
+
+/// How the distance field of a skinned body (`DynamicsParams::sdf_resolution` > 0 on a
+/// mesh skinned by a `[skin]` rig or `Frame::with_skin`) follows the skin.
+///
+/// Measured on the creature's rig (`pelage bench`, `cargo test -p pelage-strands --test
+/// sdf`; the dynamics page of the book): through the skin, the vertices that end a frame
+/// deeper than half a strand width halve at the same resolution (the bind pose's box has
+/// smaller cells than the box of every pose) and the per-frame pass is a tenth of the
+/// growth pass's at 64, but on lavapipe the simulation reads the field through the skin
+/// at about 1.5x the cost of the rebuilt field's (a build and the simulation).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SkinnedSdf {
+    /// Built once in the bind pose and read through the skin: each frame blends the
+    /// joint matrices at a lattice over the field (`pelage_strands::SdfSkin`), and the
+    /// collision step finds each vertex's bind-pose point through the blend's inverse.
+    #[default]
+    ThroughSkin,
+    /// Rebuilt every frame from the skinned mesh, over the box of every pose.
+    Rebuilt,
 }
 
 /// The time the shape stiffnesses of [`DynamicsParams`] are given for, seconds: 1/120 s,
@@ -1070,6 +1094,7 @@ impl Default for DynamicsParams {
             teleport_distance: 1.0,
             colliders: Vec::new(),
             sdf_resolution: 0,
+            sdf_skinned: SkinnedSdf::ThroughSkin,
         }
     }
 }

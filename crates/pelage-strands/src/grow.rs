@@ -392,6 +392,55 @@ impl StrandPass {
         let vertices = zeroed_storage(gpu, "pelage strand vertices", vertex_bytes, storage)?;
         pelage_gpu::audit::name_buffer(&vertices, crate::STRAND_VERTICES);
         pelage_gpu::audit::name_buffer(&roots_buffer, crate::STRAND_ROOTS);
+        let (pipeline, bind_group) = Self::bind(
+            gpu,
+            label,
+            shader,
+            inputs,
+            overrides,
+            [&uniforms.buffer, &vertices, &roots_buffer],
+        )?;
+        let style = StrandStyle {
+            max_width: roots
+                .iter()
+                .map(|r| r.width)
+                .fold(params.growth.width, f32::max),
+            ..StrandStyle::of(&params.growth)
+        };
+        Ok(Self {
+            label,
+            inputs: &[],
+            state: &[],
+            params: params.clone(),
+            pipeline,
+            bind_group,
+            uniforms,
+            buffers: StrandBuffers::new(
+                vertices,
+                roots_buffer,
+                params.roots.count,
+                params.growth.segments,
+                style,
+                reach,
+            )?,
+            level: LodLevel::full(params),
+            frame: None,
+            limits: gpu.limits().clone(),
+        })
+    }
+}
+
+impl StrandPass {
+    /// The pipeline of `shader` and its bind group: `own` (the uniforms, the vertices and
+    /// the drawn roots) around `inputs` (see [`StrandPass::with_inputs`]).
+    fn bind(
+        gpu: &Gpu,
+        label: &'static str,
+        shader: &str,
+        inputs: &[Input<'_>],
+        overrides: &[(&str, f64)],
+        own: [&wgpu::Buffer; 3],
+    ) -> crate::Result<(wgpu::ComputePipeline, wgpu::BindGroup)> {
         let module = crate::SHADERS.library().module(gpu, shader)?;
         let (pipeline, bind_group) = gpu.scoped(|device| {
             // grow.wgsl / groom.wgsl: the uniforms (force.wgsl), the read-only inputs,
@@ -428,7 +477,7 @@ impl StrandPass {
             );
             let mut entries = vec![wgpu::BindGroupEntry {
                 binding: 0,
-                resource: uniforms.buffer.as_entire_binding(),
+                resource: own[0].as_entire_binding(),
             }];
             entries.extend(
                 (1..)
@@ -443,7 +492,7 @@ impl StrandPass {
                         },
                     }),
             );
-            for (binding, buffer) in [(inputs_end, &vertices), (inputs_end + 1, &roots_buffer)] {
+            for (binding, buffer) in [(inputs_end, own[1]), (inputs_end + 1, own[2])] {
                 entries.push(wgpu::BindGroupEntry {
                     binding,
                     resource: buffer.as_entire_binding(),
@@ -459,37 +508,36 @@ impl StrandPass {
             );
             (pipeline, bind_group)
         })?;
-        let style = StrandStyle {
-            max_width: roots
-                .iter()
-                .map(|r| r.width)
-                .fold(params.growth.width, f32::max),
-            ..StrandStyle::of(&params.growth)
-        };
-        Ok(Self {
-            label,
-            inputs: &[],
-            state: &[],
-            params: params.clone(),
-            pipeline,
-            bind_group,
-            uniforms,
-            buffers: StrandBuffers::new(
-                vertices,
-                roots_buffer,
-                params.roots.count,
-                params.growth.segments,
-                style,
-                reach,
-            )?,
-            level: LodLevel::full(params),
-            frame: None,
-            limits: gpu.limits().clone(),
-        })
+        Ok((pipeline, bind_group))
     }
-}
 
-impl StrandPass {
+    /// Builds the pipeline and bind group again over new `inputs` (the same kinds of
+    /// input the shader declares), keeping the pass's own buffers: the strand buffers
+    /// later stages bound stay the same.
+    pub(crate) fn rebind(
+        &mut self,
+        gpu: &Gpu,
+        shader: &str,
+        inputs: &[Input<'_>],
+        overrides: &[(&str, f64)],
+    ) -> crate::Result<()> {
+        let (pipeline, bind_group) = Self::bind(
+            gpu,
+            self.label,
+            shader,
+            inputs,
+            overrides,
+            [
+                &self.uniforms.buffer,
+                &self.buffers.vertices,
+                &self.buffers.roots,
+            ],
+        )?;
+        self.pipeline = pipeline;
+        self.bind_group = bind_group;
+        Ok(())
+    }
+
     /// What [`StrandStage::prepare`] does once the method knows its uniforms: writes
     /// them and starts the frame at the level of detail last set.
     pub(crate) fn begin_frame(

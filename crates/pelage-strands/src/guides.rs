@@ -545,14 +545,12 @@ impl StrandStage for GuideStrands {
         let mut passes = Vec::new();
         let guides = match &self.first {
             GuidePass::Bent(_) => guides,
-            GuidePass::Simulated(guides_sim) => match guides_sim.sim.body_sdf() {
-                // A field rebuilt every frame is built before the guides' simulation.
-                Some(sdf) if guides_sim.sim.sdf_every_frame() => {
-                    passes.push(sdf.pass());
-                    guides.reads([MESH, crate::BODY_SDF])
-                }
-                _ => guides.reads([MESH]),
-            },
+            GuidePass::Simulated(guides_sim) => {
+                // The body's field, rebuilt or read through the skin, comes first.
+                let (field, reads) = guides_sim.sim.field_passes();
+                passes.extend(field);
+                guides.reads([MESH]).reads(reads)
+            }
         };
         passes.extend([
             guides.writes([GUIDE_VERTICES]),

@@ -34,6 +34,7 @@ mod guides;
 mod lod;
 mod roots;
 mod sdf;
+mod sdf_skin;
 mod simulate;
 mod skin;
 mod source;
@@ -53,6 +54,7 @@ pub use sdf::{
     BODY_SDF, BodySdf, COARSE_FACTOR, MAX_BURIED_CHECK, MAX_SDF_TRIANGLES, SDF_LABEL, SWEEP_AXES,
     body_triangles, coarse_grid,
 };
+pub use sdf_skin::{SDF_SKIN, SDF_SKIN_LABEL, SKIN_LATTICE_FACTOR, SdfSkin};
 pub use simulate::{SIMULATE_LABEL, SIMULATION_STATE, SimulateStrands};
 pub use skin::{MeshSkin, SKIN_LABEL, SKIN_NON_FINITE};
 pub use source::{StrandSource, scene_reach, sized_for_view};
@@ -71,6 +73,7 @@ pub static SHADERS: ShaderSources = pelage_gpu::wgsl_sources!(
     "strands/lod.wgsl",
     "strands/rotation.wgsl",
     "strands/sdf.wgsl",
+    "strands/sdf_skin.wgsl",
     "strands/simulate.wgsl",
     "strands/skin.wgsl",
 );

@@ -320,7 +320,26 @@ impl BodySdf {
         resolution: u32,
     ) -> crate::Result<Self> {
         buffers.check_matches(mesh)?;
-        let kept = body_triangles(mesh);
+        Self::of_triangles(
+            gpu,
+            buffers,
+            mesh,
+            &body_triangles(mesh),
+            bounds,
+            resolution,
+        )
+    }
+
+    /// [`BodySdf::new`] over `kept`, triangles of `mesh` (which `buffers` hold): every
+    /// one of them, or the subset [`body_triangles`] chose.
+    pub(crate) fn of_triangles(
+        gpu: &Gpu,
+        buffers: &MeshBuffers,
+        mesh: &Mesh,
+        kept: &[u32],
+        bounds: (Vec3, Vec3),
+        resolution: u32,
+    ) -> crate::Result<Self> {
         if kept.len() == mesh.indices.len() / 3 {
             return Self::new(gpu, buffers, bounds, resolution);
         }

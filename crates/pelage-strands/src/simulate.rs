@@ -7,15 +7,15 @@ use glam::{Mat4, UVec3, Vec2, Vec3, Vec4};
 use pelage_gpu::{Gpu, GpuTimer, UniformBuffer, read_buffer, storage_buffer, wgpu, zeroed_storage};
 use pelage_scene::{
     CameraMatrices, Collider, DynamicsParams, HairParams, HairType, MAX_COLLIDERS, Mesh,
-    ParamError, Resampled, SdfGrid,
+    ParamError, Resampled, SdfGrid, Skin,
 };
 
 use crate::MESH;
 use crate::groom::GroomShape;
 use crate::grow::{Input, StrandPass, StrandStage};
 use crate::{
-    BODY_SDF, BodySdf, LodLevel, MeshBuffers, STRAND_ROOTS, STRAND_VERTICES, StrandFrame,
-    StrandRoot, StrandsError,
+    BODY_SDF, BodySdf, LodLevel, MeshBuffers, SDF_SKIN, STRAND_ROOTS, STRAND_VERTICES, SdfSkin,
+    StrandFrame, StrandRoot, StrandsError,
 };
 use pelage_gpu::PassInfo;
 
@@ -30,9 +30,10 @@ pub const SIMULATION_STATE: &str = "strands.state";
 /// The timestamp label of the simulation's pass.
 pub const SIMULATE_LABEL: &str = "strands: simulate";
 
-/// A 2³ `r32float` texture standing in for the body's field when there is none (the
-/// pass binds one either way; `sdf_on` is 0, so it is never read).
-fn no_sdf(gpu: &Gpu) -> crate::Result<wgpu::TextureView> {
+/// A 2³ texture of `format` standing in for the body's field or its skin when there is
+/// none (the pass binds both either way; with `sdf_on` 0 or the pipeline constant
+/// `SDF_SKIN` off, it is never read).
+fn stand_in(gpu: &Gpu, format: wgpu::TextureFormat) -> crate::Result<wgpu::TextureView> {
     Ok(gpu.scoped(|device| {
         device
             .create_texture(&wgpu::TextureDescriptor {
@@ -45,7 +46,7 @@ fn no_sdf(gpu: &Gpu) -> crate::Result<wgpu::TextureView> {
                 mip_level_count: 1,
                 sample_count: 1,
                 dimension: wgpu::TextureDimension::D3,
-                format: wgpu::TextureFormat::R32Float,
+                format,
                 usage: wgpu::TextureUsages::TEXTURE_BINDING,
                 view_formats: &[],
             })
@@ -124,6 +125,12 @@ pub(crate) struct SimUniforms {
     pub sdf_dims: UVec3,
     /// 1 when the strands collide with the field.
     pub sdf_on: u32,
+    /// The skin's lattice point (0, 0, 0), bind pose ([`SdfSkin::lattice`]).
+    pub skin_origin: Vec3,
+    /// Its cell.
+    pub skin_cell: f32,
+    /// Its points per axis (read when the pipeline's `SDF_SKIN` is on).
+    pub skin_dims: UVec3,
 }
 
 impl SimUniforms {
@@ -162,6 +169,9 @@ impl SimUniforms {
             sdf_cell: 1.0,
             sdf_dims: UVec3::splat(2),
             sdf_on: 0,
+            skin_origin: Vec3::ZERO,
+            skin_cell: 1.0,
+            skin_dims: UVec3::splat(2),
         }
     }
 
@@ -174,6 +184,16 @@ impl SimUniforms {
             sdf_cell: grid.cell,
             sdf_dims: grid.dims,
             sdf_on: 1,
+            ..self
+        }
+    }
+
+    /// These uniforms reading the field through the skin whose lattice is `lattice`.
+    pub fn with_skin(self, lattice: &SdfGrid) -> Self {
+        Self {
+            skin_origin: lattice.origin,
+            skin_cell: lattice.cell,
+            skin_dims: lattice.dims,
             ..self
         }
     }
@@ -253,6 +273,8 @@ pub struct SimulateStrands {
     sdf: Option<BodySdf>,
     /// Whether `encode` rebuilds it before every frame.
     sdf_every_frame: bool,
+    /// The skin the field (built in the bind pose) is read through, if any.
+    sdf_skin: Option<SdfSkin>,
     /// World space to the field's (the mesh's pose when the field was built).
     sdf_from_world: Mat4,
 }
@@ -412,7 +434,7 @@ impl SimulateStrands {
         // The body's field, built now from the mesh buffers as they hold the mesh (its
         // pose at construction), or a 2³ stand-in never sampled.
         let (sdf, sdf_view) = match dynamics.sdf_resolution {
-            0 => (None, no_sdf(gpu)?),
+            0 => (None, stand_in(gpu, wgpu::TextureFormat::R32Float)?),
             resolution => {
                 let sdf =
                     BodySdf::of_body(gpu, mesh_buffers, mesh, mesh_buffers.bounds, resolution)?;
@@ -423,6 +445,8 @@ impl SimulateStrands {
         };
         // Built outside the frame: a constant until the field is rebuilt every frame.
         pelage_gpu::audit::constant_view(&sdf_view);
+        let skin_view = stand_in(gpu, wgpu::TextureFormat::Rgba32Float)?;
+        pelage_gpu::audit::constant_view(&skin_view);
         let mut pass = StrandPass::with_inputs(
             gpu,
             SIMULATE_LABEL,
@@ -439,6 +463,7 @@ impl SimulateStrands {
                 Input::ReadWrite(&state),
                 Input::ReadWrite(&held),
                 Input::Texture3d(&sdf_view),
+                Input::Texture3d(&skin_view),
             ],
             &[],
         )?;
@@ -460,6 +485,7 @@ impl SimulateStrands {
             wind: params.wind.clone(),
             sdf,
             sdf_every_frame: false,
+            sdf_skin: None,
             sdf_from_world: Mat4::IDENTITY,
         })
     }
@@ -470,12 +496,24 @@ impl SimulateStrands {
         self.sdf.as_ref()
     }
 
-    /// Rebuilds the body's field every frame, before the simulation's pass (a skinned
-    /// mesh: [`StrandStage::encode`] records [`BodySdf::encode`] first and
-    /// [`StrandStage::passes`] declares it), or only once (`false`, the default: a still
-    /// mesh, or a rigid one moved with [`SimulateStrands::set_sdf_transform`]). Does
-    /// nothing without a field.
-    pub fn set_sdf_every_frame(&mut self, every_frame: bool) {
+    /// Rebuilds the body's field every frame, before the simulation's pass (a mesh the
+    /// caller deforms in its own way: [`StrandStage::encode`] records
+    /// [`BodySdf::encode`] first and [`StrandStage::passes`] declares it), or only once
+    /// (`false`, the default: a still mesh, a rigid one moved with
+    /// [`SimulateStrands::set_sdf_transform`], or a skinned one read through its skin,
+    /// [`SimulateStrands::skin_body_sdf`]). Does nothing without a field. Refused, naming
+    /// `skin`, after [`SimulateStrands::skin_body_sdf`]: that field is of the bind pose,
+    /// and covers only its box.
+    pub fn set_sdf_every_frame(&mut self, every_frame: bool) -> crate::Result<()> {
+        if every_frame && self.sdf_skin.is_some() {
+            return Err(ParamError::new(
+                "skin",
+                "a field read through the skin",
+                "is built once in the bind pose (SimulateStrands::skin_body_sdf): it is not \
+                 rebuilt every frame; make the simulation again to rebuild it instead",
+            )
+            .into());
+        }
         if let Some(sdf) = &self.sdf {
             self.sdf_every_frame = every_frame;
             if every_frame {
@@ -485,6 +523,88 @@ impl SimulateStrands {
                 pelage_gpu::audit::constant_view(sdf.view());
             }
         }
+        Ok(())
+    }
+
+    /// Reads the body's field through a skin instead of rebuilding it every frame: the
+    /// field is built again, once, from `bind` (the mesh's bind pose, which `skin`
+    /// skins into `mesh_buffers` every frame: [`crate::MeshSkin`]) over `bind`'s own box,
+    /// and an [`SdfSkin`] blends the joint matrices `joint_matrices` holds
+    /// ([`crate::MeshSkin::joint_matrices`]) at a lattice over it every frame, before
+    /// the simulation's pass, which finds each vertex's bind-pose point through the
+    /// blend's inverse (see [`SdfSkin`]). The per-frame cost is the lattice's pass,
+    /// not a build. Does nothing without a field (`sdf_resolution` 0). Refused, naming
+    /// `mesh` or `skin`, when `bind` or `skin` does not match the simulation's mesh.
+    pub fn skin_body_sdf(
+        &mut self,
+        gpu: &Gpu,
+        mesh_buffers: &MeshBuffers,
+        bind: &Mesh,
+        skin: &Skin,
+        joint_matrices: &wgpu::Buffer,
+    ) -> crate::Result<()> {
+        if self.sdf.is_none() {
+            return Ok(());
+        }
+        bind.validate()?;
+        mesh_buffers.check_matches(bind)?;
+        skin.validate(bind.positions.len())?;
+        let bind_buffers = MeshBuffers::upload(gpu, bind)?;
+        let triangles = crate::body_triangles(bind);
+        let sdf = BodySdf::of_triangles(
+            gpu,
+            &bind_buffers,
+            bind,
+            &triangles,
+            bind_buffers.bounds,
+            self.dynamics.sdf_resolution,
+        )?;
+        sdf.build(gpu)?;
+        pelage_gpu::audit::constant_view(sdf.view());
+        let sdf_skin = SdfSkin::new(gpu, bind, skin, &triangles, sdf.grid(), joint_matrices)?;
+        self.pass.rebind(
+            gpu,
+            "strands/simulate.wgsl",
+            &[
+                Input::Read(&mesh_buffers.positions),
+                Input::Read(&mesh_buffers.normals),
+                Input::Read(&mesh_buffers.indices),
+                Input::Read(&self.rest_roots),
+                Input::Uniform(&self.sim.buffer),
+                Input::ReadWrite(&self.state),
+                Input::ReadWrite(&self.held),
+                Input::Texture3d(sdf.view()),
+                Input::Texture3d(sdf_skin.view()),
+            ],
+            &[("SDF_SKIN", 1.0)],
+        )?;
+        self.sdf = Some(sdf);
+        self.sdf_skin = Some(sdf_skin);
+        self.sdf_every_frame = false;
+        self.sdf_from_world = Mat4::IDENTITY;
+        Ok(())
+    }
+
+    /// The passes [`StrandStage::encode`] records before the simulation's for the body's
+    /// field (its build when rebuilt every frame, or the skin's lattice pass) and what
+    /// the simulation reads from them.
+    pub(crate) fn field_passes(&self) -> (Vec<PassInfo>, Vec<&'static str>) {
+        let mut passes = Vec::new();
+        let mut reads = Vec::new();
+        if let (Some(sdf), true) = (&self.sdf, self.sdf_every_frame) {
+            passes.push(sdf.pass());
+            reads.push(BODY_SDF);
+        }
+        if let Some(skin) = &self.sdf_skin {
+            passes.push(skin.pass());
+            reads.push(SDF_SKIN);
+        }
+        (passes, reads)
+    }
+
+    /// The skin the body's field is read through ([`SimulateStrands::skin_body_sdf`]).
+    pub fn sdf_skin(&self) -> Option<&SdfSkin> {
+        self.sdf_skin.as_ref()
     }
 
     /// Whether the field is rebuilt every frame.
@@ -543,9 +663,18 @@ impl SimulateStrands {
 
     /// Replaces the dynamics parameters (validated) and the colliders in use with its
     /// colliders, from the next `prepare` on. The body's field is made with the
-    /// simulation: a different `sdf_resolution` is refused (build a new simulation).
+    /// simulation: a different `sdf_resolution` or `sdf_skinned` is refused (build a new
+    /// simulation).
     pub fn set_dynamics(&mut self, dynamics: &DynamicsParams) -> crate::Result<()> {
         dynamics.validate()?;
+        if dynamics.sdf_skinned != self.dynamics.sdf_skinned {
+            return Err(ParamError::new(
+                "dynamics.sdf_skinned",
+                format!("{:?}", dynamics.sdf_skinned),
+                "is fixed when the simulation is made: make a new one to change it",
+            )
+            .into());
+        }
         if dynamics.sdf_resolution != self.dynamics.sdf_resolution {
             return Err(ParamError::new(
                 "dynamics.sdf_resolution",
@@ -627,6 +756,9 @@ impl StrandStage for SimulateStrands {
         if let Some(sdf) = &self.sdf {
             uniforms = uniforms.with_sdf(sdf.grid(), self.sdf_from_world);
         }
+        if let Some(skin) = &self.sdf_skin {
+            uniforms = uniforms.with_skin(skin.lattice());
+        }
         self.sim.write(queue, &uniforms)?;
         self.last_time = Some(time);
         let grow = self.pass.uniforms_at(time);
@@ -645,6 +777,9 @@ impl StrandStage for SimulateStrands {
         if let (Some(sdf), true) = (&self.sdf, self.sdf_every_frame) {
             sdf.encode(encoder, timer.as_deref_mut());
         }
+        if let Some(skin) = &self.sdf_skin {
+            skin.encode(encoder, timer.as_deref_mut());
+        }
         encoder.clear_buffer(&self.held, 0, None);
         self.pass
             .record(encoder, frame, timer, self.buffers().strand_count)
@@ -653,17 +788,13 @@ impl StrandStage for SimulateStrands {
     /// The field's build when it runs every frame, then the simulation (reading the mesh
     /// and the field, writing the strands and its state).
     fn passes(&self) -> Vec<PassInfo> {
-        let mut passes = Vec::new();
-        let mut simulate = PassInfo::new(SIMULATE_LABEL).reads([MESH]).writes([
-            STRAND_VERTICES,
-            STRAND_ROOTS,
-            SIMULATION_STATE,
-        ]);
-        if let (Some(sdf), true) = (&self.sdf, self.sdf_every_frame) {
-            passes.push(sdf.pass());
-            simulate = simulate.reads([BODY_SDF]);
-        }
-        passes.push(simulate);
+        let (mut passes, field) = self.field_passes();
+        passes.push(
+            PassInfo::new(SIMULATE_LABEL)
+                .reads([MESH])
+                .reads(field)
+                .writes([STRAND_VERTICES, STRAND_ROOTS, SIMULATION_STATE]),
+        );
         passes
     }
 

@@ -4,12 +4,13 @@
 use glam::{Vec3, Vec4};
 use pelage_gpu::{Gpu, wgpu};
 use pelage_reference::sdf::{body_surface, buried_triangles, depths, exact_field, winding_number};
-use pelage_reference::skin::skin_mesh;
+use pelage_reference::skin::{lattice_blend, skin_mesh};
 use pelage_scene::{
     DynamicsParams, HairParams, MIN_SDF_RESOLUTION, Mesh, MeshMotion, SkinBend, WindParams,
 };
 use pelage_strands::{
-    BodySdf, MAX_SDF_TRIANGLES, MeshBuffers, MeshSkin, SimulateStrands, StrandStage, body_triangles,
+    BodySdf, MAX_SDF_TRIANGLES, MeshBuffers, MeshSkin, SdfSkin, SimulateStrands, StrandStage,
+    body_triangles,
 };
 
 mod common;
@@ -288,7 +289,7 @@ fn creature_rig() -> SkinBend {
 /// vertex after each frame, over the strands that start outside the body (the creature's
 /// parts overlap unwelded, and fur rooted on a part's surface buried inside another is
 /// inside the body from the start).
-fn creature_depth(gpu: &Gpu, sdf_resolution: u32, frames: u32) -> Depth {
+fn creature_depth(gpu: &Gpu, sdf_resolution: u32, frames: u32, through_skin: bool) -> Depth {
     let bind = Mesh::creature();
     let rig = creature_rig();
     let skin = rig.skin(&bind);
@@ -305,7 +306,12 @@ fn creature_depth(gpu: &Gpu, sdf_resolution: u32, frames: u32) -> Depth {
         ..DynamicsParams::default()
     };
     let mut sim = SimulateStrands::grown(gpu, &bind, &buffers, &hair, &dynamics).unwrap();
-    sim.set_sdf_every_frame(true);
+    if through_skin {
+        sim.skin_body_sdf(gpu, &buffers, &bind, &skin, mesh_skin.joint_matrices())
+            .unwrap();
+    } else {
+        sim.set_sdf_every_frame(true).unwrap();
+    }
     let per = SEGMENTS as usize + 1;
     let mut outside: Option<Vec<bool>> = None;
     let mut depth = Depth::default();
@@ -353,33 +359,117 @@ fn creature_depth(gpu: &Gpu, sdf_resolution: u32, frames: u32) -> Depth {
 /// creature is overlapping closed parts, not welded, and where a part's surface runs on
 /// inside another the field, sampled trilinearly between nodes a cell apart, cannot
 /// follow the crease (nor a rim thinner than a cell), so a vertex can slip through
-/// there. Measured at resolution 64: the mean depth falls from 2.25 strand widths
-/// without the field to 0.050 with it, and 2.59% of the vertices (32% without) end a
-/// frame deeper than half a width; the deepest 11.3 widths (34.4 without). (0.061,
-/// 2.99% and 16.4 before the sample's cap by the nodes' distances plus the way to them;
-/// 3.12% when the buried triangles were part of the field; 0.65% with the field at 128,
-/// a scratch run: the cell, not the sign, is most of what is left.)
+/// there. The field is built once in the bind pose and read through the skin
+/// (`SimulateStrands::skin_body_sdf`, as a frame with a skin does); the field rebuilt
+/// every frame over the box of every pose (for a mesh its caller deforms) is measured
+/// beside it. Measured at resolution 64: through the skin the mean depth is 0.027
+/// strand widths and 1.33% of the vertices end a frame deeper than half a width (the
+/// deepest 9.2 widths); rebuilt every frame 0.050, 2.59% and 11.3 (its cells are
+/// larger: the box of every pose); without a field 2.25, 32% and 34.4. Through the
+/// skin at 128: 0.0040, 0.28%, 3.3 (at 256, a scratch run: 0.0013, 0.11%, 2.0; of its
+/// 140 deep vertices 110 lie inside two of the creature's parts at once, where a
+/// crossing part's surface faces outward inside the other: the sign at the crease).
 #[test]
 fn fur_stays_out_of_the_skinned_creature_but_at_its_part_junctions() {
     let gpu = gpu();
-    let with = creature_depth(&gpu, 64, 60);
-    let without = creature_depth(&gpu, 0, 60);
+    let with = creature_depth(&gpu, 64, 60, true);
+    let finer = creature_depth(&gpu, 128, 60, true);
+    let rebuilt = creature_depth(&gpu, 64, 60, false);
+    let rebuilt_finer = creature_depth(&gpu, 128, 60, false);
+    let without = creature_depth(&gpu, 0, 60, false);
+    let line = |name: &str, d: &Depth| {
+        format!(
+            "{name} max {:.3} mean {:.2e}, {:.2}% deeper than half a width",
+            d.max,
+            d.mean(),
+            100.0 * d.deep_fraction()
+        )
+    };
     eprintln!(
-        "creature rig, depth in strand widths: with the field max {:.3} mean {:.2e}, \
-         {:.2}% deeper than half a width; without max {:.1} mean {:.2e}, {:.2}%",
-        with.max,
-        with.mean(),
-        100.0 * with.deep_fraction(),
-        without.max,
-        without.mean(),
-        100.0 * without.deep_fraction()
+        "creature rig, depth in strand widths: {}; {}; {}; {}; {}",
+        line("through the skin, 64:", &with),
+        line("through the skin, 128:", &finer),
+        line("rebuilt every frame, 64:", &rebuilt),
+        line("rebuilt every frame, 128:", &rebuilt_finer),
+        line("without a field:", &without),
     );
-    assert!(with.mean() <= 0.1, "{with:?}");
-    assert!(with.deep_fraction() <= 0.05, "{with:?}");
+    assert!(with.mean() <= 0.04, "{with:?}");
+    assert!(with.deep_fraction() <= 0.02, "{with:?}");
     assert!(
-        without.mean() > 10.0 * with.mean(),
+        finer.deep_fraction() <= 0.005 && finer.max <= 5.0,
+        "{finer:?}"
+    );
+    assert!(rebuilt.mean() <= 0.1, "{rebuilt:?}");
+    assert!(rebuilt.deep_fraction() <= 0.05, "{rebuilt:?}");
+    assert!(
+        without.mean() > 10.0 * rebuilt.mean().max(with.mean()),
         "the fur did not fall into the body without the field: {without:?}"
     );
+}
+
+/// The skin's lattice (`SdfSkin`, `strands/sdf_skin.wgsl`) against the mirror
+/// (`pelage_reference::skin::lattice_blend`: the nearest surface point by brute force,
+/// its weights, the matrices blended in f64), on the creature at an instant of its rig
+/// cycle: within two lattice cells of the body, where the nearest triangle is found
+/// exactly (`EXACT_CELLS`), every element of every blended matrix agrees to 1e-5; farther, the sweeps
+/// may hand a point a triangle a little farther than the nearest (printed: how many
+/// points differ, and by how much).
+#[test]
+fn the_skin_lattice_blends_as_the_mirror() {
+    let gpu = gpu();
+    let bind = Mesh::creature();
+    let rig = creature_rig();
+    let skin = rig.skin(&bind);
+    let buffers = MeshBuffers::upload(&gpu, &bind).unwrap();
+    let mesh_skin = MeshSkin::new(&gpu, &bind, &skin, &buffers).unwrap();
+    let matrices = rig.joint_matrices(0.37);
+    mesh_skin.set_joint_matrices(&gpu.queue, &matrices).unwrap();
+    let sdf = BodySdf::of_body(&gpu, &buffers, &bind, buffers.bounds, 64).unwrap();
+    let lattice = SdfSkin::new(
+        &gpu,
+        &bind,
+        &skin,
+        &body_triangles(&bind),
+        sdf.grid(),
+        mesh_skin.joint_matrices(),
+    )
+    .unwrap();
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    lattice.encode(&mut encoder, None);
+    gpu.submit_and_wait([encoder.finish()]).unwrap();
+    let gpu_rows = lattice.read(&gpu).unwrap();
+    let mirror = lattice_blend(
+        &bind,
+        &skin,
+        &buried_triangles(&bind),
+        lattice.lattice(),
+        &matrices,
+    );
+    let cell = f64::from(lattice.lattice().cell);
+    let (mut near_err, mut near, mut far_differ, mut far_err) = (0.0f64, 0, 0, 0.0f64);
+    // The nearest a point whose blend differs lies to the body, in lattice cells.
+    let mut nearest_differing = f64::INFINITY;
+    for (g, m) in gpu_rows.iter().zip(&mirror) {
+        let err = (0..3)
+            .map(|r| (g[r].as_dvec4() - m.rows[r]).abs().max_element())
+            .fold(0.0, f64::max);
+        if m.distance <= 2.0 * cell {
+            near += 1;
+            near_err = near_err.max(err);
+        } else if err > 1e-5 {
+            far_differ += 1;
+            far_err = far_err.max(err);
+            nearest_differing = nearest_differing.min(m.distance / cell);
+        }
+    }
+    eprintln!(
+        "skin lattice against the mirror: {near} points within two cells of the body, largest \
+         difference {near_err:.2e}; of the {} farther, {far_differ} differ by more than 1e-5 \
+         (largest {far_err:.2e}), the nearest of them {nearest_differing:.2} cells from the body",
+        mirror.len() - near
+    );
+    assert!(near > 1000, "{near}");
+    assert!(near_err <= 1e-5, "{near_err}");
 }
 
 /// How far the vertices move in a frame once the hair has settled: the largest, the
@@ -478,7 +568,10 @@ fn hair_resting_on_the_head_stays_at_rest() {
 /// Bad input: a resolution of 0 (for the field itself), below the floor, past the
 /// device's `max_texture_dimension_3d` or past pelage's cap is refused naming
 /// `dynamics.sdf_resolution`, and so is a simulation's resolution changed after it is
-/// made; a mesh without triangles naming `mesh.indices`; a mesh
+/// made; a mesh without triangles naming `mesh.indices`; a skin that is not the mesh's
+/// (naming `skin.joints`), a field read through a skin then asked to be rebuilt every
+/// frame (`skin`), a skin lattice past the device's 3D texture width
+/// (`dynamics.sdf_resolution`) or over a triangle the mesh lacks (`triangles`); a mesh
 /// whose every position is NaN (a skinning gone wrong) builds a field that is far
 /// outside everywhere (no collision, no NaN).
 #[test]
@@ -547,6 +640,64 @@ fn bad_input_is_refused_by_name_and_a_nan_mesh_reads_outside() {
     let e = sim.set_dynamics(&head_dynamics(32)).unwrap_err();
     assert!(e.to_string().contains("dynamics.sdf_resolution"), "{e}");
     assert!(sim.set_dynamics(&head_dynamics(0)).is_ok());
+
+    // A skin for another mesh is refused by name; a field read through a skin is not
+    // rebuilt every frame (refused, not ignored).
+    let bind = Mesh::creature();
+    let creature_buffers = MeshBuffers::upload(&gpu, &bind).unwrap();
+    let rig = creature_rig();
+    let skin = rig.skin(&bind);
+    let mesh_skin = MeshSkin::new(&gpu, &bind, &skin, &creature_buffers).unwrap();
+    let mut sim = SimulateStrands::grown(
+        &gpu,
+        &bind,
+        &creature_buffers,
+        &head_hair(10, WindParams::calm()),
+        &head_dynamics(32),
+    )
+    .unwrap();
+    let e = sim
+        .skin_body_sdf(&gpu, &buffers, &head, &skin, mesh_skin.joint_matrices())
+        .unwrap_err();
+    assert!(e.to_string().contains("skin.joints"), "{e}");
+    sim.skin_body_sdf(
+        &gpu,
+        &creature_buffers,
+        &bind,
+        &skin,
+        mesh_skin.joint_matrices(),
+    )
+    .unwrap();
+    assert!(sim.sdf_skin().is_some());
+    let e = sim.set_sdf_every_frame(true).unwrap_err();
+    assert!(e.to_string().contains("skin"), "{e}");
+    // A lattice past the device's 3D texture width (three texels a point) is refused.
+    let wide = pelage_scene::SdfGrid {
+        origin: Vec3::ZERO,
+        cell: 0.01,
+        dims: glam::UVec3::new(device_max, 4, 4),
+    };
+    let e = SdfSkin::new(
+        &gpu,
+        &bind,
+        &skin,
+        &body_triangles(&bind),
+        &wide,
+        mesh_skin.joint_matrices(),
+    )
+    .unwrap_err();
+    assert!(e.to_string().contains("dynamics.sdf_resolution"), "{e}");
+    // A triangle past the bind pose's.
+    let e = SdfSkin::new(
+        &gpu,
+        &bind,
+        &skin,
+        &[u32::MAX],
+        sim.body_sdf().unwrap().grid(),
+        mesh_skin.joint_matrices(),
+    )
+    .unwrap_err();
+    assert!(e.to_string().contains("triangles"), "{e}");
 
     let sdf = BodySdf::new(&gpu, &buffers, head.bounds(), 32).unwrap();
     let mut broken = head.clone();

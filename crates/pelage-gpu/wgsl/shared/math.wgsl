@@ -19,6 +19,12 @@ fn all_finite3(v: vec3<f32>) -> bool {
     return all(exponent != vec3<u32>(0x7f800000u));
 }
 
+// True when every component of `v` is finite.
+fn all_finite4(v: vec4<f32>) -> bool {
+    let exponent = bitcast<vec4<u32>>(v) & vec4<u32>(0x7f800000u);
+    return all(exponent != vec4<u32>(0x7f800000u));
+}
+
 // `v` scaled to unit length, or `fallback` when `v` has a non-finite component
 // or is shorter than about 1e-20 (its largest component is below 1e-20).
 // Dividing by the largest component first keeps tiny and huge vectors from

@@ -87,7 +87,17 @@ struct SimUniforms {
     sdf_cell: f32,
     sdf_dims: vec3<u32>,
     sdf_on: u32,
+    // The skin of a field built in the bind pose (SdfSkin, strands/sdf_skin.wgsl): its
+    // lattice's point (0, 0, 0), cell and points per axis (bind pose); read when SDF_SKIN.
+    skin_origin: vec3<f32>,
+    skin_cell: f32,
+    skin_dims: vec3<u32>,
 }
+
+// True when the field is read through a skin (SimulateStrands::skin_body_sdf): a
+// pipeline constant, so that a simulation without one compiles none of it (as a uniform,
+// lavapipe ran every simulation about twice as slowly).
+override SDF_SKIN: bool = false;
 
 @group(0) @binding(1) var<storage, read> positions: array<f32>;
 @group(0) @binding(2) var<storage, read> normals: array<f32>;
@@ -97,8 +107,25 @@ struct SimUniforms {
 @group(0) @binding(6) var<storage, read_write> state: array<vec4<f32>>;
 @group(0) @binding(7) var<storage, read_write> held: array<atomic<u32>>;
 @group(0) @binding(8) var sdf: texture_3d<f32>;
-@group(0) @binding(9) var<storage, read_write> vertices: array<vec4<f32>>;
-@group(0) @binding(10) var<storage, read_write> drawn: array<StrandRoot>;
+// The skin's blended matrices: lattice point (i, j, k)'s three rows at texels 3i..3i+2.
+@group(0) @binding(9) var sdf_skin: texture_3d<f32>;
+@group(0) @binding(10) var<storage, read_write> vertices: array<vec4<f32>>;
+@group(0) @binding(11) var<storage, read_write> drawn: array<StrandRoot>;
+
+// Fixed-point steps of the skin's inverse from a point of the strand sampled before
+// (warm) and from the world point itself (cold: the first sample of a strand).
+const SKIN_WARM_STEPS: u32 = 8u;
+const SKIN_COLD_STEPS: u32 = 32u;
+
+// The last sample's world point, its bind-pose point (w = 1 when set) and the inverse of
+// the blend's linear part there: where the next sample of the strand starts.
+var<private> skin_last_p: vec3<f32>;
+var<private> skin_last_q: vec4<f32>;
+var<private> skin_last_inv: mat3x3<f32>;
+// The same for the strand's first vertex, kept from substep to substep.
+var<private> skin_head_p: vec3<f32>;
+var<private> skin_head_q: vec4<f32>;
+var<private> skin_head_inv: mat3x3<f32>;
 
 fn load_position(i: u32) -> vec3<f32> {
     return vec3<f32>(positions[3u * i], positions[3u * i + 1u], positions[3u * i + 2u]);
@@ -176,9 +203,192 @@ fn sdf_node(i: vec3<u32>) -> f32 {
     return textureLoad(sdf, vec3<i32>(i), 0).x;
 }
 
-fn body_sample(p_world: vec3<f32>) -> BodySample {
-    var out = BodySample(3.4e38, vec3<f32>(0.0));
+// The skin's blended 3x4 matrix at bind-pose point `q` (its rows r0..r2: trilinear between
+// the 8 lattice points around it, `q` clamped into the lattice) and the rows' derivatives
+// along x, y and z (per scene unit; 0 across a face `q` was clamped to).
+struct SkinBlend {
+    r0: vec4<f32>,
+    r1: vec4<f32>,
+    r2: vec4<f32>,
+    x0: vec4<f32>,
+    x1: vec4<f32>,
+    x2: vec4<f32>,
+    y0: vec4<f32>,
+    y1: vec4<f32>,
+    y2: vec4<f32>,
+    z0: vec4<f32>,
+    z1: vec4<f32>,
+    z2: vec4<f32>,
+}
+
+fn skin_texel(i: vec3<u32>, row: u32) -> vec4<f32> {
+    return textureLoad(sdf_skin, vec3<i32>(vec3<u32>(3u * i.x + row, i.y, i.z)), 0);
+}
+
+fn skin_blend(q: vec3<f32>) -> SkinBlend {
+    let top = vec3<f32>(sim.skin_dims - vec3<u32>(1u));
+    let unclamped = (q - sim.skin_origin) / sim.skin_cell;
+    let x = clamp(unclamped, vec3<f32>(0.0), top);
+    let inside = vec3<f32>(x == unclamped) / sim.skin_cell;
+    let i = min(vec3<u32>(floor(x)), sim.skin_dims - vec3<u32>(2u));
+    let f = x - vec3<f32>(i);
+    var b: SkinBlend;
+    for (var c = 0u; c < 8u; c++) {
+        let o = vec3<u32>(c & 1u, (c >> 1u) & 1u, c >> 2u);
+        let one = o == vec3<u32>(1u);
+        let w3 = select(1.0 - f, f, one);
+        let s3 = select(vec3<f32>(-1.0), vec3<f32>(1.0), one) * inside;
+        let w = w3.x * w3.y * w3.z;
+        let dw = vec3<f32>(s3.x * w3.y * w3.z, w3.x * s3.y * w3.z, w3.x * w3.y * s3.z);
+        let t0 = skin_texel(i + o, 0u);
+        let t1 = skin_texel(i + o, 1u);
+        let t2 = skin_texel(i + o, 2u);
+        b.r0 += t0 * w;
+        b.r1 += t1 * w;
+        b.r2 += t2 * w;
+        b.x0 += t0 * dw.x;
+        b.x1 += t1 * dw.x;
+        b.x2 += t2 * dw.x;
+        b.y0 += t0 * dw.y;
+        b.y1 += t1 * dw.y;
+        b.y2 += t2 * dw.y;
+        b.z0 += t0 * dw.z;
+        b.z1 += t1 * dw.z;
+        b.z2 += t2 * dw.z;
+    }
+    return b;
+}
+
+// The bind-pose point `q` the skin takes to world point `p` (A(q) q = p, A the blended
+// matrix there), by Newton steps from `start` on the map q -> A(q) q (its Jacobian: the
+// blend's linear part plus the blend's change along each axis applied to q), and the
+// Jacobian's inverse there (how q follows p); `ok` when A(q) q came within SKIN_ACCEPT
+// field cells of p. A step taken from within SKIN_ONE_STEP field cells is the last: from
+// there its error is of the order of that distance squared over the lattice's cell.
+struct Unskinned {
+    q: vec3<f32>,
+    inv: mat3x3<f32>,
+    ok: bool,
+}
+
+// Settled: A(q) q within this many field cells of p. Accepted: within this many. One
+// step: a step from within this many ends the search.
+const SKIN_SETTLED: f32 = 1e-3;
+const SKIN_ACCEPT: f32 = 0.05;
+const SKIN_ONE_STEP: f32 = 0.1;
+
+fn unskin(p: vec3<f32>, start: vec3<f32>, steps: u32) -> Unskinned {
+    var out: Unskinned;
+    out.q = start;
+    out.ok = false;
+    var miss = 3.4e38;
+    for (var k = 0u; k <= steps; k++) {
+        let b = skin_blend(out.q);
+        let q1 = vec4<f32>(out.q, 1.0);
+        let r = p - vec3<f32>(dot(b.r0, q1), dot(b.r1, q1), dot(b.r2, q1));
+        // The Jacobian's columns: the linear part's, plus the blend's change along that
+        // axis applied to q.
+        let c0 = vec3<f32>(b.r0.x, b.r1.x, b.r2.x) + vec3<f32>(dot(b.x0, q1), dot(b.x1, q1), dot(b.x2, q1));
+        let c1 = vec3<f32>(b.r0.y, b.r1.y, b.r2.y) + vec3<f32>(dot(b.y0, q1), dot(b.y1, q1), dot(b.y2, q1));
+        let c2 = vec3<f32>(b.r0.z, b.r1.z, b.r2.z) + vec3<f32>(dot(b.z0, q1), dot(b.z1, q1), dot(b.z2, q1));
+        let det = dot(c0, cross(c1, c2));
+        if !(abs(det) > 1e-12) {
+            return out;
+        }
+        // The inverse of the matrix with columns c0, c1, c2 has rows c1 x c2, c2 x c0,
+        // c0 x c1 over its determinant.
+        out.inv = transpose(mat3x3<f32>(cross(c1, c2), cross(c2, c0), cross(c0, c1))) * (1.0 / det);
+        miss = length(r);
+        if miss <= SKIN_SETTLED * sim.sdf_cell || k == steps {
+            break;
+        }
+        out.q = out.q + out.inv * r;
+        if miss <= SKIN_ONE_STEP * sim.sdf_cell {
+            miss = 0.0;
+            break;
+        }
+    }
+    out.ok = miss <= SKIN_ACCEPT * sim.sdf_cell && all_finite3(out.q);
+    return out;
+}
+
+// The last sample read from the field in this invocation: its world point and distance
+// (`field_last_d` < 0 before the first, after one inside the body or outside the grid).
+// The reading (this frame's field) changes at most FIELD_LIPSCHITZ times as fast as the
+// point moves (the trilinear reading of a distance field's nodes at most sqrt(3) times:
+// each axis's difference is at most a cell's; through a skin a little more where it
+// stretches), so a point whose bound, that sample's distance less FIELD_LIPSCHITZ times
+// the way from it, is at least `margin` cannot be within `margin` of the body:
+// body_sample answers with the bound and reads nothing (no collision, as the reading
+// itself would say).
+var<private> field_last_p: vec3<f32>;
+var<private> field_last_d: f32 = -1.0;
+const FIELD_LIPSCHITZ: f32 = 2.0;
+
+// A lower bound of the body's distance at `p_world` from the last sample read (-1 when
+// there is none).
+fn field_bound(p_world: vec3<f32>) -> f32 {
+    if field_last_d < 0.0 {
+        return -1.0;
+    }
+    return field_last_d - FIELD_LIPSCHITZ * length(p_world - field_last_p);
+}
+
+// The body's field at `p_world` as the collision step with `margin` needs it: the sample
+// (body_sample_at), or a lower bound of the distance that is at least `margin`.
+fn body_sample(p_world: vec3<f32>, margin: f32) -> BodySample {
+    let bound = field_bound(p_world);
+    if bound >= margin {
+        return BodySample(bound, vec3<f32>(0.0));
+    }
+    let s = body_sample_at(p_world);
+    field_last_p = p_world;
+    field_last_d = select(-1.0, s.d, s.d < 3.0e38);
+    return s;
+}
+
+// Settles the bind-pose point of world point `p_world` through the skin (unskin), from
+// where the last one settled moved to first order (or from `p_world` itself, cold), and
+// keeps it for body_sample_at; a point that does not settle reads far outside until the
+// next. Once per vertex and substep, before its collisions: the lattice is read here only.
+fn skin_settle(p_world: vec3<f32>) {
     let p = (sim.sdf_from_world * vec4<f32>(p_world, 1.0)).xyz;
+    if !all_finite3(p) {
+        skin_last_q.w = 0.0;
+        return;
+    }
+    var start = p;
+    var steps = SKIN_COLD_STEPS;
+    if skin_last_q.w == 1.0 {
+        start = skin_last_q.xyz + skin_last_inv * (p - skin_last_p);
+        steps = SKIN_WARM_STEPS;
+    }
+    let u = unskin(p, start, steps);
+    if !u.ok {
+        skin_last_q.w = 0.0;
+        return;
+    }
+    skin_last_p = p;
+    skin_last_q = vec4<f32>(u.q, 1.0);
+    skin_last_inv = u.inv;
+}
+
+fn body_sample_at(p_world: vec3<f32>) -> BodySample {
+    var out = BodySample(3.4e38, vec3<f32>(0.0));
+    var p = (sim.sdf_from_world * vec4<f32>(p_world, 1.0)).xyz;
+    // A skinned body: the field's point is where the skin takes `p` from; gradients go
+    // back through the inverse's transpose.
+    var back = mat3x3<f32>(vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(0.0, 1.0, 0.0), vec3<f32>(0.0, 0.0, 1.0));
+    // Through a skin: to first order from where the vertex's bind-pose point was last
+    // settled (skin_settle; the rounds of collision and length projection move a vertex
+    // by a fraction of a strand width from there).
+    if SDF_SKIN {
+        if skin_last_q.w != 1.0 || !all_finite3(p) {
+            return out;
+        }
+        p = skin_last_q.xyz + skin_last_inv * (p - skin_last_p);
+        back = transpose(skin_last_inv);
+    }
     let x = (p - sim.sdf_origin) / sim.sdf_cell;
     let top = vec3<f32>(sim.sdf_dims - vec3<u32>(1u));
     if !all_finite3(x) || any(x < vec3<f32>(0.0)) || any(x > top) {
@@ -220,9 +430,17 @@ fn body_sample(p_world: vec3<f32>) -> BodySample {
     let gy = mix(mix(c010 - c000, c110 - c100, f.x), mix(c011 - c001, c111 - c101, f.x), f.z);
     let gz = mix(mix(c001 - c000, c101 - c100, f.x), mix(c011 - c010, c111 - c110, f.x), f.y);
     // The field's space turns rigidly from world space: its gradient turns back with
-    // the transpose.
+    // the transpose. Through a skin, the gradient is the inverse's transpose times the
+    // field's, and the distance scales by how the skin stretches lengths along it
+    // (first order: 1 where the rig is rigid).
+    let grad = vec3<f32>(gx, gy, gz) / sim.sdf_cell;
+    let gp = back * grad;
+    let stretch = length(gp);
+    if stretch > 0.0 {
+        out.d = out.d * (length(grad) / stretch);
+    }
     let r = mat3x3<f32>(sim.sdf_from_world[0].xyz, sim.sdf_from_world[1].xyz, sim.sdf_from_world[2].xyz);
-    out.grad = transpose(r) * (vec3<f32>(gx, gy, gz) / sim.sdf_cell);
+    out.grad = transpose(r) * gp;
     return out;
 }
 
@@ -247,7 +465,7 @@ fn collide(p_in: vec3<f32>, prev_in: vec3<f32>, margin: f32, fallback: vec3<f32>
     }
     // The body's own shape: out along the field's gradient to `margin` from its surface.
     if sim.sdf_on == 1u {
-        let s = body_sample(m.p);
+        let s = body_sample(m.p, margin);
         if s.d < margin {
             let n = safe_normalize(s.grad, fallback);
             m.p = m.p + n * (margin - s.d);
@@ -283,7 +501,7 @@ fn onto_length_outside(p_in: vec3<f32>, parent: vec3<f32>, len: f32, margin: f32
     // The body's field, taken as its tangent plane at `p`: the point of the sphere
     // around `parent` at height `margin` above that plane nearest `p`.
     if sim.sdf_on == 1u {
-        let s = body_sample(p);
+        let s = body_sample(p, margin);
         if s.d < margin {
             let n = safe_normalize(s.grad, vec3<f32>(0.0, 1.0, 0.0));
             let h = dot(n, p - parent) + margin - s.d;
@@ -347,6 +565,13 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
             var parent_prev = x0;
             var rest_parent = x0;
             var q = vec4<f32>(0.0, 0.0, 0.0, 1.0);
+            // The skin's inverse starts where it settled for the first vertex last
+            // substep (or cold), and each later vertex where the one before it did.
+            if SDF_SKIN {
+                skin_last_p = skin_head_p;
+                skin_last_q = skin_head_q;
+                skin_last_inv = skin_head_inv;
+            }
             for (var k = 1u; k < n; k++) {
                 // Verlet.
                 var p = state[pos + k].xyz;
@@ -373,6 +598,11 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
                 p = pulled;
                 // Collisions, then follow the leader, COLLISION_PASSES times: each
                 // collision fixes what the length projection before it pushed back in.
+                // Through a skin, the vertex's bind-pose point first (the rounds read
+                // the field from it).
+                if SDF_SKIN && sim.sdf_on == 1u {
+                    skin_settle(p);
+                }
                 var m = Moved(p, prev);
                 var dir = rest_dir;
                 var correction = vec3<f32>(0.0);
@@ -401,6 +631,11 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
                 parent = p;
                 parent_prev = prev;
                 rest_parent = rest_k;
+                if SDF_SKIN && k == 1u {
+                    skin_head_p = skin_last_p;
+                    skin_head_q = skin_last_q;
+                    skin_head_inv = skin_last_inv;
+                }
             }
             state[prv + n - 1u] = vec4<f32>(parent_prev, 0.0);
         }

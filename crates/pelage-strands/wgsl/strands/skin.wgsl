@@ -18,6 +18,8 @@
 // buffer in bounds).
 // The CPU mirror of this file is pelage-reference/src/skin.rs.
 
+#import shared/math.wgsl
+
 struct SkinUniforms {
     vertex_count: u32,
     joint_count: u32,
@@ -43,13 +45,6 @@ fn bind_normal(i: u32) -> vec3<f32> {
 
 fn joint(j: u32) -> mat4x4<f32> {
     return joint_matrices[select(0u, j, j < u.joint_count)];
-}
-
-// True when every component is finite (an exponent of all ones is Inf or NaN; tested on
-// the bits, which no compiler may assume away).
-fn finite3(v: vec3<f32>) -> bool {
-    let e = (bitcast<vec3<u32>>(v) >> vec3<u32>(23u)) & vec3<u32>(0xffu);
-    return all(e != vec3<u32>(0xffu));
 }
 
 @compute @workgroup_size(64)
@@ -78,7 +73,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     let n = cn * inverseSqrt(max(dot(cn, cn), 1e-30));
     var out_p = p;
     var out_n = n;
-    if !(finite3(p) && finite3(n)) {
+    if !(all_finite3(p) && all_finite3(n)) {
         out_p = p0;
         out_n = n0;
         atomicAdd(&non_finite[0], 1u);
