@@ -35,7 +35,8 @@ use pelage::scene::{GuideParams, Resampled};
 use pelage::shadow::{ShadowMethod, VoxelShadow};
 use pelage::strands::{
     BodySdf, GroomStrands, GrowStrands, GuideMemory, GuideStrands, MeshBuffers, MeshSkin,
-    SDF_LABEL, SKIN_LABEL, SimulateStrands, StrandStage,
+    SDF_LABEL, SDF_SKIN_LABEL, SIMULATE_LABEL, SKIN_LABEL, SdfSkin, SimulateStrands, StrandStage,
+    body_triangles,
 };
 use pelage::{Renderer, scene::Scene};
 use pelage_lab::{ScatterChart, ScatterPoint, Table};
@@ -548,7 +549,12 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
     }
 
     // 1b. GPU skinning, stage 1's input, against the growth pass it feeds.
-    let (skin_rows, skin_ratio, sdf_times) = skinning_section(frames, &bar)?;
+    let SkinningSection {
+        rows: skin_rows,
+        skin_ratio,
+        sdf_times,
+        skinned_steps,
+    } = skinning_section(frames, &bar)?;
     rows.extend(skin_rows);
     bar.inc(1);
 
@@ -992,9 +998,26 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
     .chain(sdf_times.iter().map(|t| {
         let (case, target, what) = t.case();
         (
-            format!("sdf: body field {} ({case}) build over growth pass", t.resolution),
+            format!(
+                "sdf: body field {} ({case}) {} over growth pass",
+                t.resolution,
+                if t.case == SdfCase::ThroughSkin { "lattice pass" } else { "build" }
+            ),
             t.ratio(),
             format!("timestamps, {what} (target: {target}), {SKIN_STRANDS} strands x 8 segments grown"),
+        )
+    }))
+    .chain(skinned_steps.iter().map(|t| {
+        (
+            format!(
+                "sdf: body field {} (skinned body), simulation through the skin over rebuilt",
+                t.resolution
+            ),
+            t.ratio(),
+            format!(
+                "timestamps, the creature's {SKIN_STRANDS} strands x 8 segments simulated at the default dynamics, frames of 1/24 s: lattice pass + simulation over build + simulation (through {:.2} + {:.2} ms, rebuilt {:.2} + {:.2} ms)",
+                t.through.0, t.through.1, t.rebuilt.0, t.rebuilt.1
+            ),
         )
     })) {
         table.push(vec![
@@ -1067,8 +1090,20 @@ pub fn run(opts: &LabOpts) -> Result<(), Error> {
     );
     for t in &sdf_times {
         let (case, target, _) = t.case();
+        let pass = if t.case == SdfCase::ThroughSkin {
+            "its lattice pass"
+        } else {
+            "its build"
+        };
         println!(
-            "  body sdf {}, {case}: its build takes {:.3}x the growth pass of a {SKIN_STRANDS}-strand creature (target: {target})",
+            "  body sdf {}, {case}: {pass} takes {:.3}x the growth pass of a {SKIN_STRANDS}-strand creature (target: {target})",
+            t.resolution,
+            t.ratio()
+        );
+    }
+    for t in &skinned_steps {
+        println!(
+            "  body sdf {}, skinned body: a simulation's field pass and simulation through the skin take {:.3}x those of the field rebuilt every frame ({SKIN_STRANDS} strands)",
             t.resolution,
             t.ratio()
         );
@@ -1097,12 +1132,11 @@ const SKIN_STRANDS: u32 = 20_000;
 
 /// Section 1b of the benchmark: the creature skinned by the default [`SkinBend`] rig
 /// ([`MeshSkin`], a compute pass over its vertices) then [`SKIN_STRANDS`] strands of 8
-/// segments grown on it, both timed with timestamps in the same frames; returns the two
-/// rows and the skin pass's time over the growth pass's.
-fn skinning_section(
-    frames: usize,
-    bar: &progress::Progress,
-) -> Result<(Vec<Row>, f64, Vec<SdfTiming>), Error> {
+/// segments grown on it, both timed with timestamps in the same frames; then the body's
+/// distance field at [`SDF_RESOLUTIONS`] (rebuilt on the skinned body, built on the still
+/// one, its skin's lattice pass) and a simulation of the fur on the skinned body with the
+/// field read through the skin and rebuilt every frame.
+fn skinning_section(frames: usize, bar: &progress::Progress) -> Result<SkinningSection, Error> {
     let gpu = Gpu::headless()?;
     let s = scene(SKIN_STRANDS, 8);
     let mut mesh = MeshBuffers::upload(&gpu, &s.mesh)?;
@@ -1128,7 +1162,13 @@ fn skinning_section(
             grow.encode(encoder, &frame, timer)?;
             Ok(())
         })?;
-        sdf_times.push(SdfTiming::measured(sdf, r, false, &times, bar));
+        sdf_times.push(SdfTiming::measured(
+            SdfCase::Rebuilt,
+            (get(&times, SDF_LABEL), sdf.grid().nodes(), sdf.bytes()),
+            r,
+            &times,
+            bar,
+        ));
         // The same build, each stage in a pass of its own: where its time goes.
         let times = time_frames(&gpu, frames, |encoder, mut timer, frame| {
             let t = frame as f32 / 24.0;
@@ -1158,6 +1198,9 @@ fn skinning_section(
     // pass of the same frames.
     let still = MeshBuffers::upload(&gpu, &s.mesh)?;
     let mut still_grow = GrowStrands::new(&gpu, &s.mesh, &still, &s.hair)?;
+    let skin_of_rig = rig.skin(&s.mesh);
+    let body = body_triangles(&s.mesh);
+    let mut skinned_steps = Vec::new();
     for &r in &SDF_RESOLUTIONS {
         let sdf = BodySdf::of_body(&gpu, &still, &s.mesh, still.bounds, r)?;
         let times = time_frames(&gpu, frames, |encoder, mut timer, frame| {
@@ -1166,7 +1209,81 @@ fn skinning_section(
             still_grow.encode(encoder, &frame, timer)?;
             Ok(())
         })?;
-        sdf_times.push(SdfTiming::measured(&sdf, r, true, &times, bar));
+        sdf_times.push(SdfTiming::measured(
+            SdfCase::Still,
+            (get(&times, SDF_LABEL), sdf.grid().nodes(), sdf.bytes()),
+            r,
+            &times,
+            bar,
+        ));
+        // The skinned creature's field as a simulation reads it: that bind-pose field,
+        // built once, read through the skin, whose lattice pass runs every frame after
+        // the skinning.
+        let sdf_skin = SdfSkin::new(
+            &gpu,
+            &s.mesh,
+            &skin_of_rig,
+            &body,
+            sdf.grid(),
+            skin.joint_matrices(),
+        )?;
+        let times = time_frames(&gpu, frames, |encoder, mut timer, frame| {
+            let t = frame as f32 / 24.0;
+            skin.set_joint_matrices(&gpu.queue, &rig.joint_matrices(t))?;
+            let frame = grow.prepare(&gpu.queue, t)?;
+            skin.encode(encoder, timer.as_deref_mut());
+            sdf_skin.encode(encoder, timer.as_deref_mut());
+            grow.encode(encoder, &frame, timer)?;
+            Ok(())
+        })?;
+        sdf_times.push(SdfTiming::measured(
+            SdfCase::ThroughSkin,
+            (
+                get(&times, SDF_SKIN_LABEL),
+                sdf_skin.lattice().nodes(),
+                sdf.bytes() + sdf_skin.bytes(),
+            ),
+            r,
+            &times,
+            bar,
+        ));
+        // What each way costs a simulation in all: the creature's fur simulated at the
+        // default dynamics on the skinned body, the field read through the skin (the
+        // lattice's pass, then the simulation sampling through it) against the field
+        // rebuilt every frame (the build, then the simulation sampling it directly).
+        let dynamics = DynamicsParams {
+            sdf_resolution: r,
+            ..DynamicsParams::default()
+        };
+        let mut through = SimulateStrands::grown(&gpu, &s.mesh, &mesh, &s.hair, &dynamics)?;
+        through.skin_body_sdf(&gpu, &mesh, &s.mesh, &skin_of_rig, skin.joint_matrices())?;
+        let mut rebuilt = SimulateStrands::grown(&gpu, &s.mesh, &mesh, &s.hair, &dynamics)?;
+        rebuilt.set_sdf_every_frame(true)?;
+        let step = |sim: &mut SimulateStrands, field: &str| -> Result<(f64, f64), Error> {
+            let times = time_frames(&gpu, frames, |encoder, mut timer, frame| {
+                let t = frame as f32 / 24.0;
+                skin.set_joint_matrices(&gpu.queue, &rig.joint_matrices(t))?;
+                let prepared = sim.prepare(&gpu.queue, t)?;
+                skin.encode(encoder, timer.as_deref_mut());
+                sim.encode(encoder, &prepared, timer)?;
+                Ok(())
+            })?;
+            Ok((get(&times, field), get(&times, SIMULATE_LABEL)))
+        };
+        let measured = SkinnedStep {
+            resolution: r,
+            through: step(&mut through, SDF_SKIN_LABEL)?,
+            rebuilt: step(&mut rebuilt, SDF_LABEL)?,
+        };
+        bar.println(format!(
+            "  {SKIN_STRANDS:>7} strands  simulated on the skinned creature, field {r}, frames of 1/24 s: through the skin {:.3} ms lattice + {:.3} ms simulation; rebuilt {:.3} ms build + {:.3} ms simulation: {:.3}x",
+            measured.through.0,
+            measured.through.1,
+            measured.rebuilt.0,
+            measured.rebuilt.1,
+            measured.ratio()
+        ));
+        skinned_steps.push(measured);
     }
     let times = time_frames(&gpu, frames, |encoder, mut timer, frame| {
         let t = frame as f32 / 24.0;
@@ -1228,7 +1345,12 @@ fn skinning_section(
                 "the growth pass on the skinned mesh, same frames; ratio: skin over grow".into(),
             ),
         ]);
-    Ok((rows, skin_ms / grow_ms, sdf_times))
+    Ok(SkinningSection {
+        rows,
+        skin_ratio: skin_ms / grow_ms,
+        sdf_times,
+        skinned_steps,
+    })
 }
 
 /// Label prefix of the frame's target bridge passes (`src/bridge.rs`).
@@ -1361,37 +1483,79 @@ fn bridge_section(
     Ok(RasterSection { rows, summary })
 }
 
-/// One body distance field's build timed against the growth pass of the same frames.
+/// What [`skinning_section`] measured: its CSV rows, the skin pass over the growth
+/// pass, the body fields' passes and the simulations on the skinned body.
+struct SkinningSection {
+    rows: Vec<Row>,
+    skin_ratio: f64,
+    sdf_times: Vec<SdfTiming>,
+    skinned_steps: Vec<SkinnedStep>,
+}
+
+/// A simulation on the skinned creature timed both ways: (the field's pass, the
+/// simulation's pass) in milliseconds, through the skin and rebuilt every frame.
+struct SkinnedStep {
+    resolution: u32,
+    through: (f64, f64),
+    rebuilt: (f64, f64),
+}
+
+impl SkinnedStep {
+    /// Through the skin over rebuilt, each the field's pass plus the simulation's.
+    fn ratio(&self) -> f64 {
+        (self.through.0 + self.through.1) / (self.rebuilt.0 + self.rebuilt.1)
+    }
+}
+
+/// Which body's distance field a [`SdfTiming`] timed.
+#[derive(Clone, Copy, PartialEq)]
+enum SdfCase {
+    /// The still creature's field over its own box (a rigid body's case: built once).
+    Still,
+    /// The skinned creature's field over the box of every pose, rebuilt every frame (a
+    /// mesh its caller deforms without a pelage skin).
+    Rebuilt,
+    /// The skinned creature read through its skin: the lattice's pass every frame over
+    /// the still field.
+    ThroughSkin,
+}
+
+/// One body distance field's pass timed against the growth pass of the same frames.
 struct SdfTiming {
     resolution: u32,
-    /// The still creature over its own box (a rigid body's case), or the skinned one
-    /// over the box of every pose.
-    still: bool,
+    case: SdfCase,
     sdf_ms: f64,
     grow_ms: f64,
+    /// The field's nodes, or the lattice's points through the skin.
     nodes: usize,
     bytes: u64,
 }
 
 impl SdfTiming {
-    /// The timing of `sdf` (at `resolution`) in `times`, printed as it is taken.
+    /// The timing of the field at `resolution`, (its pass's time, its nodes, its bytes),
+    /// with the growth pass's in `times`, printed as it is taken.
     fn measured(
-        sdf: &BodySdf,
+        case: SdfCase,
+        (sdf_ms, nodes, bytes): (f64, usize, u64),
         resolution: u32,
-        still: bool,
         times: &[(String, f64)],
         bar: &progress::Progress,
     ) -> Self {
         let timing = Self {
             resolution,
-            still,
-            sdf_ms: get(times, SDF_LABEL),
+            case,
+            sdf_ms,
             grow_ms: get(times, "strands: grow"),
-            nodes: sdf.grid().nodes(),
-            bytes: sdf.bytes(),
+            nodes,
+            bytes,
+        };
+        let points = if case == SdfCase::ThroughSkin {
+            "lattice points"
+        } else {
+            "nodes"
         };
         bar.println(format!(
-            "  {SKIN_STRANDS:>7} strands  {} ({} nodes) {:9.3} ms, {:.3}x the growth pass ({:.3} ms)",
+            "  {SKIN_STRANDS:>7} strands  {} ({} {points}) {:9.3} ms, {:.3}x the growth pass ({:.3} ms)",
             timing.label(),
             timing.nodes,
             timing.sdf_ms,
@@ -1401,11 +1565,14 @@ impl SdfTiming {
         timing
     }
 
-    /// The bench's label of the build: the pass's, its resolution, "still" for the
-    /// still body.
+    /// The bench's label of the pass: the build's and its resolution ("still" for the
+    /// still body), or the skin's lattice pass and the field's resolution.
     fn label(&self) -> String {
-        let still = if self.still { " still" } else { "" };
-        format!("{SDF_LABEL} {}{still}", self.resolution)
+        match self.case {
+            SdfCase::Still => format!("{SDF_LABEL} {} still", self.resolution),
+            SdfCase::Rebuilt => format!("{SDF_LABEL} {}", self.resolution),
+            SdfCase::ThroughSkin => format!("{SDF_SKIN_LABEL} {}", self.resolution),
+        }
     }
 
     /// The build over the growth pass.
@@ -1415,25 +1582,30 @@ impl SdfTiming {
 
     /// The body as the summary names it, the target for it, and what was timed.
     fn case(&self) -> (&'static str, &'static str, &'static str) {
-        if self.still {
-            (
+        match self.case {
+            SdfCase::Still => (
                 "still body",
                 "<= 1 built once for a rigid body",
                 "the still creature's distance field over its own box",
-            )
-        } else {
-            (
-                "skinned body",
-                "<= 0.5 rebuilt every frame",
-                "the skinned creature's distance field, rebuilt every frame",
-            )
+            ),
+            SdfCase::Rebuilt => (
+                "deformed body, rebuilt",
+                "none: for a mesh its caller deforms without a pelage skin",
+                "the skinned creature's distance field over the box of every pose, rebuilt every frame",
+            ),
+            SdfCase::ThroughSkin => (
+                "skinned body, through the skin",
+                "<= 0.5 per frame for a skinned body",
+                "the skinned creature read through its skin: the lattice's pass every frame over the still field",
+            ),
         }
     }
 }
 
-/// The resolutions of the body's distance field the skinning section times (the lab's;
-/// 128 takes about 8x as long, every stage's work growing with the nodes).
-const SDF_RESOLUTIONS: [u32; 1] = [64];
+/// The resolutions of the body's distance field the skinning section times: the lab's,
+/// and 128 (its build about 8x as long, every stage's work growing with the nodes; read
+/// through the skin, the same lattice pass and simulation at any resolution).
+const SDF_RESOLUTIONS: [u32; 2] = [64, 128];
 
 /// What [`strand_raster_section`] measured.
 struct RasterSection {
