@@ -868,10 +868,11 @@ pub struct DynamicsParams {
 ///
 /// Measured on the creature's rig (`pelage bench`, `cargo test -p pelage-strands --test
 /// sdf`; the dynamics page of the book): through the skin, the vertices that end a frame
-/// deeper than half a strand width halve at the same resolution (the bind pose's box has
-/// smaller cells than the box of every pose) and the per-frame pass is a tenth of the
-/// growth pass's at 64, but on lavapipe the simulation reads the field through the skin
-/// at about 1.5x the cost of the rebuilt field's (a build and the simulation).
+/// deeper than half a strand width are half as many at 64 and 128 (1.35% against 2.58%,
+/// 0.30% against 0.52%: the bind pose's box has smaller cells than the box of every
+/// pose) and the per-frame pass is 0.07x the growth pass's at either, but on lavapipe the
+/// simulation reading the field through the skin costs about 1.5x the rebuilt field's
+/// build and simulation together.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum SkinnedSdf {

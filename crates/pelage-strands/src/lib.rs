@@ -54,7 +54,7 @@ pub use sdf::{
     BODY_SDF, BodySdf, COARSE_FACTOR, MAX_BURIED_CHECK, MAX_SDF_TRIANGLES, SDF_LABEL, SWEEP_AXES,
     body_triangles, coarse_grid,
 };
-pub use sdf_skin::{SDF_SKIN, SDF_SKIN_LABEL, SKIN_LATTICE_FACTOR, SdfSkin};
+pub use sdf_skin::{SDF_SKIN, SDF_SKIN_LABEL, SKIN_LATTICE_MIN_CELLS, SdfSkin};
 pub use simulate::{SIMULATE_LABEL, SIMULATION_STATE, SimulateStrands};
 pub use skin::{MeshSkin, SKIN_LABEL, SKIN_NON_FINITE};
 pub use source::{StrandSource, scene_reach, sized_for_view};

@@ -27,17 +27,45 @@ pub const SDF_SKIN: &str = "strands.sdf_skin";
 /// nearest triangle exactly.
 pub(crate) const EXACT_CELLS: u32 = 2;
 
-/// Cells of the body's field per cell of the skin's lattice along each axis.
-pub const SKIN_LATTICE_FACTOR: u32 = 2;
+/// The least cell of the skin's lattice, in cells of the body's field.
+pub const SKIN_LATTICE_MIN_CELLS: f32 = 2.0;
 
-/// The lattice of a field on `grid`: the same origin, [`SKIN_LATTICE_FACTOR`] times
-/// the cell, and enough points to cover every node of the field.
-pub(crate) fn skin_lattice(grid: &SdfGrid) -> SdfGrid {
-    let f = SKIN_LATTICE_FACTOR;
+/// The mean edge of `triangles` of `mesh` (0 when none has finite corners).
+fn mean_edge(mesh: &Mesh, triangles: &[u32]) -> f32 {
+    let (mut sum, mut count) = (0.0f64, 0u32);
+    for &t in triangles {
+        let i = 3 * t as usize;
+        let [a, b, c] = [0, 1, 2].map(|k| mesh.positions[mesh.indices[i + k] as usize]);
+        let edges = [a.distance(b), b.distance(c), c.distance(a)];
+        if edges.iter().all(|e| e.is_finite()) {
+            sum += edges.iter().map(|&e| f64::from(e)).sum::<f64>();
+            count += 3;
+        }
+    }
+    if count == 0 {
+        0.0
+    } else {
+        (sum / f64::from(count)) as f32
+    }
+}
+
+/// The skin's lattice over a field on `grid` of the body `triangles` of `bind`: the same
+/// origin, its cell the larger of [`SKIN_LATTICE_MIN_CELLS`] field cells and the body's
+/// mean edge, enough points to cover every node of the field. Skin weights belong to
+/// vertices and are interpolated across each triangle, so they change on the scale of
+/// an edge, and a much finer lattice buys little for its cost. Measured on the creature
+/// (mean edge 0.080; `cargo test -p pelage-strands --test sdf skinned_creature`): with
+/// the field at 128, a lattice of every 2nd node (107 250 points) leaves 0.24% of the
+/// fur's vertices deeper than half a width, the mean edge's (9 240 points) 0.30%; at 64,
+/// every 2nd node (cell 0.071) 1.32%, the mean edge's 1.35%, every 4th node (0.14)
+/// 1.92%.
+pub(crate) fn skin_lattice(grid: &SdfGrid, bind: &Mesh, triangles: &[u32]) -> SdfGrid {
+    let cell = (SKIN_LATTICE_MIN_CELLS * grid.cell).max(mean_edge(bind, triangles));
+    let extent = (grid.dims - UVec3::ONE).as_vec3() * grid.cell;
     SdfGrid {
         origin: grid.origin,
-        cell: grid.cell * f as f32,
-        dims: (grid.dims - UVec3::ONE + UVec3::splat(f - 1)) / f + UVec3::ONE,
+        cell,
+        dims: ((extent / cell).ceil().as_uvec3() + UVec3::ONE).max(UVec3::splat(2)),
     }
 }
 
@@ -187,18 +215,18 @@ pub(crate) fn lattice_skin(
 
 /// The skin of a body's distance field built once in the bind pose: every frame one
 /// compute pass ([`SDF_SKIN_LABEL`]) blends the frame's joint matrices with the weights
-/// of each point of a lattice over the field's box (every [`SKIN_LATTICE_FACTOR`]-th
-/// node of the field; the weights of the body's surface point nearest each, exact within
-/// two lattice cells of the surface, handed on by sweeps along the lattice's lines
-/// beyond), and a copy puts the blended matrices in a 3D `rgba32float` texture (three
+/// of each point of a lattice over the field's box (its cell the larger of
+/// [`SKIN_LATTICE_MIN_CELLS`] field cells and the body's mean edge; the weights of the
+/// body's surface point nearest each point, exact within two lattice cells of the
+/// surface, handed on by sweeps along the lattice's lines beyond), and a copy puts the blended matrices in a 3D `rgba32float` texture (three
 /// texels a point: the rows of the 3x4 affine map).
 ///
 /// The simulation (`simulate.wgsl`, `SDF_SKIN` on) interpolates them trilinearly at a
 /// bind-pose point `q` into `A(q)` and solves `A(q) q = p` for a vertex at `p` by Newton
-/// steps (the first sample of a strand from `p` itself, each later one from where the
-/// sample before it settled, moved to first order; a sample within a twentieth of a
-/// lattice cell of the last takes its answer to first order, with no lattice read), then
-/// reads the bind-pose field at `q`. The skinned surface is where the bind surface's
+/// steps, once per vertex and substep before its collision rounds (a strand's first
+/// vertex from where it settled the substep before, or from `p` itself; each later one
+/// from where the vertex before it settled, moved to first order); the rounds take that
+/// answer to first order and read the bind-pose field at `q`. The skinned surface is where the bind surface's
 /// points go, so the field's zero is the skinned surface's, to the lattice's
 /// interpolation of the weights (and to the bend of a skinned triangle, which the mesh
 /// draws flat), and no field is rebuilt per frame. Gradients come back through the
@@ -249,7 +277,7 @@ impl SdfSkin {
             )
             .into());
         }
-        let lattice = skin_lattice(field);
+        let lattice = skin_lattice(field, bind, triangles);
         let max = gpu.limits().max_texture_dimension_3d;
         if 3 * lattice.dims.x > max || lattice.dims.max_element() > max {
             return Err(pelage_scene::ParamError::new(

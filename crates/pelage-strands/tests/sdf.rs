@@ -363,12 +363,13 @@ fn creature_depth(gpu: &Gpu, sdf_resolution: u32, frames: u32, through_skin: boo
 /// (`SimulateStrands::skin_body_sdf`, as a frame with a skin does); the field rebuilt
 /// every frame over the box of every pose (for a mesh its caller deforms) is measured
 /// beside it. Measured at resolution 64: through the skin the mean depth is 0.027
-/// strand widths and 1.33% of the vertices end a frame deeper than half a width (the
-/// deepest 9.2 widths); rebuilt every frame 0.050, 2.59% and 11.3 (its cells are
-/// larger: the box of every pose); without a field 2.25, 32% and 34.4. Through the
-/// skin at 128: 0.0040, 0.28%, 3.3 (at 256, a scratch run: 0.0013, 0.11%, 2.0; of its
-/// 140 deep vertices 110 lie inside two of the creature's parts at once, where a
-/// crossing part's surface faces outward inside the other: the sign at the crease).
+/// strand widths and 1.35% of the vertices end a frame deeper than half a width (the
+/// deepest 10.1 widths); rebuilt every frame 0.050, 2.58% and 11.3 (its cells are
+/// larger: the box of every pose); without a field 2.25, 32% and 34.4. At 128: through
+/// the skin 0.0046, 0.30%, 5.7; rebuilt 0.010, 0.52%, 5.2 (at 256 through the skin with
+/// the lattice at every 2nd node, a scratch run: 0.0013, 0.11%, 2.0; of its 140 deep
+/// vertices 110 lie inside two of the creature's parts at once, where a crossing part's
+/// surface faces outward inside the other: the sign at the crease).
 #[test]
 fn fur_stays_out_of_the_skinned_creature_but_at_its_part_junctions() {
     let gpu = gpu();
@@ -396,8 +397,13 @@ fn fur_stays_out_of_the_skinned_creature_but_at_its_part_junctions() {
     assert!(with.mean() <= 0.04, "{with:?}");
     assert!(with.deep_fraction() <= 0.02, "{with:?}");
     assert!(
-        finer.deep_fraction() <= 0.005 && finer.max <= 5.0,
+        finer.deep_fraction() <= 0.005 && finer.max <= 8.0,
         "{finer:?}"
+    );
+    assert!(
+        finer.deep_fraction() < rebuilt_finer.deep_fraction()
+            && with.deep_fraction() < rebuilt.deep_fraction(),
+        "through the skin {with:?} {finer:?}, rebuilt {rebuilt:?} {rebuilt_finer:?}"
     );
     assert!(rebuilt.mean() <= 0.1, "{rebuilt:?}");
     assert!(rebuilt.deep_fraction() <= 0.05, "{rebuilt:?}");
@@ -463,12 +469,16 @@ fn the_skin_lattice_blends_as_the_mirror() {
         }
     }
     eprintln!(
-        "skin lattice against the mirror: {near} points within two cells of the body, largest \
-         difference {near_err:.2e}; of the {} farther, {far_differ} differ by more than 1e-5 \
-         (largest {far_err:.2e}), the nearest of them {nearest_differing:.2} cells from the body",
+        "skin lattice ({} points, cell {:.4}, the field's {:.4}) against the mirror: {near} \
+         points within two cells of the body, largest difference {near_err:.2e}; of the {} \
+         farther, {far_differ} differ by more than 1e-5 (largest {far_err:.2e}), the nearest \
+         of them {nearest_differing:.2} cells from the body",
+        lattice.lattice().dims,
+        lattice.lattice().cell,
+        sdf.grid().cell,
         mirror.len() - near
     );
-    assert!(near > 1000, "{near}");
+    assert!(near > 500, "{near}");
     assert!(near_err <= 1e-5, "{near_err}");
 }
 
@@ -671,10 +681,12 @@ fn bad_input_is_refused_by_name_and_a_nan_mesh_reads_outside() {
     assert!(sim.sdf_skin().is_some());
     let e = sim.set_sdf_every_frame(true).unwrap_err();
     assert!(e.to_string().contains("skin"), "{e}");
-    // A lattice past the device's 3D texture width (three texels a point) is refused.
+    // A lattice past the device's 3D texture width (three texels a point) is refused (a
+    // field whose cells are far larger than the creature's edges: the lattice takes every
+    // 2nd node).
     let wide = pelage_scene::SdfGrid {
         origin: Vec3::ZERO,
-        cell: 0.01,
+        cell: 1.0,
         dims: glam::UVec3::new(device_max, 4, 4),
     };
     let e = SdfSkin::new(

@@ -4,7 +4,9 @@
 // Reads:  the mesh (positions and normals as tightly packed f32 x3, a u32 triangle list),
 //         one StrandRoot per strand (triangle, barycentrics, width, gust phase), the
 //         frame's GrowUniforms (wind, time, level of detail; gravity, shape and surface
-//         fields unused) and SimUniforms (substeps, stiffnesses, colliders).
+//         fields unused) and SimUniforms (substeps, stiffnesses, colliders); the body's
+//         distance field (3D r32float, BodySdf) and, with SDF_SKIN, the skin's lattice of
+//         blended joint matrices (3D rgba32float, SdfSkin) it is read through.
 // Reads and writes: `state`, per strand STATE_HEADER + 3 (segments + 1) vec4 (see
 //         `state_base`): the root's pose last frame, the rest shape in the root's frame,
 //         and every vertex's position and previous position (Verlet).
@@ -29,7 +31,8 @@
 //     so they shape the strand without giving it speed; then COLLISION_PASSES rounds of
 //     collisions (out of every sphere and capsule; friction, in the first round only,
 //     taking tangential velocity off; then out of the body's signed distance field when
-//     there is one, along its gradient) and follow-the-leader (the vertex put at its rest
+//     there is one, along its gradient, read through the skin at the vertex's bind-pose
+//     point when SDF_SKIN) and follow-the-leader (the vertex put at its rest
 //     length from its parent), then onto_length_outside (at its length and out of the
 //     colliders at once, where the rounds left it inside), and the parent's velocity is
 //     corrected by -length_damping times the follow-the-leader corrections (Mueller et
@@ -112,13 +115,14 @@ override SDF_SKIN: bool = false;
 @group(0) @binding(10) var<storage, read_write> vertices: array<vec4<f32>>;
 @group(0) @binding(11) var<storage, read_write> drawn: array<StrandRoot>;
 
-// Fixed-point steps of the skin's inverse from a point of the strand sampled before
-// (warm) and from the world point itself (cold: the first sample of a strand).
+// Newton steps of the skin's inverse at most, from where the vertex before settled (warm)
+// and from the world point itself (cold: a strand's first vertex in a frame's first
+// substep).
 const SKIN_WARM_STEPS: u32 = 8u;
 const SKIN_COLD_STEPS: u32 = 32u;
 
-// The last sample's world point, its bind-pose point (w = 1 when set) and the inverse of
-// the blend's linear part there: where the next sample of the strand starts.
+// The last settled world point, its bind-pose point (w = 1 when set) and the inverse of
+// the skin's Jacobian there: where the next vertex of the strand starts.
 var<private> skin_last_p: vec3<f32>;
 var<private> skin_last_q: vec4<f32>;
 var<private> skin_last_inv: mat3x3<f32>;
@@ -377,7 +381,7 @@ fn body_sample_at(p_world: vec3<f32>) -> BodySample {
     var out = BodySample(3.4e38, vec3<f32>(0.0));
     var p = (sim.sdf_from_world * vec4<f32>(p_world, 1.0)).xyz;
     // A skinned body: the field's point is where the skin takes `p` from; gradients go
-    // back through the inverse's transpose.
+    // back through the transpose of the Jacobian's inverse.
     var back = mat3x3<f32>(vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(0.0, 1.0, 0.0), vec3<f32>(0.0, 0.0, 1.0));
     // Through a skin: to first order from where the vertex's bind-pose point was last
     // settled (skin_settle; the rounds of collision and length projection move a vertex
