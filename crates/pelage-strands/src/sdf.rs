@@ -475,23 +475,12 @@ impl BodySdf {
         ];
         let module = crate::SHADERS.library().module(gpu, "strands/sdf.wgsl")?;
         let built = gpu.scoped(|device| {
-            let texture = device.create_texture(&wgpu::TextureDescriptor {
-                label: Some("pelage body sdf"),
-                size: wgpu::Extent3d {
-                    width: grid.dims.x,
-                    height: grid.dims.y,
-                    depth_or_array_layers: grid.dims.z,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D3,
-                format: wgpu::TextureFormat::R32Float,
-                usage: wgpu::TextureUsages::COPY_DST
-                    | wgpu::TextureUsages::TEXTURE_BINDING
-                    | wgpu::TextureUsages::COPY_SRC,
-                view_formats: &[],
-            });
-            let view = texture.create_view(&wgpu::TextureViewDescriptor::default());
+            let (texture, view) = texture_3d(
+                device,
+                "pelage body sdf",
+                extent(grid.dims),
+                wgpu::TextureFormat::R32Float,
+            );
             pelage_gpu::audit::name_view(&view, BODY_SDF);
             let layout = BindLayout::new(SDF_LABEL, wgpu::ShaderStages::COMPUTE)
                 .storage(0)
@@ -573,27 +562,12 @@ impl BodySdf {
 
     /// Copies the finish's output into the texture.
     fn copy_field(&self, encoder: &mut wgpu::CommandEncoder) {
-        let dims = self.grid.dims;
-        encoder.copy_buffer_to_texture(
-            wgpu::TexelCopyBufferInfo {
-                buffer: &self.field,
-                layout: wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    bytes_per_row: Some(self.pitch * 4),
-                    rows_per_image: Some(dims.y),
-                },
-            },
-            wgpu::TexelCopyTextureInfo {
-                texture: &self.texture,
-                mip_level: 0,
-                origin: wgpu::Origin3d::ZERO,
-                aspect: wgpu::TextureAspect::All,
-            },
-            wgpu::Extent3d {
-                width: dims.x,
-                height: dims.y,
-                depth_or_array_layers: dims.z,
-            },
+        copy_rows(
+            encoder,
+            &self.field,
+            self.pitch * 4,
+            &self.texture,
+            extent(self.grid.dims),
         );
     }
 
@@ -734,11 +708,7 @@ impl BodySdf {
                     rows_per_image: Some(dims.y),
                 },
             },
-            wgpu::Extent3d {
-                width: dims.x,
-                height: dims.y,
-                depth_or_array_layers: dims.z,
-            },
+            extent(dims),
         );
         gpu.queue.submit([encoder.finish()]);
         let bytes = read_buffer(gpu, &staging)?;
@@ -752,6 +722,69 @@ impl BodySdf {
         }
         Ok(out)
     }
+}
+
+/// `dims` as a texture's size.
+pub(crate) fn extent(dims: UVec3) -> wgpu::Extent3d {
+    wgpu::Extent3d {
+        width: dims.x,
+        height: dims.y,
+        depth_or_array_layers: dims.z,
+    }
+}
+
+/// A 3D texture of `format` that a pass's buffer is copied into and the simulation reads
+/// (`COPY_DST | TEXTURE_BINDING | COPY_SRC`: read back by tests), and its view. (On
+/// lavapipe, storing a 3D texture texel by texel cost more than the body field's whole
+/// build: the passes write buffers, [`copy_rows`] moves them.)
+pub(crate) fn texture_3d(
+    device: &wgpu::Device,
+    label: &str,
+    size: wgpu::Extent3d,
+    format: wgpu::TextureFormat,
+) -> (wgpu::Texture, wgpu::TextureView) {
+    let texture = device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size,
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D3,
+        format,
+        usage: wgpu::TextureUsages::COPY_DST
+            | wgpu::TextureUsages::TEXTURE_BINDING
+            | wgpu::TextureUsages::COPY_SRC,
+        view_formats: &[],
+    });
+    let view = texture.create_view(&wgpu::TextureViewDescriptor::default());
+    (texture, view)
+}
+
+/// Records the copy of `buffer` (rows of `bytes_per_row`, a multiple of 256, `size.height`
+/// rows an image) into the whole of `texture`.
+pub(crate) fn copy_rows(
+    encoder: &mut wgpu::CommandEncoder,
+    buffer: &wgpu::Buffer,
+    bytes_per_row: u32,
+    texture: &wgpu::Texture,
+    size: wgpu::Extent3d,
+) {
+    encoder.copy_buffer_to_texture(
+        wgpu::TexelCopyBufferInfo {
+            buffer,
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(bytes_per_row),
+                rows_per_image: Some(size.height),
+            },
+        },
+        wgpu::TexelCopyTextureInfo {
+            texture,
+            mip_level: 0,
+            origin: wgpu::Origin3d::ZERO,
+            aspect: wgpu::TextureAspect::All,
+        },
+        size,
+    );
 }
 
 /// One dispatch of the build: its pipeline, bind group and workgroup counts.

@@ -11,6 +11,7 @@ use pelage_gpu::{
 };
 use pelage_scene::{Mesh, SdfGrid, Skin};
 
+use crate::sdf::{copy_rows, extent, texture_3d};
 use crate::simulate::closest_on_triangle;
 
 /// Workgroup size of `sdf_skin.wgsl`.
@@ -316,23 +317,16 @@ impl SdfSkin {
             ("JOINTS", f64::from(skin.joint_count)),
         ];
         let (texture, view, pipeline, bind_group) = gpu.scoped(|device| {
-            let texture = device.create_texture(&wgpu::TextureDescriptor {
-                label: Some("pelage sdf skin lattice"),
-                size: wgpu::Extent3d {
-                    width: 3 * lattice.dims.x,
-                    height: lattice.dims.y,
-                    depth_or_array_layers: lattice.dims.z,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D3,
-                format: wgpu::TextureFormat::Rgba32Float,
-                usage: wgpu::TextureUsages::COPY_DST
-                    | wgpu::TextureUsages::TEXTURE_BINDING
-                    | wgpu::TextureUsages::COPY_SRC,
-                view_formats: &[],
-            });
-            let view = texture.create_view(&wgpu::TextureViewDescriptor::default());
+            let (texture, view) = texture_3d(
+                device,
+                "pelage sdf skin lattice",
+                extent(UVec3::new(
+                    3 * lattice.dims.x,
+                    lattice.dims.y,
+                    lattice.dims.z,
+                )),
+                wgpu::TextureFormat::Rgba32Float,
+            );
             pelage_gpu::audit::name_view(&view, SDF_SKIN);
             let layout = BindLayout::new(SDF_SKIN_LABEL, wgpu::ShaderStages::COMPUTE)
                 .storage(0)
@@ -382,26 +376,12 @@ impl SdfSkin {
         pass.dispatch_workgroups(groups.0, groups.1, 1);
         drop(pass);
         let dims = self.lattice.dims;
-        encoder.copy_buffer_to_texture(
-            wgpu::TexelCopyBufferInfo {
-                buffer: &self.rows,
-                layout: wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    bytes_per_row: Some(self.pitch * 16),
-                    rows_per_image: Some(dims.y),
-                },
-            },
-            wgpu::TexelCopyTextureInfo {
-                texture: &self._texture,
-                mip_level: 0,
-                origin: wgpu::Origin3d::ZERO,
-                aspect: wgpu::TextureAspect::All,
-            },
-            wgpu::Extent3d {
-                width: 3 * dims.x,
-                height: dims.y,
-                depth_or_array_layers: dims.z,
-            },
+        copy_rows(
+            encoder,
+            &self.rows,
+            self.pitch * 16,
+            &self._texture,
+            extent(UVec3::new(3 * dims.x, dims.y, dims.z)),
         );
     }
 

@@ -286,6 +286,8 @@ fn unskin(p: vec3<f32>, start: vec3<f32>, steps: u32) -> Unskinned {
     out.q = start;
     out.ok = false;
     var miss = 3.4e38;
+    // A last step taken from within SKIN_ONE_STEP: accepted without a look after it.
+    var last_step = false;
     for (var k = 0u; k <= steps; k++) {
         let b = skin_blend(out.q);
         let q1 = vec4<f32>(out.q, 1.0);
@@ -308,11 +310,11 @@ fn unskin(p: vec3<f32>, start: vec3<f32>, steps: u32) -> Unskinned {
         }
         out.q = out.q + out.inv * r;
         if miss <= SKIN_ONE_STEP * sim.sdf_cell {
-            miss = 0.0;
+            last_step = true;
             break;
         }
     }
-    out.ok = miss <= SKIN_ACCEPT * sim.sdf_cell && all_finite3(out.q);
+    out.ok = (last_step || miss <= SKIN_ACCEPT * sim.sdf_cell) && all_finite3(out.q);
     return out;
 }
 
