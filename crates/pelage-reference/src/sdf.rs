@@ -95,6 +95,32 @@ pub fn exact_field(mesh: &Mesh, grid: &SdfGrid, far: f32) -> Vec<f32> {
         .collect()
 }
 
+/// Mirror of the collision step's read of the field (`body_sample_at` in
+/// `strands/simulate.wgsl`, a field in the space it was built in): the trilinear
+/// interpolation of the 8 nodes around `p` on `grid` (`node` gives a node's value),
+/// capped by each node's value plus the way to it (a distance field moves at most as
+/// fast as the point). `None` outside the grid (read as outside the body).
+pub fn read(grid: &SdfGrid, mut node: impl FnMut(glam::UVec3) -> f32, p: Vec3) -> Option<f32> {
+    let x = (p - grid.origin) / grid.cell;
+    let top = (grid.dims - glam::UVec3::ONE).as_vec3();
+    if !x.is_finite() || x.cmplt(Vec3::ZERO).any() || x.cmpgt(top).any() {
+        return None;
+    }
+    let i = x.floor().as_uvec3().min(grid.dims - glam::UVec3::splat(2));
+    let f = x - i.as_vec3();
+    let (mut value, mut cap) = (0.0, f32::INFINITY);
+    for corner in 0..8u32 {
+        let o = glam::UVec3::new(corner & 1, (corner >> 1) & 1, corner >> 2);
+        let v = node(i + o);
+        let weight: f32 = (0..3)
+            .map(|k| if o[k] == 1 { f[k] } else { 1.0 - f[k] })
+            .product();
+        value += weight * v;
+        cap = cap.min(v + grid.cell * (f - o.as_vec3()).length());
+    }
+    Some(value.min(cap))
+}
+
 /// How deep each of `points` is inside `mesh` (the exact signed distance, negated: > 0
 /// inside), for collision tests.
 pub fn depths(mesh: &Mesh, points: &[Vec3]) -> Vec<f32> {

@@ -54,10 +54,10 @@ pub use obj::{ObjError, load_obj, parse_obj};
 pub use params::{
     AdsmParams, Collider, DeepOpacityParams, DynamicsParams, GrowthParams, HairParams, HairType,
     LayerSpacing, MAX_ACCELERATION, MAX_COLLIDERS, MAX_COLOR, MAX_FORCE, MAX_MAP_VALUE,
-    MAX_REGIONS, MAX_SEGMENTS, MAX_WAVES, MapParams, MeshMotion, OpacityFormat, ParamError,
-    RegionParams, RootParams, RootTextures, STIFFNESS_INTERVAL, SUBSTEP_SLACK, SUBSTEP_ULPS,
-    ShadeParams, ShadowMapParams, ShadowParams, SkinnedSdf, Splat, SurfaceInterpolation,
-    VoxelParams, WindParams, mesh_albedo,
+    MAX_REGIONS, MAX_SDF_STANDOFF, MAX_SEGMENTS, MAX_WAVES, MapParams, MeshMotion, OpacityFormat,
+    ParamError, RegionParams, RootParams, RootTextures, STIFFNESS_INTERVAL, SUBSTEP_SLACK,
+    SUBSTEP_ULPS, ShadeParams, ShadowMapParams, ShadowParams, SkinnedSdf, Splat,
+    SurfaceInterpolation, VoxelParams, WindParams, mesh_albedo,
 };
 pub use scene::Scene;
 #[cfg(feature = "scene-file")]

@@ -861,18 +861,37 @@ pub struct DynamicsParams {
     /// How a skinned mesh's field follows the skin ([`SkinnedSdf`]): `through_skin` (the
     /// default) or `rebuilt`. Fixed when the simulation is made.
     pub sdf_skinned: SkinnedSdf,
+    /// How far beyond the body's field the collision step keeps a vertex, in the field's
+    /// cells, in [0, [`MAX_SDF_STANDOFF`]] (on top of half the strand's width): the field
+    /// is read by trilinear interpolation between nodes a cell apart, which says
+    /// "farther" than the surface is where the surface bends within a cell (a faceted
+    /// part's edges, the crease where parts meet, a rim thinner than a cell): near the
+    /// built-in creature's surface by more than 0.04 cells at 128 (0.07 at 64) at one
+    /// point in ten and by 0.23 (0.36) at one in a hundred; on a smooth sphere by at most
+    /// 0.03 at one in a hundred (`cargo test -p pelage-strands --test sdf standoff --
+    /// --nocapture`). The default, 0.25, is the best measured point on the creature's
+    /// rig (vertices deeper than half a width after a frame, the field at 64 read
+    /// through the skin: 1.35% at 0, 0.62% at 0.125, 0.17% at 0.25, 0.25% at 0.5); hair
+    /// resting on the body rests that much farther from it. 0: the interpolated surface.
+    pub sdf_standoff: f32,
 }
+
+/// The largest [`DynamicsParams::sdf_standoff`], in the field's cells.
+pub const MAX_SDF_STANDOFF: f32 = 2.0;
 
 /// How the distance field of a skinned body (`DynamicsParams::sdf_resolution` > 0 on a
 /// mesh skinned by a `[skin]` rig or `Frame::with_skin`) follows the skin.
 ///
 /// Measured on the creature's rig (`pelage bench`, `cargo test -p pelage-strands --test
-/// sdf`; the dynamics page of the book): through the skin, the vertices that end a frame
-/// deeper than half a strand width are half as many at 64 and 128 (1.35% against 2.58%,
-/// 0.30% against 0.52%: the bind pose's box has smaller cells than the box of every
-/// pose) and the per-frame pass is 0.07x the growth pass's at either, but on lavapipe the
-/// simulation reading the field through the skin costs about 1.5x the rebuilt field's
-/// build and simulation together.
+/// sdf`; the dynamics page of the book): with the default standoff the two tie on the
+/// vertices that end a frame deeper than half a strand width (through the skin 0.17% at
+/// 64 and 0.04% at 128, rebuilt 0.12% and 0.03%: a strand or two rooted at a junction of
+/// the creature's parts), and on lavapipe the rebuilt field costs 1.2x to 2.1x less in
+/// all. Through the skin is the default because its field is the bind pose's whatever
+/// the motion (a rebuilt field spans the box the caller says every pose stays in, its
+/// cells coarser for a generous box, and a pose that leaves it loses its collisions),
+/// and its per-frame pass is 0.07x the growth pass where the rebuild's is 0.9x to 3.5x
+/// and grows with the nodes and the triangles.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum SkinnedSdf {
@@ -1096,6 +1115,7 @@ impl Default for DynamicsParams {
             colliders: Vec::new(),
             sdf_resolution: 0,
             sdf_skinned: SkinnedSdf::ThroughSkin,
+            sdf_standoff: 0.25,
         }
     }
 }
@@ -1131,6 +1151,7 @@ impl DynamicsParams {
         bounded("dynamics.global_stiffness", self.global_stiffness, 1.0)?;
         bounded("dynamics.length_damping", self.length_damping, 1.0)?;
         bounded("dynamics.friction", self.friction, 1.0)?;
+        bounded("dynamics.sdf_standoff", self.sdf_standoff, MAX_SDF_STANDOFF)?;
         let in_range = |name: &str, v: f32, max: f32| {
             positive(name, v)?;
             if v > max {

@@ -249,6 +249,9 @@ fn dynamics_and_motion_tables_parse_and_name_their_bad_keys() {
     assert!(SceneFile::default().dynamics.is_none());
     for (text, key) in [
         ("[dynamics]\ndamping = -1.0\n", "dynamics.damping"),
+        ("[dynamics]\nsdf_standoff = -0.1\n", "dynamics.sdf_standoff"),
+        ("[dynamics]\nsdf_standoff = 2.5\n", "dynamics.sdf_standoff"),
+        ("[dynamics]\nsdf_standoff = nan\n", "dynamics.sdf_standoff"),
         ("[dynamics]\nstiffness = 1.0\n", "stiffness"),
         (
             "[dynamics]\ncolliders = [{ center = [0.0, 0.0, 0.0], radius = 0.0 }]\n",

@@ -59,7 +59,7 @@ fn mean_edge(mesh: &Mesh, triangles: &[u32]) -> f32 {
 /// the field at 128, a lattice of every 2nd node (107 250 points) leaves 0.24% of the
 /// fur's vertices deeper than half a width, the mean edge's (9 240 points) 0.30%; at 64,
 /// every 2nd node (cell 0.071) 1.32%, the mean edge's 1.35%, every 4th node (0.14)
-/// 1.92%.
+/// 1.92% (all without the collision step's standoff, `DynamicsParams::sdf_standoff` 0).
 pub(crate) fn skin_lattice(grid: &SdfGrid, bind: &Mesh, triangles: &[u32]) -> SdfGrid {
     let cell = (SKIN_LATTICE_MIN_CELLS * grid.cell).max(mean_edge(bind, triangles));
     let extent = (grid.dims - UVec3::ONE).as_vec3() * grid.cell;

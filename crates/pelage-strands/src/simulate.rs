@@ -131,6 +131,8 @@ pub(crate) struct SimUniforms {
     pub skin_cell: f32,
     /// Its points per axis (read when the pipeline's `SDF_SKIN` is on).
     pub skin_dims: UVec3,
+    /// [`DynamicsParams::sdf_standoff`], in the field's cells.
+    pub sdf_standoff: f32,
 }
 
 impl SimUniforms {
@@ -172,6 +174,7 @@ impl SimUniforms {
             skin_origin: Vec3::ZERO,
             skin_cell: 1.0,
             skin_dims: UVec3::splat(2),
+            sdf_standoff: dynamics.sdf_standoff,
         }
     }
 

@@ -95,6 +95,9 @@ struct SimUniforms {
     skin_origin: vec3<f32>,
     skin_cell: f32,
     skin_dims: vec3<u32>,
+    // How far beyond the field's surface the collisions keep a vertex besides `margin`,
+    // in the field's cells (DynamicsParams::sdf_standoff): the interpolation's excess.
+    sdf_standoff: f32,
 }
 
 // True when the field is read through a skin (SimulateStrands::skin_body_sdf): a
@@ -469,12 +472,14 @@ fn collide(p_in: vec3<f32>, prev_in: vec3<f32>, margin: f32, fallback: vec3<f32>
             m.prev = m.prev + (v - n * dot(v, n)) * friction;
         }
     }
-    // The body's own shape: out along the field's gradient to `margin` from its surface.
+    // The body's own shape: out along the field's gradient to `margin` and the
+    // standoff from its surface.
     if sim.sdf_on == 1u {
-        let s = body_sample(m.p, margin);
-        if s.d < margin {
+        let body_margin = margin + sim.sdf_standoff * sim.sdf_cell;
+        let s = body_sample(m.p, body_margin);
+        if s.d < body_margin {
             let n = safe_normalize(s.grad, fallback);
-            m.p = m.p + n * (margin - s.d);
+            m.p = m.p + n * (body_margin - s.d);
             let v = m.p - m.prev;
             m.prev = m.prev + (v - n * dot(v, n)) * friction;
         }
@@ -505,12 +510,13 @@ fn onto_length_outside(p_in: vec3<f32>, parent: vec3<f32>, len: f32, margin: f32
         }
     }
     // The body's field, taken as its tangent plane at `p`: the point of the sphere
-    // around `parent` at height `margin` above that plane nearest `p`.
+    // around `parent` at height `margin` and the standoff above that plane nearest `p`.
     if sim.sdf_on == 1u {
-        let s = body_sample(p, margin);
-        if s.d < margin {
+        let body_margin = margin + sim.sdf_standoff * sim.sdf_cell;
+        let s = body_sample(p, body_margin);
+        if s.d < body_margin {
             let n = safe_normalize(s.grad, vec3<f32>(0.0, 1.0, 0.0));
-            let h = dot(n, p - parent) + margin - s.d;
+            let h = dot(n, p - parent) + body_margin - s.d;
             if abs(h) < len {
                 p = parent + n * h + perpendicular(n, p - parent) * sqrt(len * len - h * h);
             }
