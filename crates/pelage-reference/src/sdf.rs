@@ -95,11 +95,13 @@ pub fn exact_field(mesh: &Mesh, grid: &SdfGrid, far: f32) -> Vec<f32> {
         .collect()
 }
 
-/// Mirror of the collision step's read of the field (`body_sample_at` in
-/// `strands/simulate.wgsl`, a field in the space it was built in): the trilinear
-/// interpolation of the 8 nodes around `p` on `grid` (`node` gives a node's value),
-/// capped by each node's value plus the way to it (a distance field moves at most as
-/// fast as the point). `None` outside the grid (read as outside the body).
+/// The collision step's read of the field (`body_sample_at` in `strands/simulate.wgsl`,
+/// in the space the field was built in), written again here to measure what it misses
+/// over exact nodes (`the_standoff_sits_in_the_tail_of_what_the_read_misses`; the
+/// shader's own read is checked only through the collision tests' depths): the
+/// trilinear interpolation of the 8 nodes around `p` on `grid` (`node` gives a node's
+/// value), capped by each node's value plus the way to it (a distance field moves at
+/// most as fast as the point). `None` outside the grid (read as outside the body).
 pub fn read(grid: &SdfGrid, mut node: impl FnMut(glam::UVec3) -> f32, p: Vec3) -> Option<f32> {
     let x = (p - grid.origin) / grid.cell;
     let top = (grid.dims - glam::UVec3::ONE).as_vec3();

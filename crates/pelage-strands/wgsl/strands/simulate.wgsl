@@ -453,6 +453,12 @@ fn body_sample_at(p_world: vec3<f32>) -> BodySample {
     return out;
 }
 
+// How far from the body's field the collisions keep a vertex whose margin from the
+// colliders is `margin`: the field's standoff (its cells) farther.
+fn body_margin_of(margin: f32) -> f32 {
+    return margin + sim.sdf_standoff * sim.sdf_cell;
+}
+
 // `p` pushed out of every collider to `margin` beyond its surface (along the direction
 // from the nearest point of its axis; `fallback` when on the axis), and `prev` moved along
 // the contact's tangent plane by `friction` of the tangential motion (the first round of
@@ -475,7 +481,7 @@ fn collide(p_in: vec3<f32>, prev_in: vec3<f32>, margin: f32, fallback: vec3<f32>
     // The body's own shape: out along the field's gradient to `margin` and the
     // standoff from its surface.
     if sim.sdf_on == 1u {
-        let body_margin = margin + sim.sdf_standoff * sim.sdf_cell;
+        let body_margin = body_margin_of(margin);
         let s = body_sample(m.p, body_margin);
         if s.d < body_margin {
             let n = safe_normalize(s.grad, fallback);
@@ -512,7 +518,7 @@ fn onto_length_outside(p_in: vec3<f32>, parent: vec3<f32>, len: f32, margin: f32
     // The body's field, taken as its tangent plane at `p`: the point of the sphere
     // around `parent` at height `margin` and the standoff above that plane nearest `p`.
     if sim.sdf_on == 1u {
-        let body_margin = margin + sim.sdf_standoff * sim.sdf_cell;
+        let body_margin = body_margin_of(margin);
         let s = body_sample(p, body_margin);
         if s.d < body_margin {
             let n = safe_normalize(s.grad, vec3<f32>(0.0, 1.0, 0.0));
