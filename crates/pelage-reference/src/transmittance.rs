@@ -466,6 +466,24 @@ impl SegmentBvh {
         t as f32
     }
 
+    /// The cylinders the ray `origin + t · dir / |dir|`, `t` in `(0, max_t]`, enters: as
+    /// [`Self::hit_count`] without the cylinders that contain `origin` (the ray leaves
+    /// those; [`Self::occluded`] does not count them either), so a ray from a fibre's axis
+    /// counts the other fibres it crosses (the same strand's farther segments included).
+    pub fn crossings(&self, origin: Vec3, dir: Vec3, max_t: f32) -> u32 {
+        let o = origin.as_dvec3();
+        let mut n = 0u32;
+        self.for_each_hit(origin, dir, max_t, None, |seg| {
+            let a = seg.a.as_dvec3();
+            let e = seg.b.as_dvec3() - a;
+            let s = ((o - a).dot(e) / e.length_squared()).clamp(0.0, 1.0);
+            if (a + e * s).distance(o) > f64::from(seg.radius) {
+                n += 1;
+            }
+        });
+        n
+    }
+
     /// Number of cylinder hits along the same ray as [`Self::transmittance`] (for tests and diagnostics).
     pub fn hit_count(
         &self,

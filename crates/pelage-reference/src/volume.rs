@@ -134,6 +134,55 @@ impl VolumeGridCpu {
         out
     }
 
+    /// The fibres' optical depth (`depth`, the body not counted) along the ray from `p`
+    /// in the unit direction `d` to the grid's border: each cell's depth per edge times
+    /// the ray's length in it (cell edges), the cells found by a 3D DDA. 0 from outside.
+    pub fn optical_depth_toward(&self, p: DVec3, d: DVec3) -> f64 {
+        let n = i64::from(self.resolution.max(1));
+        let q = (p - self.origin) / self.cell;
+        let mut at = q.floor().as_i64vec3();
+        let inside = |c: glam::I64Vec3| {
+            c.cmpge(glam::I64Vec3::ZERO).all() && c.cmplt(glam::I64Vec3::splat(n)).all()
+        };
+        if !inside(at) || !q.is_finite() || !d.is_finite() {
+            return 0.0;
+        }
+        let step = glam::I64Vec3::new(
+            if d.x >= 0.0 { 1 } else { -1 },
+            if d.y >= 0.0 { 1 } else { -1 },
+            if d.z >= 0.0 { 1 } else { -1 },
+        );
+        // A direction along a face never crosses that axis's faces.
+        let inv = DVec3::from_array(
+            d.abs()
+                .to_array()
+                .map(|a| if a > 1e-20 { 1.0 / a } else { 1e30 }),
+        );
+        let frac = q - q.floor();
+        let mut next = DVec3::new(
+            if d.x >= 0.0 { 1.0 - frac.x } else { frac.x },
+            if d.y >= 0.0 { 1.0 - frac.y } else { frac.y },
+            if d.z >= 0.0 { 1.0 - frac.z } else { frac.z },
+        ) * inv;
+        let (mut t, mut tau) = (0.0, 0.0);
+        while inside(at) {
+            let exit = next.min_element();
+            let index = ((at.z * n + at.y) * n + at.x) as usize;
+            tau += self.depth[index] * (exit - t);
+            t = exit;
+            let axis = if next.x <= exit {
+                0
+            } else if next.y <= exit {
+                1
+            } else {
+                2
+            };
+            at[axis] += step[axis];
+            next[axis] += inv[axis];
+        }
+        tau
+    }
+
     /// Calls `f(cell index, weight)` for the 8 cells around `p` (trilinear between cell
     /// centres, clamped at the grid's border).
     fn trilinear(&self, p: DVec3, mut f: impl FnMut(usize, f64)) {
@@ -920,6 +969,58 @@ fn occupancy(surface: &[DVec3], n: usize) -> Vec<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The grid's optical depth along a ray is the depth per edge times the way to the
+    /// border, in cells: along an axis, a diagonal and an oblique direction through a
+    /// uniform grid (against the distance to the cube's border, worked out apart), with
+    /// one cell emptied on the axis's way; 0 from outside.
+    #[test]
+    fn optical_depth_toward_is_the_depth_times_the_way_out() {
+        let n = 8u32;
+        let mut grid = VolumeGridCpu {
+            resolution: n,
+            origin: DVec3::splat(-1.0),
+            cell: 0.25,
+            depth: vec![0.5; (n * n * n) as usize],
+            solid: Vec::new(),
+            fluence: Vec::new(),
+            sky: Vec::new(),
+            step_energy: Vec::new(),
+            step_arrivals: Vec::new(),
+        };
+        let p = DVec3::new(0.1, -0.05, 0.2);
+        for d in [
+            DVec3::X,
+            DVec3::NEG_Y,
+            DVec3::ONE.normalize(),
+            DVec3::new(0.3, -0.8, 0.52).normalize(),
+        ] {
+            // The way to the cube [-1, 1]^3's border, by the slab method.
+            let way = (0..3)
+                .map(|a| {
+                    if d[a] > 0.0 {
+                        (1.0 - p[a]) / d[a]
+                    } else if d[a] < 0.0 {
+                        (-1.0 - p[a]) / d[a]
+                    } else {
+                        f64::INFINITY
+                    }
+                })
+                .fold(f64::INFINITY, f64::min);
+            let tau = grid.optical_depth_toward(p, d);
+            assert!(
+                (tau - 0.5 * way / 0.25).abs() < 1e-9,
+                "{d}: {tau} against {}",
+                0.5 * way / 0.25
+            );
+        }
+        // Emptying the cell next along +x takes one cell edge's depth off.
+        let before = grid.optical_depth_toward(p, DVec3::X);
+        grid.depth[((4 * n + 3) * n + 5) as usize] = 0.0;
+        let after = grid.optical_depth_toward(p, DVec3::X);
+        assert!((before - after - 0.5).abs() < 1e-9, "{before} {after}");
+        assert_eq!(grid.optical_depth_toward(DVec3::splat(2.0), DVec3::X), 0.0);
+    }
 
     /// The cell's mean transmittance from its face against the mean over random points of
     /// the cube (each point's own way out along `l`, no formula shared), for axis,

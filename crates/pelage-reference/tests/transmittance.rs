@@ -432,3 +432,36 @@ fn performance_smoke() {
     );
     assert!(sum.is_finite());
 }
+
+/// `crossings` counts the cylinders a ray enters, not the one it starts in: from the axis
+/// of one segment across two parallel others, two; along its own segment, none; and it
+/// agrees with `occluded` on whether any is entered.
+#[test]
+fn crossings_leave_the_cylinder_the_ray_starts_in() {
+    let segment = |x: f32, strand: u32| Segment {
+        a: Vec3::new(x, -1.0, 0.0),
+        b: Vec3::new(x, 1.0, 0.0),
+        radius: 0.05,
+        opacity: 1.0,
+        strand,
+    };
+    let bvh = SegmentBvh::build(vec![segment(0.0, 0), segment(0.5, 1), segment(1.0, 2)]);
+    let origin = Vec3::ZERO;
+    assert_eq!(bvh.crossings(origin, Vec3::X, f32::INFINITY), 2);
+    assert_eq!(bvh.crossings(origin, Vec3::NEG_X, f32::INFINITY), 0);
+    assert_eq!(bvh.crossings(origin, Vec3::X, 0.7), 1);
+    assert_eq!(bvh.crossings(origin, Vec3::Y, f32::INFINITY), 0);
+    for dir in [Vec3::X, Vec3::NEG_X, Vec3::Y, Vec3::new(1.0, 0.2, 0.02)] {
+        let occluded = bvh.occluded(
+            origin.as_dvec3(),
+            dir.as_dvec3().normalize(),
+            f64::INFINITY,
+            None,
+        );
+        assert_eq!(
+            occluded,
+            bvh.crossings(origin, dir, f32::INFINITY) > 0,
+            "{dir}"
+        );
+    }
+}

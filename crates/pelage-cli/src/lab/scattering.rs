@@ -878,13 +878,40 @@ struct FieldStats {
     /// sky's). NaN without a sky.
     sky_seen_reference: f64,
     sky_seen_grid: f64,
+    /// Over the same rays that the body does not stop, the hair alone: the other fibres a
+    /// traced ray crosses and the grid's optical depth along it from the fibre (its
+    /// `depth`, marched cell by cell: what the grid's Poisson model expects to cross),
+    /// means over the rays; and the share of those rays no fibre stops, traced, against
+    /// the mean of `exp(-τ)` along them. NaN without a sky.
+    sky_rays: SkyRays,
+}
+
+/// [`FieldStats::sky_rays`].
+#[derive(Clone, Copy, Debug)]
+struct SkyRays {
+    crossings: f64,
+    grid_depth: f64,
+    open_traced: f64,
+    open_grid: f64,
+}
+
+/// None measured (no sky): NaN.
+impl Default for SkyRays {
+    fn default() -> Self {
+        Self {
+            crossings: f64::NAN,
+            grid_depth: f64::NAN,
+            open_traced: f64::NAN,
+            open_grid: f64::NAN,
+        }
+    }
 }
 
 /// Directions of the rays [`FieldStats::sky_seen_reference`] follows from each fibre.
 const SKY_RAYS: usize = 256;
 
 impl FieldStats {
-    const COLUMNS: [&'static str; 15] = [
+    const COLUMNS: [&'static str; 19] = [
         "groom",
         "hair",
         "fibres",
@@ -900,6 +927,10 @@ impl FieldStats {
         "noise_grid",
         "sky_seen_reference",
         "sky_seen_grid",
+        "sky_rays_crossings",
+        "sky_rays_grid_depth",
+        "sky_rays_open_traced",
+        "sky_rays_open_grid",
     ];
 
     fn row(&self, groom: &str, hair: &str) -> Vec<String> {
@@ -919,6 +950,10 @@ impl FieldStats {
             format!("{:.3}", self.noise[2]),
             format!("{:.3}", self.sky_seen_reference),
             format!("{:.3}", self.sky_seen_grid),
+            format!("{:.3}", self.sky_rays.crossings),
+            format!("{:.3}", self.sky_rays.grid_depth),
+            format!("{:.3}", self.sky_rays.open_traced),
+            format!("{:.3}", self.sky_rays.open_grid),
         ]
     }
 
@@ -926,7 +961,9 @@ impl FieldStats {
         format!(
             "{} fibres: fluence x{:.2} (±{:.2}); |flux| / fluence {:.2} (path tracer {:.2}), \
              cos {:.2}; response x{:.2} (±{:.2}) read from the path tracer's light, x{:.2} \
-             (±{:.2}) from the grid's; sky seen {:.3} (path traced), {:.3} (grid)",
+             (±{:.2}) from the grid's; sky seen {:.3} (path traced), {:.3} (grid); sky \
+             rays the body does not stop: fibres crossed {:.2}, the grid's depth {:.2} \
+             (x{:.2}), open {:.3} (traced), {:.3} (exp(-depth))",
             self.fibres,
             self.fluence_ratio,
             self.noise[0],
@@ -938,7 +975,12 @@ impl FieldStats {
             self.grid_ratio,
             self.noise[2],
             self.sky_seen_reference,
-            self.sky_seen_grid
+            self.sky_seen_grid,
+            self.sky_rays.crossings,
+            self.sky_rays.grid_depth,
+            self.sky_rays.grid_depth / self.sky_rays.crossings,
+            self.sky_rays.open_traced,
+            self.sky_rays.open_grid
         )
     }
 }
@@ -1035,8 +1077,12 @@ fn field_at_fibres(
         (a.reading_ratio - b.reading_ratio).abs(),
         (a.grid_ratio - b.grid_ratio).abs(),
     ];
-    (stats.sky_seen_reference, stats.sky_seen_grid) = if variant.no_sky {
-        (f64::NAN, f64::NAN)
+    (
+        stats.sky_seen_reference,
+        stats.sky_seen_grid,
+        stats.sky_rays,
+    ) = if variant.no_sky {
+        (f64::NAN, f64::NAN, SkyRays::default())
     } else {
         sky_seen(&both, strands, &grid, f64::from(scene.shade.ambient))
     };
@@ -1046,39 +1092,63 @@ fn field_at_fibres(
 /// The mean share of the sky the fibres at `samples` see unscattered: through the traced
 /// strands and body (rays from each fibre's axis, which its own cylinder does not stop,
 /// in [`SKY_RAYS`] directions of a Fibonacci lattice turned per fibre) and as `grid`
-/// holds it (its sky fluence there over the unoccluded sky's, `4 ambient`).
+/// holds it (its sky fluence there over the unoccluded sky's, `4 ambient`); and, over
+/// the rays the body does not stop, the fibres they cross against the grid's depth along
+/// them ([`FieldStats::sky_rays`]).
 fn sky_seen(
     samples: &[FieldSample],
     strands: &TracedScene,
     grid: &VolumeGridCpu,
     ambient: f64,
-) -> (f64, f64) {
+) -> (f64, f64, SkyRays) {
     let bvh = SegmentBvh::build(strands.segments.clone());
     let triangles = triangles_of(strands);
-    let seen: Vec<(f64, f64)> = samples
+    // Per fibre: the share open, the grid's share; over the rays the body does not stop,
+    // their count, crossings, depths, rays open and exp(-depth).
+    let seen: Vec<(f64, f64, [f64; 5])> = samples
         .par_iter()
         .enumerate()
         .map(|(i, s)| {
             let turn = std::f64::consts::TAU * (i as f64 * 0.618_033_988_749_894_9).fract();
-            let open = (0..SKY_RAYS)
-                .filter(|&k| {
-                    let d = lattice_direction(k, SKY_RAYS, turn);
-                    !bvh.occluded(s.point, d, f64::INFINITY, None)
-                        && !triangles
-                            .iter()
-                            .any(|t| ray_hits_triangle(s.point.as_vec3(), d.as_vec3(), t))
-                })
-                .count();
+            let (mut open, mut hair) = (0usize, [0.0; 5]);
+            for k in 0..SKY_RAYS {
+                let d = lattice_direction(k, SKY_RAYS, turn);
+                let body = triangles
+                    .iter()
+                    .any(|t| ray_hits_triangle(s.point.as_vec3(), d.as_vec3(), t));
+                open += usize::from(!body && !bvh.occluded(s.point, d, f64::INFINITY, None));
+                if !body {
+                    let crossed = bvh.crossings(s.point.as_vec3(), d.as_vec3(), f32::INFINITY);
+                    let depth = grid.optical_depth_toward(s.point, d);
+                    hair[0] += 1.0;
+                    hair[1] += f64::from(crossed);
+                    hair[2] += depth;
+                    hair[3] += f64::from(u8::from(crossed == 0));
+                    hair[4] += (-depth).exp();
+                }
+            }
             (
                 open as f64 / SKY_RAYS as f64,
                 grid.sample_sky(s.point).x / (4.0 * ambient),
+                hair,
             )
         })
         .collect();
     let n = seen.len().max(1) as f64;
+    let hair = seen.iter().fold([0.0; 5], |mut sum, s| {
+        sum.iter_mut().zip(s.2).for_each(|(a, b)| *a += b);
+        sum
+    });
+    let rays = hair[0].max(1.0);
     (
         seen.iter().map(|s| s.0).sum::<f64>() / n,
         seen.iter().map(|s| s.1).sum::<f64>() / n,
+        SkyRays {
+            crossings: hair[1] / rays,
+            grid_depth: hair[2] / rays,
+            open_traced: hair[3] / rays,
+            open_grid: hair[4] / rays,
+        },
     )
 }
 
