@@ -136,51 +136,24 @@ impl VolumeGridCpu {
 
     /// The fibres' optical depth (`depth`, the body not counted) along the ray from `p`
     /// in the unit direction `d` to the grid's border: each cell's depth per edge times
-    /// the ray's length in it (cell edges), the cells found by a 3D DDA. 0 from outside.
+    /// the ray's length in it (cell edges), the cells by [`ray_cells`] from `p` itself. 0
+    /// from outside.
     pub fn optical_depth_toward(&self, p: DVec3, d: DVec3) -> f64 {
-        let n = i64::from(self.resolution.max(1));
-        let q = (p - self.origin) / self.cell;
-        let mut at = q.floor().as_i64vec3();
-        let inside = |c: glam::I64Vec3| {
-            c.cmpge(glam::I64Vec3::ZERO).all() && c.cmplt(glam::I64Vec3::splat(n)).all()
-        };
-        if !inside(at) || !q.is_finite() || !d.is_finite() {
+        let n = self.resolution.max(1) as usize;
+        let from = (p - self.origin) / self.cell;
+        if !(from.is_finite() && d.is_finite())
+            || from.min_element() < 0.0
+            || from.max_element() >= n as f64
+        {
             return 0.0;
         }
-        let step = glam::I64Vec3::new(
-            if d.x >= 0.0 { 1 } else { -1 },
-            if d.y >= 0.0 { 1 } else { -1 },
-            if d.z >= 0.0 { 1 } else { -1 },
-        );
-        // A direction along a face never crosses that axis's faces.
-        let inv = DVec3::from_array(
-            d.abs()
-                .to_array()
-                .map(|a| if a > 1e-20 { 1.0 / a } else { 1e30 }),
-        );
-        let frac = q - q.floor();
-        let mut next = DVec3::new(
-            if d.x >= 0.0 { 1.0 - frac.x } else { frac.x },
-            if d.y >= 0.0 { 1.0 - frac.y } else { frac.y },
-            if d.z >= 0.0 { 1.0 - frac.z } else { frac.z },
-        ) * inv;
-        let (mut t, mut tau) = (0.0, 0.0);
-        while inside(at) {
-            let exit = next.min_element();
-            let index = ((at.z * n + at.y) * n + at.x) as usize;
-            tau += self.depth[index] * (exit - t);
-            t = exit;
-            let axis = if next.x <= exit {
-                0
-            } else if next.y <= exit {
-                1
-            } else {
-                2
-            };
-            at[axis] += step[axis];
-            next[axis] += inv[axis];
-        }
-        tau
+        // Every ray leaves the cube within its diagonal, under 2n cell edges.
+        ray_cells(from, d, 2.0 * n as f64, n, true)
+            .into_iter()
+            .map(|(c, length)| {
+                self.depth[(c.z as usize * n + c.y as usize) * n + c.x as usize] * length
+            })
+            .sum()
     }
 
     /// Calls `f(cell index, weight)` for the 8 cells around `p` (trilinear between cell
@@ -423,10 +396,11 @@ fn cone_moments() -> (f64, f64) {
 }
 
 /// The cells a ray from `from` (in cell units) along unit `l` crosses, with the length of
-/// the ray in each (cell units), from where it leaves its first cell up to `limit` or the
-/// border of an `n`-cell grid: every crossing of a cell face found per axis, sorted, each
-/// stretch between two crossings in the cell holding its middle.
-fn ray_cells(from: DVec3, l: DVec3, limit: f64, n: usize) -> Vec<(IVec3, f64)> {
+/// the ray in each (cell units), from where it leaves its first cell (or, `from_start`,
+/// from `from` itself, its first cell included) up to `limit` or the border of an
+/// `n`-cell grid: every crossing of a cell face found per axis, sorted, each stretch
+/// between two crossings in the cell holding its middle.
+fn ray_cells(from: DVec3, l: DVec3, limit: f64, n: usize, from_start: bool) -> Vec<(IVec3, f64)> {
     let mut cuts = Vec::new();
     for a in 0..3 {
         if l[a].abs() < 1e-20 {
@@ -447,6 +421,9 @@ fn ray_cells(from: DVec3, l: DVec3, limit: f64, n: usize) -> Vec<(IVec3, f64)> {
         }
     }
     cuts.push(limit);
+    if from_start {
+        cuts.push(0.0);
+    }
     cuts.sort_by(f64::total_cmp);
     let mut out = Vec::new();
     let start = cuts[0];
@@ -616,7 +593,7 @@ pub fn volume_grid(input: &VolumeInput<'_>) -> VolumeGridCpu {
     let clear_toward = |pos: DVec3, l: DVec3, reach: f64| {
         let mut tau = 0.0;
         let mut clear = 1.0;
-        for (c, length) in ray_cells((pos - origin) / cell, l, reach / cell, n) {
+        for (c, length) in ray_cells((pos - origin) / cell, l, reach / cell, n, false) {
             let j = index(c);
             tau += depth[j] * length;
             clear *= (1.0 - solid[j]).max(1e-30).powf(length);
@@ -1120,7 +1097,7 @@ mod tests {
     /// corner to the limit.
     #[test]
     fn ray_cells_cross_whole_cells() {
-        let along = ray_cells(DVec3::new(1.5, 1.5, 1.5), DVec3::X, 100.0, 5);
+        let along = ray_cells(DVec3::new(1.5, 1.5, 1.5), DVec3::X, 100.0, 5, false);
         assert_eq!(along.len(), 3);
         assert!(
             along
@@ -1128,9 +1105,9 @@ mod tests {
                 .all(|&(c, l)| c.y == 1 && c.z == 1 && (l - 1.0).abs() < 1e-12)
         );
         let d = DVec3::ONE.normalize();
-        let diagonal = ray_cells(DVec3::splat(0.5), d, 3.0, 8);
+        let diagonal = ray_cells(DVec3::splat(0.5), d, 3.0, 8, false);
         let total: f64 = diagonal.iter().map(|&(_, l)| l).sum();
         assert!((total - (3.0 - 0.5 * 3f64.sqrt())).abs() < 1e-12, "{total}");
-        assert!(ray_cells(DVec3::splat(0.5), d, 0.5, 8).is_empty());
+        assert!(ray_cells(DVec3::splat(0.5), d, 0.5, 8, false).is_empty());
     }
 }
