@@ -136,8 +136,8 @@ impl VolumeGridCpu {
 
     /// The fibres' optical depth (`depth`, the body not counted) along the ray from `p`
     /// in the unit direction `d` to the grid's border: each cell's depth per edge times
-    /// the ray's length in it (cell edges), the cells by the mirror's `ray_cells` from `p` itself. 0
-    /// from outside.
+    /// the ray's length in it (cell edges), the cells by the mirror's `ray_cells` from `p`
+    /// itself. 0 from outside.
     pub fn optical_depth_toward(&self, p: DVec3, d: DVec3) -> f64 {
         let n = self.resolution.max(1) as usize;
         let from = (p - self.origin) / self.cell;
