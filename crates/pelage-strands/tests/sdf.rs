@@ -601,7 +601,7 @@ struct Movement {
 /// sphere collider of `scenes/head_turn.toml` instead): settles for 3 s at 60 fps, then
 /// how far its vertices move per frame over the next second, and the depth of the last
 /// frame.
-fn resting(gpu: &Gpu, sdf_resolution: u32, sphere: bool) -> (Movement, Depth) {
+fn resting(gpu: &Gpu, sdf_resolution: u32, sphere: bool, sdf_standoff: f32) -> Resting {
     let head = Mesh::icosphere(0.5, 3).unwrap();
     let buffers = MeshBuffers::upload(gpu, &head).unwrap();
     let mut sim = SimulateStrands::grown(
@@ -609,7 +609,10 @@ fn resting(gpu: &Gpu, sdf_resolution: u32, sphere: bool) -> (Movement, Depth) {
         &head,
         &buffers,
         &head_hair(200, WindParams::calm()),
-        &head_dynamics(sdf_resolution),
+        &DynamicsParams {
+            sdf_standoff,
+            ..head_dynamics(sdf_resolution)
+        },
     )
     .unwrap();
     if sphere {
@@ -637,26 +640,68 @@ fn resting(gpu: &Gpu, sdf_resolution: u32, sphere: bool) -> (Movement, Depth) {
     };
     let mut depth = Depth::default();
     depth.add(&head, &last, WIDTH);
-    (movement, depth)
+    // How high the hair lying on the head rests: per strand, its lowest vertex past the
+    // first segment (exact distance to the mesh less half a width, in widths); the
+    // median over the strands whose lowest vertex is within 5 widths (those lying on it).
+    let mut lowest: Vec<f32> = last
+        .chunks(SEGMENTS as usize + 1)
+        .map(|s| {
+            let points: Vec<Vec3> = s[2..].iter().map(|v| v.truncate()).collect();
+            depths(&head, &points)
+                .iter()
+                .map(|&d| -d / WIDTH - 0.5)
+                .fold(f32::INFINITY, f32::min)
+        })
+        .filter(|&h| h < 5.0)
+        .collect();
+    lowest.sort_by(f32::total_cmp);
+    Resting {
+        movement,
+        depth,
+        lying: lowest.len(),
+        height: lowest.get(lowest.len() / 2).copied().unwrap_or(f32::NAN),
+    }
+}
+
+/// What `resting` measures.
+#[derive(Debug)]
+struct Resting {
+    movement: Movement,
+    depth: Depth,
+    /// Strands whose lowest vertex past the first segment is within 5 widths of the head.
+    lying: usize,
+    /// Their median rest height, in widths from the strand's edge to the mesh.
+    height: f32,
 }
 
 /// Hair resting on the still head stays on it as still as on the sphere collider: after
 /// settling, its mean move per frame is at most 1.5x the sphere collider's (measured
-/// 0.076 against 0.072 strand widths: 1.07x), and no vertex is deeper than half a width
-/// inside the head; without the field the hair hangs through the head (113 widths
-/// deep). Neither comes wholly to rest: friction takes a fraction of the tangential
-/// velocity at each contact (no static friction), so hair on a slope of the head keeps
-/// sliding slowly (99th percentile 1.1 widths per frame, largest 27).
+/// 0.076 against 0.072 strand widths: 1.07x), the hair lying on the head rests the
+/// standoff higher than without it (the median lowest vertex of the 45 strands lying on
+/// it 1.35 widths above the head against -0.05, the standoff 1.41 widths), and no vertex
+/// is deeper than half a width inside the head; without the field the hair hangs through
+/// the head (113 widths deep). Neither comes wholly to rest: friction takes a fraction
+/// of the tangential velocity at each contact (no static friction), so hair on a slope
+/// of the head keeps sliding slowly (99th percentile 1.1 widths per frame, largest 27).
 #[test]
 fn hair_resting_on_the_head_stays_at_rest() {
     let gpu = gpu();
-    let (moved, depth) = resting(&gpu, 64, false);
-    let (moved_sphere, sphere) = resting(&gpu, 0, true);
-    let (moved_without, without) = resting(&gpu, 0, false);
+    let standoff = DynamicsParams::default().sdf_standoff;
+    let field = resting(&gpu, 64, false, standoff);
+    let flush = resting(&gpu, 64, false, 0.0);
+    let sphere = resting(&gpu, 0, true, standoff);
+    let without = resting(&gpu, 0, false, standoff);
+    let cell = pelage_scene::SdfGrid::new(Mesh::icosphere(0.5, 3).unwrap().bounds(), 64)
+        .unwrap()
+        .cell;
+    let (moved, depth) = (&field.movement, &field.depth);
+    let (moved_sphere, moved_without) = (&sphere.movement, &without.movement);
     eprintln!(
         "resting hair, moves per frame after settling in strand widths (max / p99 / mean) \
          and deepest vertex: field {:.2e} / {:.2e} / {:.2e}, {:.3}; sphere collider \
-         {:.2e} / {:.2e} / {:.2e}, {:.2}; nothing {:.2e} / {:.2e} / {:.2e}, {:.1}",
+         {:.2e} / {:.2e} / {:.2e}, {:.2}; nothing {:.2e} / {:.2e} / {:.2e}, {:.1}; \
+         lying on the head, median height of the lowest vertex in widths: field {:.2} \
+         ({} strands), without the standoff {:.2} ({}), the standoff {:.2} widths",
         moved.max,
         moved.p99,
         moved.mean,
@@ -664,20 +709,33 @@ fn hair_resting_on_the_head_stays_at_rest() {
         moved_sphere.max,
         moved_sphere.p99,
         moved_sphere.mean,
-        sphere.max,
+        sphere.depth.max,
         moved_without.max,
         moved_without.p99,
         moved_without.mean,
-        without.max
+        without.depth.max,
+        field.height,
+        field.lying,
+        flush.height,
+        flush.lying,
+        standoff * cell / WIDTH
     );
     assert!(
         moved.mean <= 1.5 * moved_sphere.mean,
         "{moved:?} against {moved_sphere:?}"
     );
     assert!(depth.max <= 0.5, "{depth:?}");
+    assert!(flush.depth.max <= 0.5, "{:?}", flush.depth);
+    // The hair lying on the head rests the standoff higher, as it is meant to.
+    let lift = standoff * cell / WIDTH;
     assert!(
-        without.max > 0.5,
-        "the hair did not fall into the head: {without:?}"
+        (field.height - flush.height - lift).abs() < 0.5 * lift,
+        "rest heights {field:?} and {flush:?} against a standoff of {lift} widths"
+    );
+    assert!(
+        without.depth.max > 0.5,
+        "the hair did not fall into the head: {:?}",
+        without.depth
     );
 }
 
