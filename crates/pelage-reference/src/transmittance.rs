@@ -471,15 +471,13 @@ impl SegmentBvh {
     /// those; [`Self::occluded`] does not count them either), so a ray from a fibre's axis
     /// counts the other fibres it crosses (the same strand's farther segments included).
     pub fn crossings(&self, origin: Vec3, dir: Vec3, max_t: f32) -> u32 {
-        let o = origin.as_dvec3();
+        let Some((o, d, t_max)) = prepare_ray(origin, dir, max_t) else {
+            return 0;
+        };
         let mut n = 0u32;
+        // An entry at t > 0, as `occluded` finds them: none into a cylinder holding `o`.
         self.for_each_hit(origin, dir, max_t, None, |seg| {
-            let a = seg.a.as_dvec3();
-            let e = seg.b.as_dvec3() - a;
-            let s = ((o - a).dot(e) / e.length_squared()).clamp(0.0, 1.0);
-            if (a + e * s).distance(o) > f64::from(seg.radius) {
-                n += 1;
-            }
+            n += u32::from(entry_f64(seg, o, d, t_max).is_some());
         });
         n
     }

@@ -150,9 +150,7 @@ impl VolumeGridCpu {
         // Every ray leaves the cube within its diagonal, under 2n cell edges.
         ray_cells(from, d, 2.0 * n as f64, n, true)
             .into_iter()
-            .map(|(c, length)| {
-                self.depth[(c.z as usize * n + c.y as usize) * n + c.x as usize] * length
-            })
+            .map(|(c, length)| self.depth[cell_index(c, n)] * length)
             .sum()
     }
 
@@ -395,6 +393,11 @@ fn cone_moments() -> (f64, f64) {
     (0.5 * aside / flux, solid / flux)
 }
 
+/// Index of cell `c` (inside the grid) of an `n`-cell grid, x fastest.
+fn cell_index(c: IVec3, n: usize) -> usize {
+    (c.z as usize * n + c.y as usize) * n + c.x as usize
+}
+
 /// The cells a ray from `from` (in cell units) along unit `l` crosses, with the length of
 /// the ray in each (cell units), from where it leaves its first cell (or, `from_start`,
 /// from `from` itself, its first cell included) up to `limit` or the border of an
@@ -482,7 +485,7 @@ pub fn volume_grid(input: &VolumeInput<'_>) -> VolumeGridCpu {
     let cell = (extent / (n as f64 - 1.0)).max(1e-6);
     let origin = centre - DVec3::splat(0.5 * n as f64 * cell);
     let cells = n * n * n;
-    let index = |c: IVec3| (c.z as usize * n + c.y as usize) * n + c.x as usize;
+    let index = |c: IVec3| cell_index(c, n);
     let clamp_cell = |q: DVec3| {
         let c = ((q - origin) / cell).floor();
         IVec3::new(
@@ -829,7 +832,7 @@ pub fn volume_grid(input: &VolumeInput<'_>) -> VolumeGridCpu {
 /// `settle`: per cell, `values` over the clear share where the body fills part of it; a
 /// cell at least half solid takes its clear neighbours' (weighted by their shares).
 fn settle(values: &[[DVec4; 3]], solid: &[f64], n: usize) -> Vec<[DVec4; 3]> {
-    let index = |c: IVec3| ((c.z as usize * n) + c.y as usize) * n + c.x as usize;
+    let index = |c: IVec3| cell_index(c, n);
     let mut out = values.to_vec();
     for (c, value) in out.iter_mut().enumerate() {
         let s = solid[c];
@@ -902,7 +905,7 @@ fn splat_mesh(mesh: &VolumeMesh<'_>, origin: DVec3, cell: f64, n: usize, surface
                         continue;
                     }
                     let c = q.floor().as_ivec3();
-                    surface[(c.z as usize * n + c.y as usize) * n + c.x as usize] += per;
+                    surface[cell_index(c, n)] += per;
                 }
             }
         }

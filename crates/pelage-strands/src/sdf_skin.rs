@@ -219,18 +219,19 @@ pub(crate) fn lattice_skin(
 /// of each point of a lattice over the field's box (its cell the larger of
 /// [`SKIN_LATTICE_MIN_CELLS`] field cells and the body's mean edge; the weights of the
 /// body's surface point nearest each point, exact within two lattice cells of the
-/// surface, handed on by sweeps along the lattice's lines beyond), and a copy puts the blended matrices in a 3D `rgba32float` texture (three
-/// texels a point: the rows of the 3x4 affine map).
+/// surface, handed on by sweeps along the lattice's lines beyond), and a copy puts the
+/// blended matrices in a 3D `rgba32float` texture (three texels a point: the rows of the
+/// 3x4 affine map).
 ///
 /// The simulation (`simulate.wgsl`, `SDF_SKIN` on) interpolates them trilinearly at a
 /// bind-pose point `q` into `A(q)` and solves `A(q) q = p` for a vertex at `p` by Newton
 /// steps, once per vertex and substep before its collision rounds (a strand's first
 /// vertex from where it settled the substep before, or from `p` itself; each later one
 /// from where the vertex before it settled, moved to first order); the rounds take that
-/// answer to first order and read the bind-pose field at `q`. The skinned surface is where the bind surface's
-/// points go, so the field's zero is the skinned surface's, to the lattice's
-/// interpolation of the weights (and to the bend of a skinned triangle, which the mesh
-/// draws flat), and no field is rebuilt per frame. Gradients come back through the
+/// answer to first order and read the bind-pose field at `q`. The skinned surface is
+/// where the bind surface's points go, so the field's zero is the skinned surface's, to
+/// the lattice's interpolation of the weights (and to the bend of a skinned triangle,
+/// which the mesh draws flat), and no field is rebuilt per frame. Gradients come back through the
 /// inverse of the map's Jacobian, transposed, and distances scale by how the map
 /// stretches lengths along the gradient (1 where the rig is rigid).
 ///

@@ -523,9 +523,9 @@ fn the_standoff_sits_in_the_tail_of_what_the_read_misses() {
 /// (`pelage_reference::skin::lattice_blend`: the nearest surface point by brute force,
 /// its weights, the matrices blended in f64), on the creature at an instant of its rig
 /// cycle: within two lattice cells of the body, where the nearest triangle is found
-/// exactly (`EXACT_CELLS`), every element of every blended matrix agrees to 1e-5; farther, the sweeps
-/// may hand a point a triangle a little farther than the nearest (printed: how many
-/// points differ, and by how much).
+/// exactly (`EXACT_CELLS`), every element of every blended matrix agrees to 1e-5;
+/// farther, the sweeps may hand a point a triangle a little farther than the nearest
+/// (printed: how many points differ, and by how much).
 #[test]
 fn the_skin_lattice_blends_as_the_mirror() {
     let gpu = gpu();
