@@ -1157,6 +1157,18 @@ fn negative_numbers_name_the_option() {
             &["lab", "scattering", "--size", "8"],
             &["--size", "16..=1024"],
         ),
+        (
+            &["lab", "scattering", "--voxel-bias", "-1"],
+            &["--voxel-bias", "0..=8"],
+        ),
+        (
+            &["lab", "scattering", "--voxel-bias", "NaN"],
+            &["--voxel-bias", "0..=8"],
+        ),
+        (
+            &["lab", "scattering", "--voxel-bias", "many"],
+            &["--voxel-bias", "0 to 8"],
+        ),
     ] {
         let stderr = exits_2(args, words);
         assert!(

@@ -177,6 +177,12 @@ pub struct ScatteringOpts {
     /// renderers). With --no-back-light and --no-sky too it is an error (nothing lit).
     #[arg(long)]
     pub no_key_light: bool,
+    /// The voxel shadow's lookup bias in voxels toward the light (`[shadow] bias_voxels`),
+    /// in 0..=8, for the lab's scenes and its fibre counts (default: the scene's, 1.5).
+    /// The shadow lab sweeps the shadows themselves; this shows what the bias does to the
+    /// shaded hair against the path tracer.
+    #[arg(long, value_name = "VOXELS", value_parser = voxel_bias, allow_hyphen_values = true)]
+    pub voxel_bias: Option<f32>,
     /// Side of the square images in pixels, in 16..=1024 (default 256; 64 with --quick).
     /// Strands are a fraction of a pixel wide at 64: the silhouettes' coverage then weighs
     /// in the luminance (see docs/src/path-tracer.md).
@@ -230,6 +236,7 @@ impl Lab {
                     no_sky: opts.no_sky,
                     no_back_light: opts.no_back_light,
                     no_key_light: opts.no_key_light,
+                    voxel_bias: opts.voxel_bias,
                 },
                 &scattering::Rows {
                     grooms: opts.grooms.clone(),
@@ -273,4 +280,16 @@ pub(crate) fn background(scene: &Scene) -> [u8; 3] {
         linear_to_srgb8(b.y),
         linear_to_srgb8(b.z),
     ]
+}
+
+/// `--voxel-bias`: a finite number of voxels in 0..=8.
+fn voxel_bias(text: &str) -> Result<f32, String> {
+    let bias: f32 = text
+        .parse()
+        .map_err(|_| format!("{text:?} is not a number (a bias in voxels, 0 to 8)"))?;
+    if (0.0..=8.0).contains(&bias) {
+        Ok(bias)
+    } else {
+        Err(format!("{text} voxels is outside 0..=8"))
+    }
 }

@@ -78,6 +78,9 @@ pub struct Variant {
     pub no_back_light: bool,
     /// No key light: the back light and the sky only.
     pub no_key_light: bool,
+    /// The voxel shadow's lookup bias (`VoxelParams::bias_voxels`) in both the scenes
+    /// and the fibre counts; `None`: the default.
+    pub voxel_bias: Option<f32>,
 }
 
 impl Variant {
@@ -215,6 +218,9 @@ fn scene(
                 pitch: 0.06,
             };
         }
+    }
+    if let (Some(bias), ShadowParams::Voxel(v)) = (variant.voxel_bias, &mut scene.shadow) {
+        v.bias_voxels = bias;
     }
     scene.shade.model = ShadingModel::Chiang(params);
     scene.shade.transparency = Transparency::KBuffer { k: 8 };
@@ -369,10 +375,18 @@ fn srgb_image(image: &PathTracedImage) -> Result<RgbaImage, Box<dyn std::error::
         .ok_or_else(|| "path-traced image has the wrong size".into())
 }
 
-/// The shadow methods whose fibre counts [`fibre_counts`] measures, at their defaults.
-fn shadow_methods() -> [(&'static str, ShadowParams); 4] {
+/// The shadow methods whose fibre counts [`fibre_counts`] measures, at their defaults (the
+/// voxel shadow's lookup bias `variant`'s when it sets one).
+fn shadow_methods(variant: Variant) -> [(&'static str, ShadowParams); 4] {
+    let voxel = VoxelParams::default();
     [
-        ("voxel", ShadowParams::Voxel(VoxelParams::default())),
+        (
+            "voxel",
+            ShadowParams::Voxel(VoxelParams {
+                bias_voxels: variant.voxel_bias.unwrap_or(voxel.bias_voxels),
+                ..voxel
+            }),
+        ),
         (
             "deep_opacity",
             ShadowParams::DeepOpacity(DeepOpacityParams::default()),
@@ -429,16 +443,20 @@ const MAX_TAU: f64 = 13.8;
 /// shading stage (an opaque fibre counts 1 in every method's convention, so `τ` is the
 /// fibre count the model uses) against the number of fibres the path tracer's shadow ray
 /// from that vertex toward the light crosses (ray against the real cylinders, the vertex's
-/// own strand excluded). Adds one row per method to `table` and returns the printed lines.
+/// own strand excluded), and the light that reaches the vertices: the method's mean
+/// `exp(-τ)` against the share of those rays no fibre crosses. `variant`'s voxel bias
+/// applies (its lighting does not: the key light alone counts). Adds one row per method to
+/// `table` and returns the printed lines.
 fn fibre_counts(
     groom: &str,
     quick: bool,
     size: u32,
+    variant: Variant,
     table: &mut Table,
 ) -> Result<String, Box<dyn std::error::Error>> {
     let mut text = String::new();
     let mut truth: Option<Vec<(usize, f64)>> = None;
-    for (method, shadow) in shadow_methods() {
+    for (method, shadow) in shadow_methods(variant) {
         let mut s = scene(groom, 1.3, 0.0, quick, METHODS[0].1, Variant::default())?;
         s.shadow = shadow;
         let gpu = Gpu::headless()?;
@@ -521,6 +539,12 @@ fn fibre_counts(
         // The least-squares scale that maps the method's tau to the crossings.
         let scale = taus.iter().zip(counts).map(|(t, c)| t * c).sum::<f64>()
             / taus.iter().map(|t| t * t).sum::<f64>().max(1e-12);
+        // What the shading sees of it: the light reaching the vertices, the method's mean
+        // exp(-tau) against the share of shadow rays no fibre crosses (opaque fibres: a ray
+        // with a crossing is dark). The crossings are over-dispersed (strands lie in
+        // clumps and sheets), so a tau short of the mean count can still light right.
+        let lit = taus.iter().map(|t| (-t).exp()).sum::<f64>() / n;
+        let open = counts.iter().filter(|&&c| c == 0.0).count() as f64 / n;
         table.push(vec![
             groom.into(),
             method.into(),
@@ -531,10 +555,13 @@ fn fibre_counts(
             format!("{spread:.3}"),
             format!("{correlation:.3}"),
             format!("{scale:.3}"),
+            format!("{open:.4}"),
+            format!("{lit:.4}"),
         ])?;
         text.push_str(&format!(
-            "{groom:<9} {method:<12} fibres crossed {mean_count:.2}, tau {mean_tau:.2} (x{:.2}), spread of tau - fibres {spread:.2}, correlation {correlation:.2}, best scale {scale:.2}\n",
-            mean_tau / mean_count.max(1e-12)
+            "{groom:<9} {method:<12} fibres crossed {mean_count:.2}, tau {mean_tau:.2} (x{:.2}), spread of tau - fibres {spread:.2}, correlation {correlation:.2}, best scale {scale:.2}; lit: open rays {open:.3}, exp(-tau) {lit:.3} (x{:.2})\n",
+            mean_tau / mean_count.max(1e-12),
+            lit / open.max(1e-12)
         ));
     }
     Ok(text)
@@ -629,10 +656,12 @@ pub fn run(
         "spread_tau_minus_fibres",
         "correlation",
         "best_scale",
+        "open_rays",
+        "mean_exp_neg_tau",
     ]);
     let mut counts_text = String::new();
     for &groom in &grooms {
-        counts_text.push_str(&fibre_counts(groom, quick, size, &mut counts)?);
+        counts_text.push_str(&fibre_counts(groom, quick, size, variant, &mut counts)?);
     }
     counts.write_csv(&opts.out.join("scattering_fibre_counts.csv"))?;
     println!("fibre counts (dual scattering's n) against the path tracer's shadow rays:");
@@ -875,14 +904,14 @@ struct FieldStats {
     /// The sky's unscattered light at the fibres, as the share of the sky each sees: the
     /// path traced strands' and body's (rays from the fibre's axis in [`SKY_RAYS`]
     /// directions that nothing stops) and the grid's (its sky fluence over the whole
-    /// sky's). NaN without a sky.
+    /// sky's). NaN without a sky (an empty cell in the CSV).
     sky_seen_reference: f64,
     sky_seen_grid: f64,
     /// Over the same rays that the body does not stop, the hair alone: the other fibres a
     /// traced ray crosses and the grid's optical depth along it from the fibre (its
     /// `depth`, marched cell by cell: what the grid's Poisson model expects to cross),
     /// means over the rays; and the share of those rays no fibre stops, traced, against
-    /// the mean of `exp(-τ)` along them. NaN without a sky.
+    /// the mean of `exp(-τ)` along them. NaN without a sky (an empty cell in the CSV).
     sky_rays: SkyRays,
 }
 
@@ -934,6 +963,15 @@ impl FieldStats {
     ];
 
     fn row(&self, groom: &str, hair: &str) -> Vec<String> {
+        // The sky's figures: empty without a sky (as the CSV's other figures that do not
+        // apply).
+        let sky = |v: f64| {
+            if v.is_nan() {
+                String::new()
+            } else {
+                format!("{v:.3}")
+            }
+        };
         vec![
             groom.into(),
             hair.into(),
@@ -948,22 +986,37 @@ impl FieldStats {
             format!("{:.3}", self.noise[0]),
             format!("{:.3}", self.noise[1]),
             format!("{:.3}", self.noise[2]),
-            format!("{:.3}", self.sky_seen_reference),
-            format!("{:.3}", self.sky_seen_grid),
-            format!("{:.3}", self.sky_rays.crossings),
-            format!("{:.3}", self.sky_rays.grid_depth),
-            format!("{:.3}", self.sky_rays.open_traced),
-            format!("{:.3}", self.sky_rays.open_grid),
+            sky(self.sky_seen_reference),
+            sky(self.sky_seen_grid),
+            sky(self.sky_rays.crossings),
+            sky(self.sky_rays.grid_depth),
+            sky(self.sky_rays.open_traced),
+            sky(self.sky_rays.open_grid),
         ]
     }
 
     fn line(&self) -> String {
+        // Without a sky (`--no-sky`) there is nothing to measure the sky figures on.
+        let sky = if self.sky_seen_reference.is_nan() {
+            "no sky, so no sky seen nor sky rays".to_string()
+        } else {
+            format!(
+                "sky seen {:.3} (path traced), {:.3} (grid); sky rays the body does not \
+                 stop: fibres crossed {:.2}, the grid's depth {:.2} (x{:.2}), open {:.3} \
+                 (traced), {:.3} (exp(-depth))",
+                self.sky_seen_reference,
+                self.sky_seen_grid,
+                self.sky_rays.crossings,
+                self.sky_rays.grid_depth,
+                self.sky_rays.grid_depth / self.sky_rays.crossings,
+                self.sky_rays.open_traced,
+                self.sky_rays.open_grid
+            )
+        };
         format!(
             "{} fibres: fluence x{:.2} (±{:.2}); |flux| / fluence {:.2} (path tracer {:.2}), \
              cos {:.2}; response x{:.2} (±{:.2}) read from the path tracer's light, x{:.2} \
-             (±{:.2}) from the grid's; sky seen {:.3} (path traced), {:.3} (grid); sky \
-             rays the body does not stop: fibres crossed {:.2}, the grid's depth {:.2} \
-             (x{:.2}), open {:.3} (traced), {:.3} (exp(-depth))",
+             (±{:.2}) from the grid's; {sky}",
             self.fibres,
             self.fluence_ratio,
             self.noise[0],
@@ -974,13 +1027,6 @@ impl FieldStats {
             self.noise[1],
             self.grid_ratio,
             self.noise[2],
-            self.sky_seen_reference,
-            self.sky_seen_grid,
-            self.sky_rays.crossings,
-            self.sky_rays.grid_depth,
-            self.sky_rays.grid_depth / self.sky_rays.crossings,
-            self.sky_rays.open_traced,
-            self.sky_rays.open_grid
         )
     }
 }
