@@ -179,8 +179,8 @@ pub struct ScatteringOpts {
     pub no_key_light: bool,
     /// The voxel shadow's lookup bias in voxels toward the light (`[shadow] bias_voxels`),
     /// in 0..=8, for the lab's scenes and its fibre counts (default: the scene's, 1.5).
-    /// The shadow lab sweeps the shadows themselves; this shows what the bias does to the
-    /// shaded hair against the path tracer.
+    /// The shadow lab measures the shadows against ray tracing; this shows what the bias
+    /// does to the shaded hair against the path tracer.
     #[arg(long, value_name = "VOXELS", value_parser = voxel_bias, allow_hyphen_values = true)]
     pub voxel_bias: Option<f32>,
     /// Side of the square images in pixels, in 16..=1024 (default 256; 64 with --quick).
