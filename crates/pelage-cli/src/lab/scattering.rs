@@ -558,10 +558,17 @@ fn fibre_counts(
             format!("{open:.4}"),
             format!("{lit:.4}"),
         ])?;
+        // Where every ray crosses a fibre there is no ratio to print.
+        let lit_ratio = if open > 0.0 {
+            format!("x{:.2}", lit / open)
+        } else {
+            "no ray open".to_string()
+        };
         text.push_str(&format!(
-            "{groom:<9} {method:<12} fibres crossed {mean_count:.2}, tau {mean_tau:.2} (x{:.2}), spread of tau - fibres {spread:.2}, correlation {correlation:.2}, best scale {scale:.2}; lit: open rays {open:.3}, exp(-tau) {lit:.3} (x{:.2})\n",
+            "{groom:<9} {method:<12} fibres crossed {mean_count:.2}, tau {mean_tau:.2} \
+             (x{:.2}), spread of tau - fibres {spread:.2}, correlation {correlation:.2}, best \
+             scale {scale:.2}; lit: open rays {open:.3}, exp(-tau) {lit:.3} ({lit_ratio})\n",
             mean_tau / mean_count.max(1e-12),
-            lit / open.max(1e-12)
         ));
     }
     Ok(text)
