@@ -55,8 +55,9 @@
 //!   leave it (bounded by each joint's transformed box of the vertices it moves) is
 //!   logged once with `warn!` (the fur is still drawn, its shadow may be clipped).
 //! - Morph targets are not applied: the fur grows on the mesh without its morph
-//!   weights. With this crate's `morph` feature (which turns on Bevy's) a mesh with
-//!   morph targets is logged once with `warn!`; without it Bevy's mesh cannot tell.
+//!   weights. With this crate's `morph` feature (on by default; it turns on Bevy's) a
+//!   mesh with morph targets is logged once with `warn!`; without it Bevy's mesh cannot
+//!   tell.
 //! - The entity's [`GlobalTransform`] is applied through the camera matrices: pelage
 //!   grows, winds and shadows in the mesh's own space and the view matrix carries the
 //!   model matrix, so [`HairParams::wind`] blows in mesh space and the light is turned

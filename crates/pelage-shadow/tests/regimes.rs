@@ -57,7 +57,19 @@ fn measure(
     light: &DirectionalLight,
     methods: &[ShadowParams],
 ) -> Vec<(f32, f32)> {
-    let r = reference_from(gpu, mesh, hair, light);
+    measure_sampled(gpu, mesh, hair, light, methods, 1)
+}
+
+/// [`measure`] with the RMSE over every `stride`-th vertex (the minimum over all).
+fn measure_sampled(
+    gpu: &Gpu,
+    mesh: &Mesh,
+    hair: &HairParams,
+    light: &DirectionalLight,
+    methods: &[ShadowParams],
+    stride: usize,
+) -> Vec<(f32, f32)> {
+    let r = reference_sampled(gpu, mesh, hair, light, stride);
     methods
         .iter()
         .map(|params| {
@@ -171,13 +183,16 @@ fn a_very_dense_groom_saturates_8_bit_layers() {
     // 60 000 strands: the accumulated opacity passes 1, where 8-bit layers clamp, so no
     // point gets darker than e^-1; float layers keep counting.
     let gpu = gpu();
-    println!("dense fur, 60 000 strands:");
-    let e = measure(
+    // The RMSE over every 16th vertex (about 34 000 of them): with the reference's rays
+    // at all 540 000 the test took 96 s here, with these 12 s.
+    println!("dense fur, 60 000 strands (RMSE over every 16th vertex):");
+    let e = measure_sampled(
         &gpu,
         &Mesh::creature(),
         &fur(60_000),
         &light(),
         &[dom(OpacityFormat::Float16), dom(OpacityFormat::Unorm8)],
+        16,
     );
     let (float, unorm) = (e[0], e[1]);
     assert!(

@@ -6,7 +6,7 @@
 use glam::{Vec2, Vec3, Vec4};
 use pelage_gpu::{Gpu, read_buffer, storage_buffer, wgpu, zeroed_storage};
 use pelage_reference::transmittance::{
-    SegmentBvh, rmse_p95, segments_from_strands, transmittance_at_vertices,
+    SegmentBvh, directional_transmittance, rmse_p95, segments_from_strands,
 };
 use pelage_scene::{DirectionalLight, GrowthParams, HairParams, Mesh, WindParams};
 use pelage_shadow::{ShadowMethod, TransmittanceProbe};
@@ -169,12 +169,14 @@ pub fn long_hair() -> (Mesh, HairParams) {
     (Mesh::icosphere(0.5, 3).unwrap(), hair)
 }
 
-/// A groom grown at t = 0 and the ray-traced transmittance at every one of its vertices.
+/// A groom grown at t = 0 and the ray-traced transmittance at every `stride`-th one of
+/// its vertices (every one for [`reference`]).
 pub struct Reference {
     pub light: DirectionalLight,
     pub strands: GrowStrands,
     pub mesh_buffers: MeshBuffers,
     pub truth: Vec<f32>,
+    pub stride: usize,
 }
 
 pub fn reference(gpu: &Gpu, mesh: &Mesh, hair: &HairParams) -> Reference {
@@ -187,6 +189,18 @@ pub fn reference_from(
     mesh: &Mesh,
     hair: &HairParams,
     light: &DirectionalLight,
+) -> Reference {
+    reference_sampled(gpu, mesh, hair, light, 1)
+}
+
+/// [`reference_from`] at every `stride`-th vertex only (a dense groom's reference costs
+/// a ray bundle per vertex; the errors are statistics over the vertices).
+pub fn reference_sampled(
+    gpu: &Gpu,
+    mesh: &Mesh,
+    hair: &HairParams,
+    light: &DirectionalLight,
+    stride: usize,
 ) -> Reference {
     let (strands, mesh_buffers) = grow(gpu, mesh, hair);
     let buffers = strands.buffers();
@@ -202,19 +216,30 @@ pub fn reference_from(
         g.opacity,
     ));
     let to_light = light.to_light().unwrap();
-    let truth = transmittance_at_vertices(
-        &bvh,
-        &vertices,
-        per,
-        to_light,
-        REFERENCE_DISC,
-        REFERENCE_RAYS,
-    );
+    // As `transmittance_at_vertices`, at the sampled vertices: each vertex's own strand
+    // excluded, its index the rays' seed.
+    let truth = vertices
+        .iter()
+        .enumerate()
+        .step_by(stride.max(1))
+        .map(|(i, v)| {
+            directional_transmittance(
+                &bvh,
+                v.truncate(),
+                to_light,
+                REFERENCE_DISC,
+                REFERENCE_RAYS,
+                i as u32,
+                Some((i / per) as u32),
+            )
+        })
+        .collect();
     Reference {
         light: light.clone(),
         strands,
         mesh_buffers,
         truth,
+        stride: stride.max(1),
     }
 }
 
@@ -225,7 +250,10 @@ pub const REFERENCE_RAYS: u32 = 16;
 
 /// RMSE and p95 of `method`'s transmittance against the reference.
 pub fn error(gpu: &Gpu, r: &Reference, method: &dyn ShadowMethod) -> (f32, f32) {
-    let t = transmittance_from(gpu, method, r.strands.buffers(), &r.light);
+    let t: Vec<f32> = transmittance_from(gpu, method, r.strands.buffers(), &r.light)
+        .into_iter()
+        .step_by(r.stride)
+        .collect();
     rmse_p95(&t, &r.truth).unwrap()
 }
 
