@@ -1169,10 +1169,6 @@ fn negative_numbers_name_the_option() {
             &["lab", "scattering", "--voxel-bias", "many"],
             &["--voxel-bias", "0 to 8"],
         ),
-        (
-            &["lab", "scattering", "--voxel-splat", "cubic"],
-            &["--voxel-splat", "\"cubic\"", "nearest", "trilinear", "bilinear"],
-        ),
     ] {
         let stderr = exits_2(args, words);
         assert!(

@@ -1524,23 +1524,6 @@ pub enum Splat {
     /// Each sample spreads over the 8 nearest voxel centres.
     #[default]
     Trilinear,
-    /// Each sample spreads across the light over the 4 nearest column centres and stays
-    /// in its own layer along it, so a column's first occupied layer holds no density
-    /// ahead of the fibre that put it there.
-    Bilinear,
-}
-
-impl std::str::FromStr for Splat {
-    type Err = String;
-
-    /// A splat by its scene-file name (`nearest`, `trilinear`, `bilinear`); the error
-    /// names the text and the names allowed.
-    fn from_str(text: &str) -> Result<Self, String> {
-        use serde::de::IntoDeserializer;
-        let name: serde::de::value::StrDeserializer<'_, serde::de::value::Error> =
-            text.into_deserializer();
-        Splat::deserialize(name).map_err(|e| format!("{text:?}: {e}"))
-    }
 }
 
 /// Voxel shadows (seed 001): density splatted into a light-space grid fitted to the

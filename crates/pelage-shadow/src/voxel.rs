@@ -45,8 +45,7 @@ impl VoxelShadow {
         strands.style.validate()?;
         let resolution = params.resolution_for(reach);
         let [rx, ry, rz] = resolution;
-        // The layers, the column totals and the columns' fronts.
-        let voxels = u64::from(rx) * u64::from(ry) * u64::from(rz + 2);
+        let voxels = u64::from(rx) * u64::from(ry) * u64::from(rz + 1);
         gpu.check_storage_size("voxel shadow grid", voxels * 4)?;
         // A power of two, so the scale and its inverse are exact. At the default 2^16 a
         // sample's share of a trilinear splat keeps three significant digits.
@@ -55,7 +54,6 @@ impl VoxelShadow {
             splat: match params.splat {
                 Splat::Nearest => 0,
                 Splat::Trilinear => 1,
-                Splat::Bilinear => 2,
             },
             bias_voxels: params.bias_voxels,
             fixed_scale,
@@ -185,12 +183,9 @@ impl VoxelShadow {
         );
     }
 
-    /// The volume: `resolution_x * resolution_y * (resolution_z + 2)` cells, index
+    /// The volume: `resolution_x * resolution_y * (resolution_z + 1)` cells, index
     /// `(z * ry + y) * rx + x`; u32 fixed-point density after the splat, f32 optical
-    /// depth in front of each voxel after the scan (layer `resolution_z`: the column
-    /// totals). Layer `resolution_z + 1` holds each column's front, where along the light
-    /// its density begins: a u32 key after the splat, f32 grid units after the scan
-    /// (mirrors: `pelage_reference::voxel::front_key`, `front_of_key`).
+    /// depth in front of each voxel after the scan (the last layer: column totals).
     pub fn volume(&self) -> &wgpu::Buffer {
         &self.volume
     }
@@ -216,7 +211,6 @@ impl ShadowMethod for VoxelShadow {
         let splat = match self.params.splat {
             Splat::Nearest => "nearest",
             Splat::Trilinear => "trilinear",
-            Splat::Bilinear => "bilinear",
         };
         format!("voxel {x}x{y}x{z} {splat}")
     }

@@ -183,10 +183,6 @@ pub struct ScatteringOpts {
     /// does to the shaded hair against the path tracer.
     #[arg(long, value_name = "VOXELS", value_parser = voxel_bias, allow_hyphen_values = true)]
     pub voxel_bias: Option<f32>,
-    /// The voxel shadow's splat (`[shadow] splat`: nearest, trilinear or bilinear) for the
-    /// lab's scenes and its fibre counts (default: the scene's).
-    #[arg(long, value_name = "SPLAT", value_parser = clap::value_parser!(pelage::scene::Splat))]
-    pub voxel_splat: Option<pelage::scene::Splat>,
     /// Side of the square images in pixels, in 16..=1024 (default 256; 64 with --quick).
     /// Strands are a fraction of a pixel wide at 64: the silhouettes' coverage then weighs
     /// in the luminance (see docs/src/path-tracer.md).
@@ -241,7 +237,6 @@ impl Lab {
                     no_back_light: opts.no_back_light,
                     no_key_light: opts.no_key_light,
                     voxel_bias: opts.voxel_bias,
-                    voxel_splat: opts.voxel_splat,
                 },
                 &scattering::Rows {
                     grooms: opts.grooms.clone(),

@@ -44,8 +44,8 @@ use pelage::gpu::Gpu;
 use pelage::gpu::read_buffer;
 use pelage::scene::{
     AdsmParams, Camera, ChiangParams, DeepOpacityParams, DirectionalLight, HairType, Light, Mesh,
-    MultipleScattering, ShadingModel, ShadowMapParams, ShadowParams, Splat, Transparency,
-    VoxelParams, WindParams, chiang_color_scale, sigma_a_from_melanin,
+    MultipleScattering, ShadingModel, ShadowMapParams, ShadowParams, Transparency, VoxelParams,
+    WindParams, chiang_color_scale, sigma_a_from_melanin,
 };
 use pelage::{Renderer, scene::Scene};
 use pelage_lab::{ScatterChart, ScatterPoint, Table, contact_sheet};
@@ -81,8 +81,6 @@ pub struct Variant {
     /// The voxel shadow's lookup bias (`VoxelParams::bias_voxels`) in both the scenes
     /// and the fibre counts; `None`: the default.
     pub voxel_bias: Option<f32>,
-    /// The voxel shadow's splat (`VoxelParams::splat`), the same; `None`: the default.
-    pub voxel_splat: Option<Splat>,
 }
 
 impl Variant {
@@ -221,9 +219,8 @@ fn scene(
             };
         }
     }
-    if let ShadowParams::Voxel(v) = &mut scene.shadow {
-        v.bias_voxels = variant.voxel_bias.unwrap_or(v.bias_voxels);
-        v.splat = variant.voxel_splat.unwrap_or(v.splat);
+    if let (Some(bias), ShadowParams::Voxel(v)) = (variant.voxel_bias, &mut scene.shadow) {
+        v.bias_voxels = bias;
     }
     scene.shade.model = ShadingModel::Chiang(params);
     scene.shade.transparency = Transparency::KBuffer { k: 8 };
@@ -387,7 +384,6 @@ fn shadow_methods(variant: Variant) -> [(&'static str, ShadowParams); 4] {
             "voxel",
             ShadowParams::Voxel(VoxelParams {
                 bias_voxels: variant.voxel_bias.unwrap_or(voxel.bias_voxels),
-                splat: variant.voxel_splat.unwrap_or(voxel.splat),
                 ..voxel
             }),
         ),

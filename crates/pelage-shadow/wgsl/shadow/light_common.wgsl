@@ -16,8 +16,7 @@ struct LightGridUniforms {
     vertex_count: u32,
     segments: u32,
     strand_count: u32,
-    // 0 = nearest, 1 = trilinear, 2 = bilinear (across the light; the sample's own
-    // layer along it).
+    // 0 = nearest, 1 = trilinear.
     splat: u32,
     // Added around the fitted bounds, world units.
     padding: f32,
@@ -53,20 +52,4 @@ fn to_light_space(u: LightGridUniforms, p: vec3<f32>) -> vec3<f32> {
 // Index of voxel (x, y, z); z-major layers so neighbouring columns are neighbours in memory.
 fn voxel_index(u: LightGridUniforms, x: u32, y: u32, z: u32) -> u32 {
     return (z * u.resolution_y + y) * u.resolution_x + x;
-}
-
-// The voxel volume's front layer (layer resolution_z + 1): where along the light, in
-// grid units, a column's density begins. The splat keeps the largest key, the
-// complement of the depth in 16.16 fixed point, so the least depth wins and an empty
-// column (never written) keeps 0; the scan turns the key into an f32 depth.
-fn front_key(start: f32) -> u32 {
-    return 0xffffffffu - u32(clamp(start, 0.0, 32768.0) * 65536.0);
-}
-
-// The depth a key stands for; `empty` where no density was splatted into the column.
-fn front_of_key(key: u32, empty: f32) -> f32 {
-    if key == 0u {
-        return empty;
-    }
-    return f32(0xffffffffu - key) / 65536.0;
 }

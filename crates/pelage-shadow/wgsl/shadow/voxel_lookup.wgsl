@@ -7,9 +7,8 @@
 //
 // light_visibility(p) = exp(-optical depth of the hair toward the light) x mesh visibility;
 // surface_visibility(p) the same without the bias below.
-// The optical depth is interpolated bilinearly across the light between column centres
-// and linearly along it between layer faces, except in each column's first occupied
-// layer, whose density starts at the column's front; read `bias_voxels` voxels toward
+// The optical depth is interpolated trilinearly: bilinear across the light between
+// column centres, linear along it between layer faces, read `bias_voxels` voxels toward
 // the light so a strand does not shadow itself. Outside the grid's columns it is 0;
 // behind the hair it is the column's total.
 
@@ -20,40 +19,27 @@
 @group(1) @binding(1) var<storage, read> voxel_grid: LightGrid;
 @group(1) @binding(2) var<storage, read> voxel_depth: array<f32>;
 
-// Optical depth of column (x, y) in front of depth z (grid units along the light):
-// linear between the faces of z's layer, except in the layer where the column's density
-// begins (the front, voxel_scan.wgsl), whose density lies between the front and the
-// layer's end. 0 outside the columns and in front of the grid, the column's total
-// behind it.
-fn voxel_column_depth(x: i32, y: i32, z: f32) -> f32 {
+// Optical depth stored at column (x, y), face z; 0 outside the columns, faces clamped.
+fn voxel_face(x: i32, y: i32, z: i32) -> f32 {
     if x < 0 || y < 0 || x >= i32(voxel.resolution_x) || y >= i32(voxel.resolution_y) {
         return 0.0;
     }
-    let rz = voxel.resolution_z;
-    let front = voxel_depth[voxel_index(voxel, u32(x), u32(y), rz + 1u)];
-    let zc = clamp(z, 0.0, f32(rz));
-    let layer = min(u32(floor(zc)), rz - 1u);
-    var t = zc - f32(layer);
-    if floor(front) == f32(layer) {
-        t = clamp((zc - front) / (f32(layer) + 1.0 - front), 0.0, 1.0);
-    }
-    let near = voxel_depth[voxel_index(voxel, u32(x), u32(y), layer)];
-    let far = voxel_depth[voxel_index(voxel, u32(x), u32(y), layer + 1u)];
-    return mix(near, far, t);
+    let zc = clamp(z, 0, i32(voxel.resolution_z));
+    return voxel_depth[voxel_index(voxel, u32(x), u32(y), u32(zc))];
 }
 
 // Optical depth of the hair between the light and world point p moved `bias` voxels
-// toward the light: bilinear across the light between column centres.
+// toward the light.
 fn voxel_optical_depth(p: vec3<f32>, bias: f32) -> f32 {
     let g = (to_light_space(voxel, p) - voxel_grid.origin) * voxel_grid.inv_cell;
-    let c = g.xy - 0.5;
-    let base = vec2<i32>(floor(c));
+    let c = vec3<f32>(g.x - 0.5, g.y - 0.5, g.z - bias);
+    let base = vec3<i32>(floor(c));
     let f = c - floor(c);
     var tau = 0.0;
-    for (var corner = 0u; corner < 4u; corner++) {
-        let o = vec2<i32>(i32(corner & 1u), i32((corner >> 1u) & 1u));
-        let w = select(1.0 - f.x, f.x, o.x == 1) * select(1.0 - f.y, f.y, o.y == 1);
-        tau += w * voxel_column_depth(base.x + o.x, base.y + o.y, g.z - bias);
+    for (var corner = 0u; corner < 8u; corner++) {
+        let o = vec3<i32>(i32(corner & 1u), i32((corner >> 1u) & 1u), i32((corner >> 2u) & 1u));
+        let w = select(1.0 - f.x, f.x, o.x == 1) * select(1.0 - f.y, f.y, o.y == 1) * select(1.0 - f.z, f.z, o.z == 1);
+        tau += w * voxel_face(base.x + o.x, base.y + o.y, base.z + o.z);
     }
     return tau;
 }

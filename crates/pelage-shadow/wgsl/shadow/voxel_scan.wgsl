@@ -3,12 +3,10 @@
 // Reads:  LightGridUniforms; `volume` as u32 fixed-point density per voxel.
 // Writes: `volume` as f32 bits: layer z holds the optical depth in front of voxel z
 //         (the sum over layers < z, so no voxel shadows itself); layer resolution_z
-//         holds the column's total, for points behind the hair. Sums saturate. Layer
-//         resolution_z + 1, the column's front key (voxel_splat.wgsl), becomes the f32
-//         depth where the column's density begins (resolution_z + 1 for an empty column).
+//         holds the column's total, for points behind the hair. Sums saturate.
 // Dispatch: one invocation per (x, y) column, workgroup_size(8, 8),
 //         ceil(resolution_x / 8) x ceil(resolution_y / 8). Cost depends on the grid only.
-// The CPU mirror is pelage-reference/src/voxel.rs (`exclusive_scan_column`, `front_of_key`).
+// The CPU mirror is pelage-reference/src/voxel.rs (`exclusive_scan_column`).
 
 #import shadow/light_common.wgsl
 
@@ -27,6 +25,4 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         volume[index] = bitcast<u32>(f32(running) * u.inv_fixed_scale);
         running = select(running + density, 0xffffffffu, running > 0xffffffffu - density);
     }
-    let front = voxel_index(u, gid.x, gid.y, u.resolution_z + 1u);
-    volume[front] = bitcast<u32>(front_of_key(volume[front], f32(u.resolution_z + 1u)));
 }

@@ -2,12 +2,8 @@
 //
 // Reads:  LightGridUniforms, LightGrid (fitted this frame), the strand vertices and
 //         StrandRoot attributes (width).
-// Writes: `volume`, (resolution_z + 2) layers of atomic<u32>, cleared to 0 before the
-//         pass: layers 0..resolution_z fixed-point optical depth (additions saturate at
-//         0xffffffff; layer resolution_z stays empty for the scan's totals), and layer
-//         resolution_z + 1 each column's front: where along the light the first density
-//         the column received begins, as front_key (atomicMax of a complement, so the
-//         least depth wins and 0 means an empty column).
+// Writes: `volume`, (resolution_z + 1) layers of atomic<u32> fixed-point optical
+//         depth, cleared to 0 before the pass; additions saturate at 0xffffffff.
 // Dispatch: one invocation per segment, workgroup_size(64); x = min(groups, limit),
 //         y = ceil(groups / x).
 //
@@ -17,12 +13,6 @@
 // the number of crossings on a ray is Poisson, and E[(1 - opacity)^N] = exp(-opacity * E[N]):
 // so the segment adds optical depth opacity * w * L * sin(theta) / A, sampled along its
 // length at most half a voxel apart so long segments leave no gaps.
-//
-// Along the light a sample's density starts where its splat kernel starts (the
-// sample itself for `nearest` and `bilinear`, half a voxel ahead of it for
-// `trilinear`), and each column records the least such depth: the lookup spreads the
-// first occupied layer's density over [front, layer end] instead of the whole layer,
-// so the outermost fibres are not shadowed by density that lies behind them.
 
 #import shared/strand.wgsl
 #import shadow/light_common.wgsl
@@ -45,39 +35,10 @@ fn add_saturating(index: u32, amount: u32) {
     }
 }
 
-// Records that column (x, y) holds density from `start` (grid units along the light) on.
-fn mark_front(x: u32, y: u32, start: f32) {
-    atomicMax(&volume[voxel_index(u, x, y, u.resolution_z + 1u)], front_key(start));
-}
-
 fn splat_nearest(g: vec3<f32>, amount: f32) {
     let res = vec3<i32>(i32(u.resolution_x), i32(u.resolution_y), i32(u.resolution_z));
     let c = clamp(vec3<i32>(floor(g)), vec3<i32>(0), res - 1);
-    let units = u32(round(amount));
-    if units > 0u {
-        add_saturating(voxel_index(u, u32(c.x), u32(c.y), u32(c.z)), units);
-        mark_front(u32(c.x), u32(c.y), g.z);
-    }
-}
-
-// Bilinear across the light (the 4 nearest column centres), the sample's own layer
-// along it.
-fn splat_bilinear(g: vec3<f32>, amount: f32) {
-    let res = vec3<i32>(i32(u.resolution_x), i32(u.resolution_y), i32(u.resolution_z));
-    let c = g.xy - 0.5;
-    let base = vec2<i32>(floor(c));
-    let f = c - floor(c);
-    let z = u32(clamp(i32(floor(g.z)), 0, res.z - 1));
-    for (var corner = 0u; corner < 4u; corner++) {
-        let o = vec2<i32>(i32(corner & 1u), i32((corner >> 1u) & 1u));
-        let w = select(1.0 - f.x, f.x, o.x == 1) * select(1.0 - f.y, f.y, o.y == 1);
-        let v = clamp(base + o, vec2<i32>(0), res.xy - 1);
-        let units = u32(round(amount * w));
-        if units > 0u {
-            add_saturating(voxel_index(u, u32(v.x), u32(v.y), z), units);
-            mark_front(u32(v.x), u32(v.y), g.z);
-        }
-    }
+    add_saturating(voxel_index(u, u32(c.x), u32(c.y), u32(c.z)), u32(round(amount)));
 }
 
 fn splat_trilinear(g: vec3<f32>, amount: f32) {
@@ -92,11 +53,7 @@ fn splat_trilinear(g: vec3<f32>, amount: f32) {
         // Weight that falls outside the grid is kept at the border (the grid is padded,
         // so this only happens for the outermost half voxel).
         let v = clamp(base + o, vec3<i32>(0), res - 1);
-        let units = u32(round(amount * w));
-        if units > 0u {
-            add_saturating(voxel_index(u, u32(v.x), u32(v.y), u32(v.z)), units);
-            mark_front(u32(v.x), u32(v.y), g.z - 0.5);
-        }
+        add_saturating(voxel_index(u, u32(v.x), u32(v.y), u32(v.z)), u32(round(amount * w)));
     }
 }
 
@@ -127,16 +84,10 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     }
     for (var i = 0u; i < n; i++) {
         let g = mix(ga, gb, (f32(i) + 0.5) / f32(n));
-        switch u.splat {
-            case 1u: {
-                splat_trilinear(g, amount);
-            }
-            case 2u: {
-                splat_bilinear(g, amount);
-            }
-            default: {
-                splat_nearest(g, amount);
-            }
+        if u.splat == 1u {
+            splat_trilinear(g, amount);
+        } else {
+            splat_nearest(g, amount);
         }
     }
 }
