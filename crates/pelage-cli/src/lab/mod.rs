@@ -282,14 +282,15 @@ pub(crate) fn background(scene: &Scene) -> [u8; 3] {
     ]
 }
 
-/// `--voxel-bias`: a finite number of voxels in 0..=8.
+/// `--voxel-bias`: a finite number of voxels in 0..=`VoxelParams::MAX_BIAS_VOXELS`.
 fn voxel_bias(text: &str) -> Result<f32, String> {
+    let max = pelage::scene::VoxelParams::MAX_BIAS_VOXELS;
     let bias: f32 = text
         .parse()
-        .map_err(|_| format!("{text:?} is not a number (a bias in voxels, 0 to 8)"))?;
-    if (0.0..=8.0).contains(&bias) {
+        .map_err(|_| format!("{text:?} is not a number (a bias in voxels, 0 to {max})"))?;
+    if (0.0..=max).contains(&bias) {
         Ok(bias)
     } else {
-        Err(format!("{text} voxels is outside 0..=8"))
+        Err(format!("{text} voxels is outside 0..={max}"))
     }
 }
