@@ -765,9 +765,34 @@ pub fn transmittance_at_vertices(
     disc_radius: f32,
     rays: u32,
 ) -> Vec<f32> {
+    transmittance_at_every_nth_vertex(
+        bvh,
+        vertices,
+        vertices_per_strand,
+        to_light,
+        disc_radius,
+        rays,
+        1,
+    )
+}
+
+/// [`transmittance_at_vertices`] at vertices `0, stride, 2 stride, ...` only (a stride of 0
+/// is taken as 1), each exactly as there (its own strand excluded, its index in `vertices`
+/// the seed): a dense groom's statistics from a sample of its vertices. Returns one value per
+/// sampled vertex, in their order.
+pub fn transmittance_at_every_nth_vertex(
+    bvh: &SegmentBvh,
+    vertices: &[Vec4],
+    vertices_per_strand: usize,
+    to_light: Vec3,
+    disc_radius: f32,
+    rays: u32,
+    stride: usize,
+) -> Vec<f32> {
     vertices
         .iter()
         .enumerate()
+        .step_by(stride.max(1))
         .map(|(i, v)| {
             let exclude = (vertices_per_strand > 0).then(|| (i / vertices_per_strand) as u32);
             directional_transmittance(

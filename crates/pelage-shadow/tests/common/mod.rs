@@ -6,7 +6,7 @@
 use glam::{Vec2, Vec3, Vec4};
 use pelage_gpu::{Gpu, read_buffer, storage_buffer, wgpu, zeroed_storage};
 use pelage_reference::transmittance::{
-    SegmentBvh, directional_transmittance, rmse_p95, segments_from_strands,
+    SegmentBvh, rmse_p95, segments_from_strands, transmittance_at_every_nth_vertex,
 };
 use pelage_scene::{DirectionalLight, GrowthParams, HairParams, Mesh, WindParams};
 use pelage_shadow::{ShadowMethod, TransmittanceProbe};
@@ -216,24 +216,15 @@ pub fn reference_sampled(
         g.opacity,
     ));
     let to_light = light.to_light().unwrap();
-    // As `transmittance_at_vertices`, at the sampled vertices: each vertex's own strand
-    // excluded, its index the rays' seed.
-    let truth = vertices
-        .iter()
-        .enumerate()
-        .step_by(stride.max(1))
-        .map(|(i, v)| {
-            directional_transmittance(
-                &bvh,
-                v.truncate(),
-                to_light,
-                REFERENCE_DISC,
-                REFERENCE_RAYS,
-                i as u32,
-                Some((i / per) as u32),
-            )
-        })
-        .collect();
+    let truth = transmittance_at_every_nth_vertex(
+        &bvh,
+        &vertices,
+        per,
+        to_light,
+        REFERENCE_DISC,
+        REFERENCE_RAYS,
+        stride,
+    );
     Reference {
         light: light.clone(),
         strands,
