@@ -63,20 +63,13 @@ pub fn closest_bary(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> (f64, f64, f64) {
 /// is finite.
 pub fn signed_distance(mesh: &Mesh, p: Vec3) -> Option<f32> {
     let mut best: Option<(f64, bool)> = None;
-    let pd = p.as_dvec3();
     for tri in mesh.indices.chunks_exact(3) {
-        let [a, b, c] = [0, 1, 2].map(|k| mesh.positions[tri[k] as usize]);
-        if !(a.is_finite() && b.is_finite() && c.is_finite()) {
+        let Some((d, inside, _)) = nearest_on(mesh, tri, p) else {
             continue;
-        }
-        let (u, v, w) = closest_bary(p, a, b, c);
-        let q = a.as_dvec3() * u + b.as_dvec3() * v + c.as_dvec3() * w;
-        let d = pd.distance(q);
+        };
         if best.is_some_and(|(bd, _)| d > bd) {
             continue;
         }
-        let [na, nb, nc] = [0, 1, 2].map(|k| mesh.normals[tri[k] as usize].as_dvec3());
-        let inside = (pd - q).dot(na * u + nb * v + nc * w) < 0.0;
         best = Some(match best {
             Some((bd, was_inside)) if d == bd => (d, was_inside && inside),
             _ => (d, inside),
@@ -86,12 +79,182 @@ pub fn signed_distance(mesh: &Mesh, p: Vec3) -> Option<f32> {
     Some(if inside { -d as f32 } else { d as f32 })
 }
 
+/// The point of triangle `tri` (three indices into `mesh`) nearest `p`: its distance,
+/// whether `p` is behind the mesh's normal there (the vertex normals interpolated), and
+/// its barycentrics. `None` when a corner is not finite.
+fn nearest_on(mesh: &Mesh, tri: &[u32], p: Vec3) -> Option<(f64, bool, (f64, f64, f64))> {
+    let [a, b, c] = [0, 1, 2].map(|k| mesh.positions[tri[k] as usize]);
+    if !(a.is_finite() && b.is_finite() && c.is_finite()) {
+        return None;
+    }
+    let (u, v, w) = closest_bary(p, a, b, c);
+    let q = a.as_dvec3() * u + b.as_dvec3() * v + c.as_dvec3() * w;
+    let pd = p.as_dvec3();
+    let [na, nb, nc] = [0, 1, 2].map(|k| mesh.normals[tri[k] as usize].as_dvec3());
+    let inside = (pd - q).dot(na * u + nb * v + nc * w) < 0.0;
+    Some((pd.distance(q), inside, (u, v, w)))
+}
+
 /// The exact field of `mesh` on every node of `grid` (in [`SdfGrid::index`] order);
 /// `far` where no triangle is finite. Brute force: `O(nodes · triangles)`.
 pub fn exact_field(mesh: &Mesh, grid: &SdfGrid, far: f32) -> Vec<f32> {
     (0..grid.nodes())
         .into_par_iter()
         .map(|i| signed_distance(mesh, grid.node(grid.node_of(i))).unwrap_or(far))
+        .collect()
+}
+
+/// The parts of `mesh`: each triangle's part, numbered from 0 (triangles sharing a vertex
+/// index are in one part), by repeated relabelling until no label changes (the GPU's
+/// preparation, `pelage_strands::burial`, joins vertices with a union-find instead).
+/// `None` when an index is past the vertices.
+pub fn triangle_parts(mesh: &Mesh) -> Option<Vec<usize>> {
+    let vertices = mesh.positions.len();
+    if mesh.indices.iter().any(|&i| i as usize >= vertices) {
+        return None;
+    }
+    // Every vertex starts as its own label; each triangle takes its corners' least.
+    let mut label: Vec<usize> = (0..vertices).collect();
+    loop {
+        let mut changed = false;
+        for tri in mesh.indices.chunks_exact(3) {
+            let least = tri.iter().map(|&i| label[i as usize]).min().unwrap_or(0);
+            for &i in tri {
+                if label[i as usize] != least {
+                    label[i as usize] = least;
+                    changed = true;
+                }
+            }
+        }
+        if !changed {
+            break;
+        }
+    }
+    let mut number = std::collections::BTreeMap::new();
+    Some(
+        mesh.indices
+            .chunks_exact(3)
+            .map(|tri| {
+                let next = number.len();
+                *number.entry(label[tri[0] as usize]).or_insert(next)
+            })
+            .collect(),
+    )
+}
+
+/// Each part of `mesh` (`parts`: each triangle's, [`triangle_parts`]) as a mesh of its
+/// own: the same vertices, that part's triangles.
+fn part_meshes(mesh: &Mesh, parts: &[usize]) -> Vec<Mesh> {
+    let count = parts.iter().max().map_or(0, |&p| p + 1);
+    (0..count)
+        .map(|k| {
+            let mut m = mesh.clone();
+            m.indices = mesh
+                .indices
+                .chunks_exact(3)
+                .zip(parts)
+                .filter(|(_, p)| **p == k)
+                .flat_map(|(tri, _)| tri.iter().copied())
+                .collect();
+            m
+        })
+        .collect()
+}
+
+/// Mirror of `pelage_strands::burial`: how deep each vertex lies inside another part of
+/// `mesh`, the most over the other parts of the distance to that part's nearest triangle
+/// signed by its winding number (inside at ½ or more), never below minus the mesh's
+/// longest edge (`pelage_strands::burial`'s floor; it measures only parts whose box
+/// grown by that edge holds the vertex, which changes nothing above the floor). Every
+/// part is measured here, in f64.
+pub fn burial(mesh: &Mesh) -> Vec<f32> {
+    let longest = mesh
+        .indices
+        .chunks_exact(3)
+        .filter(|tri| tri.iter().all(|&i| (i as usize) < mesh.positions.len()))
+        .flat_map(|tri| {
+            let [a, b, c] = [0, 1, 2].map(|k| mesh.positions[tri[k] as usize]);
+            [a.distance(b), b.distance(c), c.distance(a)]
+        })
+        .filter(|d| d.is_finite())
+        .fold(0.0f32, f32::max);
+    let floor = -longest.max(f32::MIN_POSITIVE);
+    let Some(parts) = triangle_parts(mesh) else {
+        return vec![floor; mesh.positions.len()];
+    };
+    let meshes = part_meshes(mesh, &parts);
+    let count = meshes.len();
+    let mut vertex_part = vec![usize::MAX; mesh.positions.len()];
+    for (tri, &k) in mesh.indices.chunks_exact(3).zip(&parts) {
+        for &i in tri {
+            vertex_part[i as usize] = k;
+        }
+    }
+    (0..mesh.positions.len())
+        .into_par_iter()
+        .map(|v| {
+            let p = mesh.positions[v];
+            if vertex_part[v] == usize::MAX || !p.is_finite() {
+                return floor;
+            }
+            (0..count)
+                .filter(|&k| k != vertex_part[v])
+                .filter_map(|k| {
+                    let d = f64::from(signed_distance(&meshes[k], p)?.abs());
+                    let inside = winding_number(&meshes[k], p) >= 0.5;
+                    Some((if inside { d } else { -d }) as f32)
+                })
+                .fold(floor, f32::max)
+        })
+        .collect()
+}
+
+/// Mirror of the GPU field's sign and distance near the surface (`BodySdf::of_body`,
+/// the splat and finish of `strands/sdf.wgsl`): over every triangle of `mesh`, the
+/// nearest point and the side of the normal there; a nearest point whose corners'
+/// `burial` (one per vertex, [`burial`]) interpolates to a depth above 0 says "inside"
+/// where the point is nearer than that depth (the node is in the other part), and else,
+/// where it says "outside", gives only a distance. Inside at the distance of the nearest
+/// vote that decides a side when it says inside (an exact tie between sides: outside);
+/// else outside at the nearest of every vote. `None` when no triangle is finite.
+pub fn union_signed_distance(mesh: &Mesh, burial: &[f32], p: Vec3) -> Option<f32> {
+    // (distance, inside) of the nearest deciding vote; the nearest distance of all.
+    let mut deciding: Option<(f64, bool)> = None;
+    let mut any = f64::INFINITY;
+    for tri in mesh.indices.chunks_exact(3) {
+        let Some((d, side, (u, v, w))) = nearest_on(mesh, tri, p) else {
+            continue;
+        };
+        let [ba, bb, bc] = [0, 1, 2].map(|k| f64::from(burial[tri[k] as usize]));
+        let depth = ba * u + bb * v + bc * w;
+        // Nearer a buried point than it is deep: inside that other part.
+        let inside = side || depth > d;
+        any = any.min(d);
+        if !inside && depth > 0.0 {
+            continue;
+        }
+        deciding = Some(match deciding {
+            Some((bd, was_inside)) if d == bd => (d, was_inside && inside),
+            Some((bd, was_inside)) if d > bd => (bd, was_inside),
+            _ => (d, inside),
+        });
+    }
+    if !any.is_finite() {
+        return None;
+    }
+    Some(match deciding {
+        Some((d, true)) => -d as f32,
+        _ => any as f32,
+    })
+}
+
+/// [`union_signed_distance`] on every node of `grid` (in [`SdfGrid::index`] order), the
+/// burial computed here ([`burial`]); `far` where no triangle is finite.
+pub fn union_field(mesh: &Mesh, grid: &SdfGrid, far: f32) -> Vec<f32> {
+    let burial = burial(mesh);
+    (0..grid.nodes())
+        .into_par_iter()
+        .map(|i| union_signed_distance(mesh, &burial, grid.node(grid.node_of(i))).unwrap_or(far))
         .collect()
 }
 
@@ -123,12 +286,25 @@ pub fn read(grid: &SdfGrid, mut node: impl FnMut(glam::UVec3) -> f32, p: Vec3) -
     Some(value.min(cap))
 }
 
-/// How deep each of `points` is inside `mesh` (the exact signed distance, negated: > 0
-/// inside), for collision tests.
+/// How deep each of `points` is inside `mesh`, for collision tests: the signed distance
+/// to each part of the mesh ([`triangle_parts`]; the nearest triangle's distance, signed
+/// by the side of its normal, [`signed_distance`]), the least over the parts, negated
+/// (> 0 inside). For one closed part that is its exact signed distance; for overlapping
+/// parts, inside wherever a part holds the point, at least as deep as the part that holds
+/// it deepest (a part's surface buried in another decides nothing for a point inside
+/// that other part). `-inf` where no triangle is finite.
 pub fn depths(mesh: &Mesh, points: &[Vec3]) -> Vec<f32> {
+    let parts = triangle_parts(mesh).unwrap_or_else(|| vec![0; mesh.indices.len() / 3]);
+    let meshes = part_meshes(mesh, &parts);
     points
         .par_iter()
-        .map(|&p| signed_distance(mesh, p).map_or(f32::NEG_INFINITY, |d| -d))
+        .map(|&p| {
+            meshes
+                .iter()
+                .filter_map(|m| signed_distance(m, p))
+                .fold(f32::INFINITY, f32::min)
+        })
+        .map(|d| if d.is_finite() { -d } else { f32::NEG_INFINITY })
         .collect()
 }
 
@@ -167,7 +343,8 @@ pub fn buried_triangles(mesh: &Mesh) -> Vec<bool> {
         .collect()
 }
 
-/// `mesh` without its [`buried_triangles`]: the surface `BodySdf::of_body` builds from.
+/// `mesh` without its [`buried_triangles`] (`pelage_strands::body_triangles`: the surface the
+/// skin's lattice takes each point's nearest triangle from; the field splats every triangle).
 pub fn body_surface(mesh: &Mesh) -> Mesh {
     let buried = buried_triangles(mesh);
     let mut out = mesh.clone();
@@ -198,5 +375,44 @@ mod tests {
         let mut broken = ico.clone();
         broken.positions.iter_mut().for_each(|p| *p = Vec3::NAN);
         assert_eq!(signed_distance(&broken, Vec3::ZERO), None);
+    }
+
+    /// Two unit spheres overlapping unwelded, their centres 1.2 apart: the +x pole of the
+    /// first is 0.8 deep in the second, and just beyond it, inside the second only, the
+    /// nearest triangle (the first's surface, buried) says "outside"; the union's rule
+    /// says "inside", and outside both, in the valley above the junction, "outside".
+    #[test]
+    fn overlapping_parts_are_one_body() {
+        let mut mesh = Mesh::icosphere(1.0, 3).unwrap();
+        let mut other = mesh.clone();
+        other
+            .positions
+            .iter_mut()
+            .for_each(|p| *p += Vec3::new(1.2, 0.0, 0.0));
+        mesh.append(&other).unwrap();
+        let parts = triangle_parts(&mesh).unwrap();
+        assert_eq!(parts.iter().max(), Some(&1));
+        let burial = burial(&mesh);
+        let pole = |p: Vec3| {
+            (0..mesh.positions.len())
+                .min_by(|&a, &b| {
+                    mesh.positions[a]
+                        .distance(p)
+                        .total_cmp(&mesh.positions[b].distance(p))
+                })
+                .unwrap()
+        };
+        let deep = burial[pole(Vec3::X)];
+        assert!((deep - 0.8).abs() < 0.01, "{deep}");
+        assert!(burial[pole(-Vec3::X)] < 0.0);
+        let near_pole = Vec3::new(1.05, 0.0, 0.0);
+        assert!(signed_distance(&mesh, near_pole).unwrap() > 0.0);
+        let d = union_signed_distance(&mesh, &burial, near_pole).unwrap();
+        assert!(d < 0.0, "{d}");
+        let valley = Vec3::new(0.6, 0.9, 0.0);
+        assert!(winding_number(&mesh, valley) < 0.5);
+        assert!(union_signed_distance(&mesh, &burial, valley).unwrap() > 0.0);
+        // And the depths of collision tests count a point inside either part.
+        assert!(depths(&mesh, &[near_pole])[0] > 0.0);
     }
 }

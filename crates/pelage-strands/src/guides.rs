@@ -765,7 +765,7 @@ fn check_guides_on_mesh(mesh: &Mesh, guides: &Resampled, limit: f32) -> crate::R
 
 /// Distance from `p` to triangle `t` of `mesh` (its closest point,
 /// [`closest_on_triangle`]).
-fn distance_to_triangle(mesh: &Mesh, t: usize, p: Vec3) -> f32 {
+pub(crate) fn distance_to_triangle(mesh: &Mesh, t: usize, p: Vec3) -> f32 {
     let corner = |k: usize| mesh.positions[mesh.indices[t * 3 + k] as usize];
     let (a, b, c) = (corner(0), corner(1), corner(2));
     let (u, v, w) = closest_on_triangle(p, a, b, c);

@@ -52,7 +52,7 @@ pub use pelage_contract::{
 pub use roots::{hash_to_unit, pcg_hash, root_region, root_tint, sample_roots, strand_brightness};
 pub use sdf::{
     BODY_SDF, BodySdf, COARSE_FACTOR, MAX_BURIED_CHECK, MAX_SDF_TRIANGLES, SDF_LABEL, SWEEP_AXES,
-    body_triangles, coarse_grid,
+    body_triangles, burial, coarse_grid,
 };
 pub use sdf_skin::{SDF_SKIN, SDF_SKIN_LABEL, SKIN_LATTICE_MIN_CELLS, SdfSkin};
 pub use simulate::{SIMULATE_LABEL, SIMULATION_STATE, SimulateStrands};

@@ -553,12 +553,12 @@ impl SimulateStrands {
         mesh_buffers.check_matches(bind)?;
         skin.validate(bind.positions.len())?;
         let bind_buffers = MeshBuffers::upload(gpu, bind)?;
-        let triangles = crate::body_triangles(bind);
-        let sdf = BodySdf::of_triangles(
+        let burial = crate::burial(bind);
+        let triangles = crate::sdf::kept_triangles(bind, &burial);
+        let sdf = BodySdf::of_burial(
             gpu,
             &bind_buffers,
-            bind,
-            &triangles,
+            &burial,
             bind_buffers.bounds,
             self.dynamics.sdf_resolution,
         )?;

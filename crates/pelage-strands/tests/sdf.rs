@@ -4,7 +4,7 @@
 use glam::{Vec3, Vec4};
 use pelage_gpu::{Gpu, wgpu};
 use pelage_reference::sdf::{
-    body_surface, buried_triangles, depths, exact_field, read, signed_distance, winding_number,
+    body_surface, buried_triangles, depths, read, signed_distance, union_field, winding_number,
 };
 use pelage_reference::skin::{lattice_blend, skin_mesh};
 use pelage_scene::{
@@ -30,7 +30,7 @@ struct Comparison {
     /// The largest error beyond the band, in cells.
     far_err: f32,
     /// The largest amount by which a node beyond the band reads nearer the surface than
-    /// it is, in cells (the contract: never, but for rounding).
+    /// the mirror's, in cells (one closed part: never, but for rounding).
     far_under: f32,
     /// Nodes beyond the band whose sign differs from the exact one.
     sign_flips: usize,
@@ -48,8 +48,9 @@ fn compare(mesh: &Mesh, resolution: u32) -> Comparison {
     sdf.build(&gpu).unwrap();
     let field = sdf.read(&gpu).unwrap();
     let grid = *sdf.grid();
-    // The surface the field is of: the mesh without the triangles buried in another part.
-    let exact = exact_field(&body_surface(mesh), &grid, f32::MAX);
+    // The field as the mirror has it: every triangle, a buried point's "outside" deciding
+    // no side.
+    let exact = union_field(mesh, &grid, f32::MAX);
     assert_eq!(field.len(), exact.len());
     let mut c = Comparison {
         band_err: 0.0,
@@ -104,18 +105,64 @@ fn the_head_field_is_exact_in_the_band_and_close_beyond() {
 fn the_creature_field_is_exact_in_the_band_and_close_beyond() {
     let creature = Mesh::creature();
     let c = compare(&creature, 40);
-    // Measured: 1.6e-6 cells in the band, 1.58 cells farther beyond; 134 of 28 160 nodes
-    // flip sign, every one inside the body. The creature's parts overlap unwelded: the
-    // triangles wholly inside another part are left out, but those crossing its surface
-    // run on inside it, facing outward, and a node about as far from them as from the
-    // body's own surface takes either side (never in the band, never outside the body).
+    // Measured: 1.6e-6 cells in the band, 2.84 cells farther beyond; 158 of 28 160 nodes
+    // take the other side from the mirror's, every one inside the body. Beyond the band
+    // the two are not the same function where parts meet: the mirror decides by the
+    // nearest vote of every triangle, the GPU by the surface points the coarse nodes hold
+    // (buried ones left out), which can be up to 1.29 cells nearer there (a point of
+    // another part's surface beyond the junction) and on its part's outside.
+    // `the_field_is_inside_where_the_body_is` measures the side against the winding
+    // number instead.
     assert!(c.band_err < 1e-4, "{c:?}");
-    assert!(c.far_err < 2.0, "{c:?}");
-    assert!(c.far_under < 1e-4, "{c:?}");
+    assert!(c.far_err < 3.0, "{c:?}");
+    assert!(c.far_under < 1.5, "{c:?}");
     assert_eq!(c.flips_outside, 0, "{c:?}");
     assert!(
-        c.sign_flips <= c.nodes / 200,
-        "{c:?}: at most 0.5% of the nodes flip sign"
+        c.sign_flips <= c.nodes / 150,
+        "{c:?}: at most 0.7% of the nodes take the other side"
+    );
+}
+
+/// The field's side near the body's surface against whether the body is there (the
+/// winding number of the whole mesh, at least ½: inside some part), on the creature: a
+/// node within the band that the field puts on the wrong side of the body. Where two
+/// parts meet, a part's surface runs on inside the other; the nearest point of it says
+/// "outside" of its own part while the node is in the other. With each vertex's burial
+/// ([`pelage_strands::burial`]) such a point decides no side.
+#[test]
+fn the_field_is_inside_where_the_body_is() {
+    let gpu = gpu();
+    let creature = Mesh::creature();
+    let buffers = MeshBuffers::upload(&gpu, &creature).unwrap();
+    let mut lines = Vec::new();
+    for resolution in [64, 128] {
+        let sdf =
+            BodySdf::of_body(&gpu, &buffers, &creature, creature.bounds(), resolution).unwrap();
+        sdf.build(&gpu).unwrap();
+        let field = sdf.read(&gpu).unwrap();
+        let grid = *sdf.grid();
+        let band: Vec<usize> = (0..field.len())
+            .filter(|&i| field[i].abs() <= grid.band())
+            .collect();
+        let wrong: Vec<f32> = band
+            .iter()
+            .filter(|&&i| {
+                let inside = winding_number(&creature, grid.node(grid.node_of(i))) >= 0.5;
+                inside != (field[i] < 0.0)
+            })
+            .map(|&i| field[i].abs() / grid.cell)
+            .collect();
+        let worst = wrong.iter().copied().fold(0.0, f32::max);
+        lines.push(format!(
+            "{resolution}: {} of {} band nodes on the wrong side (the farthest {worst:.2} cells from the surface)",
+            wrong.len(),
+            band.len()
+        ));
+        assert!(wrong.len() * 200 <= band.len(), "{lines:?}");
+    }
+    eprintln!(
+        "the field's side against the winding number: {}",
+        lines.join("; ")
     );
 }
 
@@ -139,6 +186,24 @@ fn buried_surfaces_are_the_mirrors() {
     assert!(kept.len() < buried.len());
     let head = Mesh::icosphere(0.5, 3).unwrap();
     assert_eq!(body_triangles(&head).len(), head.indices.len() / 3);
+    // Each vertex's depth in the other parts, against the mirror's (every part measured,
+    // in f64; the GPU's preparation measures the parts whose grown box holds the vertex).
+    let ours = pelage_strands::burial(&creature);
+    let theirs = pelage_reference::sdf::burial(&creature);
+    let worst = ours
+        .iter()
+        .zip(&theirs)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0f32, f32::max);
+    let buried_vertices = ours.iter().filter(|&&d| d > 0.0).count();
+    eprintln!(
+        "creature: {buried_vertices} of {} vertices inside another part; burial against the mirror: {worst:.1e}",
+        ours.len()
+    );
+    // Measured: 8.2e-8.
+    assert!(worst < 1e-6, "{worst}");
+    assert!(buried_vertices > 0);
+    assert!(pelage_strands::burial(&head).iter().all(|&d| d < 0.0));
 }
 
 /// Every resolution the parameter allows builds: the smallest grid is exact in its band
@@ -161,6 +226,8 @@ struct Depth {
     count: usize,
     /// Vertices deeper than half a strand width.
     deep: usize,
+    /// Strand-frames left out: rooted inside another part of the body.
+    left_out: usize,
 }
 
 impl Depth {
@@ -324,7 +391,6 @@ fn creature_depth(
     let per = SEGMENTS as usize + 1;
     let mut outside: Option<Vec<bool>> = None;
     let mut depth = Depth::default();
-    let mut buried = 0;
     for frame in 0..frames {
         let t = frame as f32 / 60.0;
         let matrices = rig.joint_matrices(t);
@@ -345,18 +411,22 @@ fn creature_depth(
                 })
                 .collect()
         });
-        // A root on one part's surface that the rig has pushed inside another (winding
-        // number 1½ rather than ½) holds its strand inside the body whatever the
-        // collisions do: such strands are left out of the frame (and counted).
+        // A root on one part's surface that the rig has pushed inside another (deeper
+        // than a hundredth of a width: float rounding) holds its strand inside the body
+        // whatever the collisions do: such strands are left out of the frame (and
+        // counted).
+        let roots: Vec<Vec3> = v.chunks(per).map(|s| s[0].truncate()).collect();
+        let root_depths = depths(&posed, &roots);
         let kept: Vec<Vec4> = v
             .chunks(per)
             .zip(keep.iter())
-            .filter(|(s, k)| {
-                let free = winding_number(&posed, s[0].truncate()) < 1.0;
-                buried += usize::from(**k && !free);
+            .zip(&root_depths)
+            .filter(|((_, k), d)| {
+                let free = **d <= 0.01 * width;
+                depth.left_out += usize::from(**k && !free);
                 **k && free
             })
-            .flat_map(|(s, _)| s.iter().copied())
+            .flat_map(|((s, _), _)| s.iter().copied())
             .collect();
         depth.add(&posed, &kept, width);
     }
@@ -366,36 +436,44 @@ fn creature_depth(
 /// The figures' line, as the creature's two tests below print them.
 fn depth_line(name: &str, d: &Depth) -> String {
     format!(
-        "{name} max {:.3} mean {:.2e}, {:.2}% deeper than half a width",
+        "{name} max {:.3} mean {:.2e}, {:.3}% ({} of {}) deeper than half a width ({} strand-frames rooted inside another part left out)",
         d.max,
         d.mean(),
-        100.0 * d.deep_fraction()
+        100.0 * d.deep_fraction(),
+        d.deep,
+        d.count,
+        d.left_out
     )
 }
 
 /// Over the creature's rig cycle (1 s), fur at the default dynamics, which falls into
-/// the body without a collider, stays out of it but at the junctions of its parts: the
-/// creature is overlapping closed parts, not welded, and a strand rooted beside a crease
-/// starts into the other part, or is pressed into the valley between two. The field is
-/// built once in the bind pose and read through the skin (`SimulateStrands::
-/// skin_body_sdf`, as a frame with a skin does); the field rebuilt every frame over the
-/// box of every pose (for a mesh its caller deforms) is measured beside it, and the
-/// field read through the skin without the standoff (`DynamicsParams::sdf_standoff` 0:
-/// the trilinear read says "farther" than the surface is where it bends within a cell).
-/// Measured: through the skin at 64 the mean depth is 0.0028 strand widths and 0.17% of
-/// the vertices end a frame deeper than half a width (the deepest 5.2 widths), at 128
-/// 0.00078, 0.04%, 3.6; rebuilt 0.0034, 0.12%, 7.2 at 64 and 0.00046, 0.03%, 4.2 at 128;
-/// through the skin at 64 without the standoff 0.027, 1.35%, 10.1 (0.62% at 0.125 cells,
-/// 0.25% at 0.5: the default, 0.25, is the sweep's best); without a field 2.25, 32%,
-/// 34.4. The deep vertices left are at junctions (a scratch run: at 64 two strands
-/// hold 198 of the 212, one rooted in the neck's crease and one beside a leg; at 128 one
-/// strand rooted beside the head's junction holds 45 of the 52).
+/// the body without a collider, stays out of it. The creature is overlapping closed
+/// parts, not welded: where parts meet, a part's surface runs on inside the other, and
+/// the field's side comes from each vertex's depth in the other parts
+/// ([`pelage_strands::burial`]). The field is built once in the bind pose and read
+/// through the skin (`SimulateStrands::skin_body_sdf`, as a frame with a skin does); the
+/// field rebuilt every frame over the box of every pose (for a mesh its caller deforms)
+/// is measured beside it, and the field read through the skin at other standoffs
+/// (`DynamicsParams::sdf_standoff`: the trilinear read says "farther" than the surface is
+/// where it bends within a cell). Depth is the least over the parts of the exact signed
+/// distance (`pelage_reference::sdf::depths`).
+///
+/// Measured (vertices deeper than half a width, of 166 080 vertex-frames): through the
+/// skin at 64, 25 (0.015%; the deepest, 4.96 widths, the tip of a strand rooted on an
+/// ear thinner than two cells, folding into it), at 128, 5 (3.62); rebuilt at 64, 5
+/// (1.11 widths), at 128, none; through the skin at 64 at standoffs 0, 0.125 and 0.5
+/// cells, 0.48%, 0.066% and none (the default, 0.25, rests hair 1.35 widths above the
+/// head, 0.5 rests it 2.76 above: `hair_resting_on_the_head_stays_at_rest`); without a
+/// field, 36%. Before the burial (the triangles wholly inside another part left out, the
+/// rest kept whole; the same depths and strands, a scratch run): through the skin 431
+/// (0.26%, 17.7 widths) at 64 and the same 5 at 128, rebuilt 308 (0.19%) and 93
+/// (0.056%), without the standoff 2.36%.
 ///
 /// This test: the 64-cell fields (through the skin, rebuilt, the standoff's sweep) and
 /// no field; the 128-cell ones are the next test's, so the two can run side by side (on
 /// two cores lavapipe already uses both: the file's tests took 104 s split against 110 s).
 #[test]
-fn fur_stays_out_of_the_skinned_creature_but_at_its_part_junctions() {
+fn fur_stays_out_of_the_skinned_creature() {
     let gpu = gpu();
     let standoff = DynamicsParams::default().sdf_standoff;
     let with = creature_depth(&gpu, 64, 60, true, standoff);
@@ -411,17 +489,17 @@ fn fur_stays_out_of_the_skinned_creature_but_at_its_part_junctions() {
         depth_line("through the skin at 64 without the standoff:", flush),
         depth_line("without a field:", &without),
     );
-    assert!(with.mean() <= 0.01, "{with:?}");
-    assert!(with.deep_fraction() <= 0.005, "{with:?}");
-    assert!(rebuilt.mean() <= 0.01, "{rebuilt:?}");
-    assert!(rebuilt.deep_fraction() <= 0.005, "{rebuilt:?}");
-    // The standoff covers most of what the read's interpolation misses, and the
-    // default is the best point of the sweep.
+    assert!(with.mean() <= 0.001, "{with:?}");
+    assert!(with.deep_fraction() <= 0.0005, "{with:?}");
+    assert!(rebuilt.mean() <= 0.001, "{rebuilt:?}");
+    assert!(rebuilt.deep_fraction() <= 0.0005, "{rebuilt:?}");
+    // The standoff covers most of what the read's interpolation misses, and a larger
+    // one leaves no more vertices deep.
     eprintln!(
-        "standoff sweep, through the skin at 64: {}, {standoff} (the default) {:.2}%",
+        "standoff sweep, through the skin at 64: {}, {standoff} (the default) {:.3}%",
         sweep
             .iter()
-            .map(|(s, d)| format!("{s} {:.2}%", 100.0 * d.deep_fraction()))
+            .map(|(s, d)| format!("{s} {:.3}%", 100.0 * d.deep_fraction()))
             .collect::<Vec<_>>()
             .join(", "),
         100.0 * with.deep_fraction()
@@ -430,19 +508,20 @@ fn fur_stays_out_of_the_skinned_creature_but_at_its_part_junctions() {
         with.deep_fraction() <= 0.25 * flush.deep_fraction(),
         "with the standoff {with:?}, without {flush:?}"
     );
-    for (s, d) in &sweep {
-        assert!(
-            with.deep_fraction() <= d.deep_fraction(),
-            "a standoff of {s} leaves fewer vertices deep than the default: {d:?} against {with:?}"
-        );
-    }
+    let [(_, s0), (_, s1), (_, s3)] = &sweep;
+    assert!(
+        s0.deep >= s1.deep && s1.deep >= with.deep && with.deep >= s3.deep,
+        "more standoff, fewer vertices deep: {:?}",
+        [s0.deep, s1.deep, with.deep, s3.deep]
+    );
     assert!(
         without.mean() > 10.0 * rebuilt.mean().max(with.mean()),
         "the fur did not fall into the body without the field: {without:?}"
     );
 }
 
-/// The 128-cell fields of the measurement above (through the skin and rebuilt).
+/// The 128-cell fields of the measurement above (through the skin and rebuilt): the
+/// rebuilt field leaves no vertex deeper than half a width.
 #[test]
 fn finer_fields_leave_fewer_vertices_in_the_creature() {
     let gpu = gpu();
@@ -455,13 +534,11 @@ fn finer_fields_leave_fewer_vertices_in_the_creature() {
         depth_line("rebuilt every frame, 128:", &rebuilt_finer),
     );
     assert!(
-        finer.deep_fraction() <= 0.002 && finer.max <= 6.0,
+        finer.deep_fraction() <= 0.0001 && finer.max <= 4.5,
         "{finer:?}"
     );
-    assert!(
-        rebuilt_finer.deep_fraction() <= 0.002 && rebuilt_finer.max <= 8.0,
-        "{rebuilt_finer:?}"
-    );
+    // The target: no vertex deeper than half a width (measured: none deeper than 0).
+    assert_eq!(rebuilt_finer.deep, 0, "{rebuilt_finer:?}");
 }
 
 /// How much farther than the surface the collision step's read of the field says a

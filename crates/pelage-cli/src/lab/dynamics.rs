@@ -32,9 +32,11 @@
 //! `dynamics.sdf_resolution` = [`LAB_SDF_RESOLUTION`]): `hair_sdf`, the head with the
 //! field instead of the sphere inside it (built once, moved with the head), and
 //! `fur_sdf`, the creature's fur at the default dynamics (which without a collider fall
-//! into the body) on the field rebuilt every frame after the skinning. Every row reports
+//! into the body) on the field built once in the bind pose and read through the skin (the
+//! default `dynamics.sdf_skinned`). Every row reports
 //! how deep the simulated strands are inside the body (exact distances to the posed mesh
-//! on the CPU, every k-th strand up to [`DEPTH_STRANDS`], in strand widths).
+//! on the CPU, every k-th strand up to [`DEPTH_STRANDS`], in strand widths; strands
+//! rooted inside another part of the mesh left out).
 //!
 //! `--scene FILE` takes a scene file with a `[dynamics]` table (`scenes/head_turn.toml`)
 //! instead, compared with the same scene without the table.
@@ -258,8 +260,11 @@ fn posed_mesh(scene: &Scene, t: f32) -> pelage::scene::Mesh {
 }
 
 /// How deep the vertices of every `every`-th strand (its root left out) are inside
-/// `mesh`, in strand widths (the exact signed distance, `pelage_reference::sdf`): the
-/// largest and the mean, depths outside counting 0.
+/// `mesh`, in strand widths (the least over the mesh's parts of the exact signed
+/// distance, `pelage_reference::sdf::depths`): the largest and the mean, depths outside
+/// counting 0. Strands rooted inside another part of the mesh (a root on one part's
+/// surface that the pose has inside another, by more than a hundredth of a width: float
+/// rounding) are left out: they are inside whatever collisions do.
 fn depth_in_widths(
     mesh: &pelage::scene::Mesh,
     vertices: &[[f32; 3]],
@@ -267,10 +272,17 @@ fn depth_in_widths(
     every: usize,
     width: f32,
 ) -> (f64, f64) {
-    let points: Vec<glam::Vec3> = vertices
+    let strands: Vec<&[[f32; 3]]> = vertices
         .chunks_exact(per_strand)
         .step_by(every.max(1))
-        .flat_map(|s| s[1..].iter().map(|&v| glam::Vec3::from(v)))
+        .collect();
+    let roots: Vec<glam::Vec3> = strands.iter().map(|s| glam::Vec3::from(s[0])).collect();
+    let root_depths = pelage_reference::sdf::depths(mesh, &roots);
+    let points: Vec<glam::Vec3> = strands
+        .iter()
+        .zip(&root_depths)
+        .filter(|&(_, &d)| d <= 0.01 * width)
+        .flat_map(|(s, _)| s[1..].iter().map(|&v| glam::Vec3::from(v)))
         .collect();
     let depths = pelage_reference::sdf::depths(mesh, &points);
     let widths = depths.iter().map(|&d| f64::from(d.max(0.0) / width));

@@ -10,24 +10,29 @@
 //     floats order as their bits do) shifted up one, the side (1: inside) below;
 //     atomicMax on its complement keeps the least key, so the nearest triangle's side
 //     comes with its distance and the field is the same run after run (an exact tie
-//     between sides: outside);
+//     between sides: outside). A mesh of overlapping parts: a nearest point buried inside
+//     another part (its corners' burial interpolated, > 0) that says "outside" says it of
+//     its own part only, while the node may be inside the other: its key goes to a second
+//     array, which gives a distance but no side;
 //  2. splat_coarse (per triangle, the coarse level, one coarse cell around it): the same
-//     nodes and distances, the key the distance in fixed point above the triangle's
-//     index (INDEX_BITS below): the least key names the node's nearest triangle (ties
-//     within a quantum, COARSE_RANGE cells / 2^(32 - INDEX_BITS): the lowest index);
+//     nodes and distances (buried points left out), the key the distance in fixed point
+//     above the triangle's index (INDEX_BITS below): the least key names the node's
+//     nearest triangle (ties within a quantum, COARSE_RANGE cells / 2^(32 - INDEX_BITS):
+//     the lowest index);
 //  3. seed (per coarse node): the nearest point of the triangle its key names and the
 //     mesh's normal there (packed);
 //  4. sweep (per line of coarse nodes, along x, then y, then z): each node takes the
 //     nearest of its point and those the line hands it from either end (vector
 //     propagation: a node hands on whichever of its point and the one it was handed is
 //     nearer the next node);
-//  5. finish (per fine node): within the band (the splat's least key at most `band`
-//     cells) the splat's exact distance, negative where its side is inside; beyond, the
-//     nearest of the splat's triangle and the 8 surface points the coarse nodes around
-//     the node hold, signed by the side of that point's normal the node is on; +far where
-//     nothing reached (every triangle non-finite). Written to a buffer with the rows of
-//     the field's texture (a copy moves it there: writing a 3D storage texture node by
-//     node costs more than the rest of the build on some devices).
+//  5. finish (per fine node): within the band (the least key at most `band` cells) the
+//     splat's exact distance, negative where the nearest key that decides a side is
+//     inside (else the nearest of both arrays, outside); beyond, the nearest of that and
+//     the 8 surface points the coarse nodes around the node hold, signed by the side of
+//     that point's normal the node is on; +far where nothing reached (every triangle
+//     non-finite). Written to a buffer with the rows of the field's texture (a copy moves
+//     it there: writing a 3D storage texture node by node costs more than the rest of
+//     the build on some devices).
 // The field: every node within `band` cells of the surface holds its exact signed
 // distance (its nearest triangle's grown box and slab hold it). A farther node holds the
 // distance to a point of the surface (so never less than the exact distance), the
@@ -36,8 +41,9 @@
 // A mesh with holes: the sign is the nearest surface point's normal side, so the field
 // says "inside" only behind the surface near a node, and a hole's rim is a surface like
 // any other (no flood fill, no winding number: an open mesh is not inside-out).
-// Bindings: the mesh (positions and normals f32 x3, u32 triangle list), the level's keys,
-// the field and the coarse points (two halves).
+// Bindings: the mesh (positions and normals f32 x3, u32 triangle list), the level's keys
+// (the fine level's two arrays one after the other), the field, the coarse points (two
+// halves) and each vertex's burial.
 //
 // The grid a dispatch runs on and the halves it reads and writes are pipeline constants:
 // BodySdf builds one pipeline per dispatch of the build, each specialised to its level
@@ -118,6 +124,9 @@ fn coarse_dims() -> vec3<u32> {
 @group(0) @binding(3) var<storage, read_write> keys: array<atomic<u32>>;
 @group(0) @binding(4) var<storage, read_write> field: array<f32>;
 @group(0) @binding(5) var<storage, read_write> points: array<vec4<u32>>;
+// How deep each vertex lies inside another part of the mesh (burial in sdf.rs: > 0
+// buried; every vertex < 0 for a mesh of one part).
+@group(0) @binding(6) var<storage, read> burial: array<f32>;
 
 fn load_position(i: u32) -> vec3<f32> {
     return vec3<f32>(positions[3u * i], positions[3u * i + 1u], positions[3u * i + 2u]);
@@ -199,12 +208,6 @@ fn load_triangle(t: u32) -> Triangle {
     return Triangle(a, b, c, all_finite3(a) && all_finite3(b) && all_finite3(c));
 }
 
-// Distance from p to triangle `tri`.
-fn triangle_distance(p: vec3<f32>, tri: Triangle) -> f32 {
-    let bary = closest_bary(p, tri.a, tri.b, tri.c);
-    return distance(p, tri.a * bary.x + tri.b * bary.y + tri.c * bary.z);
-}
-
 fn node_position(i: vec3<u32>) -> vec3<f32> {
     return level().origin + vec3<f32>(i) * level().cell;
 }
@@ -282,6 +285,13 @@ fn triangle_normal(t: u32, bary: vec3<f32>) -> vec3<f32> {
         + load_normal(indices[3u * t + 2u]) * bary.z;
 }
 
+// How deep each corner of triangle `t` lies inside another part of the mesh (> 0:
+// buried); a point's depth is their interpolation at its barycentrics (the junction of
+// two parts taken as straight across a triangle).
+fn corner_burial(t: u32) -> vec3<f32> {
+    return vec3<f32>(burial[indices[3u * t]], burial[indices[3u * t + 1u]], burial[indices[3u * t + 2u]]);
+}
+
 // A splat's key at a node: its distance's bits shifted up one, 1 below where the node is
 // inside (the least key is the nearest triangle's, and outside on a tie).
 fn splat_key(d: f32, inside: bool) -> u32 {
@@ -314,6 +324,7 @@ fn splat(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
     let na = load_normal(indices[3u * t]);
     let nb = load_normal(indices[3u * t + 1u]);
     let nc = load_normal(indices[3u * t + 2u]);
+    let buried = corner_burial(t);
     for (var z = bx.lo.z; z <= bx.hi.z; z++) {
         for (var y = bx.lo.y; y <= bx.hi.y; y++) {
             for (var x = bx.lo.x; x <= bx.hi.x; x++) {
@@ -325,8 +336,15 @@ fn splat(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
                 let bary = closest_bary(p, tri.a, tri.b, tri.c);
                 let q = tri.a * bary.x + tri.b * bary.y + tri.c * bary.z;
                 let normal = na * bary.x + nb * bary.y + nc * bary.z;
-                let key = ~splat_key(distance(p, q), dot(p - q, normal) < 0.0);
-                let i = node_index(n);
+                let d = distance(p, q);
+                let depth = dot(buried, bary);
+                // A buried point's "outside" is the outside of its own part only: a node
+                // nearer it than it is deep in another part is in that part (a distance
+                // moves no faster than the point), and says "inside"; else its distance
+                // goes to the second half of the keys, which decides no side (the finish).
+                let inside = dot(p - q, normal) < 0.0 || depth > d;
+                let key = ~splat_key(d, inside);
+                let i = node_index(n) + select(0u, node_count(), !inside && depth > 0.0);
                 // Most nodes already hold a nearer triangle's key: a load skips the atomic.
                 if key > atomicLoad(&keys[i]) {
                     atomicMax(&keys[i], key);
@@ -356,6 +374,7 @@ fn splat_coarse(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     }
     let bx = splat_box(tri);
     let slab = splat_slab(tri);
+    let buried = corner_burial(t);
     for (var z = bx.lo.z; z <= bx.hi.z; z++) {
         for (var y = bx.lo.y; y <= bx.hi.y; y++) {
             for (var x = bx.lo.x; x <= bx.hi.x; x++) {
@@ -364,7 +383,13 @@ fn splat_coarse(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
                 if outside_slab(slab, p) {
                     continue;
                 }
-                let key = ~coarse_key(triangle_distance(p, tri), t);
+                let bary = closest_bary(p, tri.a, tri.b, tri.c);
+                // A buried point is no point of the body's surface: it seeds no node.
+                if dot(buried, bary) > 0.0 {
+                    continue;
+                }
+                let q = tri.a * bary.x + tri.b * bary.y + tri.c * bary.z;
+                let key = ~coarse_key(distance(p, q), t);
                 let i = node_index(n);
                 if key > atomicLoad(&keys[i]) {
                     atomicMax(&keys[i], key);
@@ -518,14 +543,19 @@ fn finish(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups
             for (var x = first.x; x <= last.x; x++) {
                 let node = vec3<u32>(x, y, z);
                 let key = least_key(node_index(node));
-                let reached = key != 0xffffffffu;
-                let splat_d = key_distance(key);
-                // (distance, side): within the band the splat's exact distance and its
-                // nearest triangle's side.
+                let buried_key = least_key(node_index(node) + node_count());
+                // (distance, side): within the band the splat's exact distance, inside
+                // where the nearest vote that decides a side says so, else outside at the
+                // nearest of every vote (a buried point's included: the node is outside
+                // the parts around it, at most that far from their surface).
                 var best = vec2<f32>(level().far, 1.0);
-                if reached {
-                    best = vec2<f32>(splat_d, select(1.0, -1.0, (key & 1u) == 1u));
+                if key != 0xffffffffu && (key & 1u) == 1u {
+                    best = vec2<f32>(key_distance(key), -1.0);
+                } else if min(key, buried_key) != 0xffffffffu {
+                    best = vec2<f32>(key_distance(min(key, buried_key)), 1.0);
                 }
+                let reached = best.x < level().far;
+                let splat_d = best.x;
                 if !reached || splat_d > f32(level().band) * level().cell {
                     // Beyond the band: the nearest of the surface points the coarse nodes
                     // around hold, on the side of its normal.
