@@ -296,15 +296,57 @@ pub fn read(grid: &SdfGrid, mut node: impl FnMut(glam::UVec3) -> f32, p: Vec3) -
 pub fn depths(mesh: &Mesh, points: &[Vec3]) -> Vec<f32> {
     let parts = triangle_parts(mesh).unwrap_or_else(|| vec![0; mesh.indices.len() / 3]);
     let meshes = part_meshes(mesh, &parts);
+    // Each part's bounding ball (centre, radius): no point of the part is nearer `p` than
+    // `|p - centre| - radius`, so a part whose bound is no less than the least signed
+    // distance so far cannot lower it (the bound is exact pruning, not an estimate).
+    let balls: Vec<(Vec3, f32)> = meshes
+        .iter()
+        .map(|m| {
+            let used: Vec<Vec3> = m.indices.iter().map(|&i| m.positions[i as usize]).collect();
+            let (lo, hi) = used.iter().fold(
+                (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+                |(lo, hi), &q| (lo.min(q), hi.max(q)),
+            );
+            let centre = (lo + hi) * 0.5;
+            let radius = used
+                .iter()
+                .map(|q| q.distance(centre))
+                .fold(0.0f32, f32::max);
+            (centre, radius)
+        })
+        .collect();
     points
         .par_iter()
         .map(|&p| {
-            meshes
+            // Nearest ball first, so that the far parts are pruned.
+            let mut order: Vec<(f32, usize)> = balls
                 .iter()
-                .filter_map(|m| signed_distance(m, p))
-                .fold(f32::INFINITY, f32::min)
+                .enumerate()
+                .map(|(k, (c, r))| (p.distance(*c) - r, k))
+                .collect();
+            order.sort_by(|a, b| a.0.total_cmp(&b.0));
+            let mut least = f32::INFINITY;
+            for (bound, k) in order {
+                // A non-finite ball (a NaN corner) prunes nothing.
+                if bound.is_finite() && bound >= least {
+                    break;
+                }
+                if let Some(d) = signed_distance(&meshes[k], p) {
+                    least = least.min(d);
+                }
+            }
+            least
         })
         .map(|d| if d.is_finite() { -d } else { f32::NEG_INFINITY })
+        .collect()
+}
+
+/// [`winding_number`] at each of `points` (in parallel), for tests that judge a field's
+/// side against it.
+pub fn winding_numbers(mesh: &Mesh, points: &[Vec3]) -> Vec<f64> {
+    points
+        .par_iter()
+        .map(|&p| winding_number(mesh, p))
         .collect()
 }
 

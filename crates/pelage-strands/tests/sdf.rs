@@ -5,6 +5,7 @@ use glam::{Vec3, Vec4};
 use pelage_gpu::{Gpu, wgpu};
 use pelage_reference::sdf::{
     body_surface, buried_triangles, depths, read, signed_distance, union_field, winding_number,
+    winding_numbers,
 };
 use pelage_reference::skin::{lattice_blend, skin_mesh};
 use pelage_scene::{
@@ -144,13 +145,13 @@ fn the_field_is_inside_where_the_body_is() {
         let band: Vec<usize> = (0..field.len())
             .filter(|&i| field[i].abs() <= grid.band())
             .collect();
+        let nodes: Vec<Vec3> = band.iter().map(|&i| grid.node(grid.node_of(i))).collect();
+        let winding = winding_numbers(&creature, &nodes);
         let wrong: Vec<f32> = band
             .iter()
-            .filter(|&&i| {
-                let inside = winding_number(&creature, grid.node(grid.node_of(i))) >= 0.5;
-                inside != (field[i] < 0.0)
-            })
-            .map(|&i| field[i].abs() / grid.cell)
+            .zip(&winding)
+            .filter(|&(&i, &w)| (w >= 0.5) != (field[i] < 0.0))
+            .map(|(&i, _)| field[i].abs() / grid.cell)
             .collect();
         let worst = wrong.iter().copied().fold(0.0, f32::max);
         lines.push(format!(
