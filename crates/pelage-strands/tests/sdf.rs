@@ -460,12 +460,12 @@ fn depth_line(name: &str, d: &Depth) -> String {
 /// distance (`pelage_reference::sdf::depths`).
 ///
 /// Measured (vertices deeper than half a width, of 166 080 vertex-frames): through the
-/// skin at 64, 25 (0.015%; the deepest, 4.96 widths, the tip of a strand rooted on an
-/// ear thinner than two cells, folding into it), at 128, 5 (3.62); rebuilt at 64, 5
-/// (1.11 widths), at 128, none; through the skin at 64 at standoffs 0, 0.125 and 0.5
-/// cells, 0.48%, 0.066% and none (the default, 0.25, rests hair 1.35 widths above the
-/// head, 0.5 rests it 2.76 above: `hair_resting_on_the_head_stays_at_rest`); without a
-/// field, 36%. Before the burial (the triangles wholly inside another part left out, the
+/// skin at 64, 25 (0.015%, the deepest 4.96 widths; all of them the tip of one strand
+/// rooted on an ear thinner than two cells, folding into it), at 128, 5 (3.62); rebuilt
+/// at 64, 5 (1.11 widths), at 128, none; through the skin at 64 at standoffs 0, 0.125
+/// and 0.5 cells, 0.48%, 0.066% and none (the default, 0.25, rests hair 1.35 widths
+/// above the head, 0.5 rests it 2.76 above: `hair_resting_on_the_head_stays_at_rest`);
+/// without a field, 36%. Before the burial (the triangles wholly inside another part left out, the
 /// rest kept whole; the same depths and strands, a scratch run): through the skin 431
 /// (0.26%, 17.7 widths) at 64 and the same 5 at 128, rebuilt 308 (0.19%) and 93
 /// (0.056%), without the standoff 2.36%.
