@@ -378,23 +378,12 @@ impl BodySdf {
         resolution: u32,
     ) -> crate::Result<Self> {
         buffers.check_matches(mesh)?;
-        Self::of_burial(gpu, buffers, &burial(mesh), bounds, resolution)
+        Self::with_burial(gpu, buffers, Some(&burial(mesh)), bounds, resolution)
     }
 
-    /// [`BodySdf::of_body`] with the vertices' [`burial`] given (one per vertex of the
-    /// mesh `buffers` hold).
-    pub(crate) fn of_burial(
-        gpu: &Gpu,
-        buffers: &MeshBuffers,
-        burial: &[f32],
-        bounds: (Vec3, Vec3),
-        resolution: u32,
-    ) -> crate::Result<Self> {
-        Self::with_burial(gpu, buffers, Some(burial), bounds, resolution)
-    }
-
-    /// [`BodySdf::new`] with each vertex's [`burial`] (`None`: nothing buried).
-    fn with_burial(
+    /// [`BodySdf::new`] with each vertex's [`burial`] (one per vertex of the mesh `mesh`
+    /// holds; `None`: nothing buried).
+    pub(crate) fn with_burial(
         gpu: &Gpu,
         mesh: &MeshBuffers,
         burial: Option<&[f32]>,

@@ -555,10 +555,10 @@ impl SimulateStrands {
         let bind_buffers = MeshBuffers::upload(gpu, bind)?;
         let burial = crate::burial(bind);
         let triangles = crate::sdf::kept_triangles(bind, &burial);
-        let sdf = BodySdf::of_burial(
+        let sdf = BodySdf::with_burial(
             gpu,
             &bind_buffers,
-            &burial,
+            Some(&burial),
             bind_buffers.bounds,
             self.dynamics.sdf_resolution,
         )?;
